@@ -1,0 +1,20 @@
+"""ddp-lite: Depth completion with a view-constrained Deep Depth Prior (Ghosh et al., 3DV 2020).
+
+    >>> import ddp_lite as ddp
+    >>> result = ddp.complete_depth(rgb, depth_with_nans, camera, neighbors, variant="rgbd+warp")
+    >>> result.depth  # (H, W) metres, holes filled
+
+Units and conventions: images float32 (H, W, 3) in [0, 1]; depth float32 (H, W) metres with NaN
+holes; cameras in the OpenCV convention (x right, y down, z forward), pixel (0, 0) = centre of the
+top-left pixel. ``DDP_PROFILE`` (ci / class / paper) sets sizes and schedules.
+"""
+from .camera import Camera, backproject, look_at, pixel_grid, project, relative_pose
+from .disparity import DisparityTransform
+from .fit import VARIANTS, DepthResult, FitConfig, ImageResult, complete_depth, fit_image, merge
+from .losses import disparity_loss, masked_l1, rgb_loss, ssim, warp_loss
+from .nets import SkipNet, UNet, build_net, make_noise
+from .profiles import PROFILES, Profile, get_profile
+from .scenes import Scene, View
+from .warp import Warper, warp_to_reference
+
+__version__ = "0.1.0"

@@ -1,0 +1,148 @@
+"""Pinhole cameras in the OpenCV convention.
+
+Frames: x right, y down, z forward (metres). Pixel (0, 0) is the *centre* of the top-left
+pixel, so a pixel's integer coordinates (u, v) = (column, row) name its centre, and the image
+spans [-0.5, W - 0.5] × [-0.5, H - 0.5]. ``cam_from_world`` maps homogeneous world points to
+camera points; the relative pose of a neighbour seen from a reference camera is
+``nbr_from_ref = nbr.cam_from_world @ inv(ref.cam_from_world)``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+
+__all__ = ["Camera", "relative_pose", "pixel_grid", "backproject", "project", "look_at"]
+
+
+def _as_matrix(value, shape: tuple[int, int], name: str) -> np.ndarray:
+    array = np.array(value, dtype=np.float64, copy=True)
+    if array.shape != shape:
+        raise ValueError(f"{name} must have shape {shape}, got {array.shape}")
+    if not np.all(np.isfinite(array)):
+        raise ValueError(f"{name} must contain only finite values")
+    return array
+
+
+@dataclass(frozen=True, eq=False)
+class Camera:
+    """A calibrated pinhole camera: intrinsics ``K`` (3×3, pixels), ``cam_from_world`` (4×4).
+
+    Example:
+        >>> cam = Camera.from_fov(width=128, height=96, fov_x_deg=60.0)
+        >>> cam.K.shape, cam.center.tolist()
+        ((3, 3), [0.0, 0.0, 0.0])
+    """
+
+    K: np.ndarray
+    cam_from_world: np.ndarray
+    width: int
+    height: int
+
+    def __post_init__(self):
+        K = _as_matrix(self.K, (3, 3), "K")
+        pose = _as_matrix(self.cam_from_world, (4, 4), "cam_from_world")
+        if abs(np.linalg.det(K)) < 1e-12 or K[0, 0] <= 0 or K[1, 1] <= 0:
+            raise ValueError(f"K must be invertible with positive focal lengths, got\n{K}")
+        if not np.allclose(K[2], [0.0, 0.0, 1.0]):
+            raise ValueError(f"K's last row must be [0, 0, 1], got {K[2].tolist()}")
+        if not np.allclose(pose[3], [0.0, 0.0, 0.0, 1.0]):
+            raise ValueError(f"cam_from_world's last row must be [0, 0, 0, 1], got {pose[3].tolist()}")
+        rotation = pose[:3, :3]
+        if not np.allclose(rotation @ rotation.T, np.eye(3), atol=1e-6) or np.linalg.det(rotation) < 0:
+            raise ValueError("cam_from_world's upper-left 3×3 block must be a rotation matrix")
+        for name in ("width", "height"):
+            size = getattr(self, name)
+            if int(size) != size or size <= 0:
+                raise ValueError(f"{name} must be a positive integer, got {size!r}")
+        K.setflags(write=False)
+        pose.setflags(write=False)
+        object.__setattr__(self, "K", K)
+        object.__setattr__(self, "cam_from_world", pose)
+        object.__setattr__(self, "width", int(self.width))
+        object.__setattr__(self, "height", int(self.height))
+
+    @classmethod
+    def from_fov(cls, width: int, height: int, fov_x_deg: float, cam_from_world=None) -> "Camera":
+        """A camera with square pixels, principal point at the image centre, horizontal FOV in degrees."""
+        if not 0.0 < fov_x_deg < 180.0:
+            raise ValueError(f"fov_x_deg must be in (0, 180), got {fov_x_deg}")
+        focal = 0.5 * width / np.tan(np.radians(fov_x_deg) / 2.0)
+        K = np.array([[focal, 0.0, (width - 1) / 2.0], [0.0, focal, (height - 1) / 2.0], [0.0, 0.0, 1.0]])
+        return cls(K, np.eye(4) if cam_from_world is None else cam_from_world, width, height)
+
+    @property
+    def world_from_cam(self) -> np.ndarray:
+        """Inverse pose (4×4): camera points → world points."""
+        return np.linalg.inv(self.cam_from_world)
+
+    @property
+    def center(self) -> np.ndarray:
+        """Camera centre in world coordinates, (3,) metres."""
+        return self.world_from_cam[:3, 3]
+
+    @property
+    def focal(self) -> float:
+        """Horizontal focal length in pixels."""
+        return float(self.K[0, 0])
+
+    def resized(self, width: int, height: int) -> "Camera":
+        """The same camera for an image resampled to ``width × height`` (pixel centres kept)."""
+        sx, sy = width / self.width, height / self.height
+        K = self.K.copy()
+        K[0, 0] *= sx
+        K[1, 1] *= sy
+        K[0, 2] = (K[0, 2] + 0.5) * sx - 0.5
+        K[1, 2] = (K[1, 2] + 0.5) * sy - 0.5
+        return Camera(K, self.cam_from_world, width, height)
+
+    def __repr__(self) -> str:
+        c = self.center
+        return (f"Camera({self.width}×{self.height}, f={self.focal:.1f}px, "
+                f"centre=({c[0]:.3f}, {c[1]:.3f}, {c[2]:.3f}) m)")
+
+
+def relative_pose(ref: Camera, nbr: Camera) -> np.ndarray:
+    """``nbr_from_ref`` (4×4): maps points in the reference camera frame to the neighbour's frame."""
+    return nbr.cam_from_world @ np.linalg.inv(ref.cam_from_world)
+
+
+def look_at(eye, target, up=(0.0, -1.0, 0.0)) -> np.ndarray:
+    """``cam_from_world`` (4×4) of a camera at ``eye`` looking at ``target`` (world metres).
+
+    ``up`` is the world direction that should appear upwards in the image; with the OpenCV
+    convention (y down) the default world "up" is -y.
+    """
+    eye, target, up = (np.asarray(v, dtype=np.float64) for v in (eye, target, up))
+    forward = target - eye
+    forward /= np.linalg.norm(forward)
+    right = np.cross(forward, up)  # x = y × z with y = -up
+    right /= np.linalg.norm(right)
+    down = np.cross(forward, right)
+    world_from_cam = np.eye(4)
+    world_from_cam[:3, 0], world_from_cam[:3, 1], world_from_cam[:3, 2] = right, down, forward
+    world_from_cam[:3, 3] = eye
+    return np.linalg.inv(world_from_cam)
+
+
+def pixel_grid(height: int, width: int, dtype=torch.float32, device=None) -> torch.Tensor:
+    """Homogeneous pixel centres (3, H·W): rows (u, v, 1), u = column, v = row, (0, 0) top-left."""
+    v, u = torch.meshgrid(torch.arange(height, dtype=dtype, device=device),
+                          torch.arange(width, dtype=dtype, device=device), indexing="ij")
+    return torch.stack([u.reshape(-1), v.reshape(-1), torch.ones_like(u).reshape(-1)])
+
+
+def backproject(depth: torch.Tensor, K: torch.Tensor) -> torch.Tensor:
+    """Depth (B, 1, H, W) in metres (z, not ray length) → camera-frame points (B, 3, H, W)."""
+    B, _, H, W = depth.shape
+    rays = torch.linalg.inv(K.to(depth.dtype)) @ pixel_grid(H, W, depth.dtype, depth.device)  # (3, H·W)
+    return rays.reshape(1, 3, H, W) * depth
+
+
+def project(points: torch.Tensor, K: torch.Tensor, eps: float = 1e-6):
+    """Camera-frame points (B, 3, H, W) → pixel coordinates (B, 2, H, W) and depth z (B, 1, H, W)."""
+    B, _, H, W = points.shape
+    uvw = (K.to(points.dtype) @ points.reshape(B, 3, -1)).reshape(B, 3, H, W)
+    z = uvw[:, 2:3]
+    return uvw[:, :2] / z.clamp(min=eps), z

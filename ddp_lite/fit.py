@@ -1,0 +1,457 @@
+"""The optimisation loop: fit a randomly initialised net, from fixed noise, to one scene.
+
+    θ* = argmin_θ L(f_θ(n)),   output* = f_θ*(n)          (Deep Image Prior, paper Eq. 1)
+
+One loop serves Deep Image Prior on images (:func:`fit_image`) and the three DDP variants
+(:func:`complete_depth`): ``"d"`` (disparity only), ``"rgbd"`` (disparity + colour) and
+``"rgbd+warp"`` (plus photo-consistency with calibrated neighbours). The variants are the same
+code with different loss weights.
+
+Stopping: a run either follows a fixed schedule (the paper's) or stops by itself. For the
+latter a small random share of the *valid* pixels is held out of the loss; their error is a
+ground-truth-free estimate of how well the net predicts depth it has not seen. The output at
+the best held-out error is kept, and the run stops when it has not improved for ``patience``
+iterations.
+"""
+from __future__ import annotations
+
+import dataclasses
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import torch
+from tqdm.auto import tqdm
+
+from .camera import Camera
+from .disparity import DisparityTransform
+from .losses import LossWeights, disparity_loss, rgb_loss, warp_loss
+from .nets import build_net, make_noise
+from .profiles import get_profile
+from .warp import Warper
+
+__all__ = ["FitConfig", "DepthResult", "ImageResult", "complete_depth", "fit_image", "merge", "VARIANTS"]
+
+VARIANTS = ("d", "rgbd", "rgbd+warp")
+MIN_VALID_PIXELS = 16
+
+
+@dataclass
+class FitConfig:
+    """Everything a fit needs besides the data. Defaults are the paper's (supplement).
+
+    ``iterations=None`` means 16000 (6000 for depth only); milestones are absolute iterations.
+    Use :meth:`for_profile` for the sizes and schedules of ``DDP_PROFILE``.
+    """
+
+    net: str = "unet"  # "unet" or "skip"
+    channels: tuple | None = None  # encoder widths; None → the paper's
+    noise_channels: int = 16
+    lr: float = 5e-5
+    iterations: int | None = None
+    lr_milestones: tuple = (12000, 15000)
+    lr_gamma: float = 0.01
+    lambda_z: float = 0.8  # L1 share of L_disp
+    lambda_i: float = 0.5  # L1 share of L_rgb
+    lambda_w: float = 0.5  # SSIM share of L_warp
+    gammas: tuple | None = None  # (γ1, γ2); None → (0.96, 0.02) with warp, (0.98, 0.01) without
+    reg_noise_std: float = 0.0  # DIP input jitter: n + σ·N(0, 1) every iteration
+    average_outputs: float = 0.0  # DIP output averaging: EMA weight (0.99 in DIP), 0 = off
+    auto_stop: bool = False
+    holdout_fraction: float = 0.05  # share of valid pixels held out when auto_stop is on
+    patience: int = 200
+    eval_every: int = 10
+    seed: int = 0
+    device: str | None = None  # None → cuda or mps when available, else cpu
+    progress: bool = True
+    callback_every: int = 0
+
+    @classmethod
+    def for_profile(cls, profile=None, variant: str = "rgbd+warp", **overrides) -> "FitConfig":
+        """The config of a profile (name, :class:`Profile` or None for ``DDP_PROFILE``)."""
+        profile = get_profile(profile) if profile is None or isinstance(profile, str) else profile
+        iterations = profile.iterations_depth_only if variant == "d" else profile.iterations
+        net = overrides.get("net", "unet")
+        values = dict(net=net, channels=profile.channels if net == "unet" else profile.skip_channels,
+                      lr=profile.lr, iterations=iterations, lr_milestones=profile.milestones(iterations),
+                      lr_gamma=profile.lr_gamma, auto_stop=profile.auto_stop, patience=profile.patience,
+                      eval_every=profile.eval_every)
+        values.update(overrides)
+        return cls(**values)
+
+    def replace(self, **changes) -> "FitConfig":
+        """A copy with some fields changed."""
+        return dataclasses.replace(self, **changes)
+
+    def resolved_iterations(self, variant: str) -> int:
+        """The iteration count this config runs for ``variant``."""
+        if self.iterations is not None:
+            return int(self.iterations)
+        return 6000 if variant == "d" else 16000
+
+    def validate(self) -> None:
+        """Raise ``ValueError`` naming the first bad field."""
+        checks = [("lr", self.lr > 0), ("lr_gamma", self.lr_gamma > 0), ("eval_every", self.eval_every >= 1),
+                  ("patience", self.patience >= 1), ("noise_channels", self.noise_channels >= 1),
+                  ("holdout_fraction", 0.0 < self.holdout_fraction < 0.5),
+                  ("average_outputs", 0.0 <= self.average_outputs < 1.0),
+                  ("reg_noise_std", self.reg_noise_std >= 0.0),
+                  ("iterations", self.iterations is None or self.iterations >= 1)]
+        checks += [(name, 0.0 <= getattr(self, name) <= 1.0) for name in ("lambda_z", "lambda_i", "lambda_w")]
+        for name, ok in checks:
+            if not ok:
+                raise ValueError(f"config.{name} is out of range: {getattr(self, name)!r}")
+        if self.gammas is not None and (len(self.gammas) != 2 or min(self.gammas) < 0 or sum(self.gammas) > 1):
+            raise ValueError(f"config.gammas must be (γ1, γ2) with γ1, γ2 ≥ 0 and γ1 + γ2 ≤ 1, got {self.gammas}")
+
+
+@dataclass
+class DepthResult:
+    """What :func:`complete_depth` returns. Arrays are NumPy, (H, W) or (H, W, 3)."""
+
+    depth: np.ndarray  # metres, holes filled
+    disparity: np.ndarray  # [0, 1], see ``transform``
+    rgb: np.ndarray | None  # the net's colour output (None for depth only)
+    history: dict  # per-iteration loss terms; per-evaluation held-out and hole errors
+    transform: DisparityTransform
+    iterations: int  # iterations run
+    best_iteration: int  # the iteration whose output is returned
+    seconds: float
+
+    def merged(self, input_depth) -> np.ndarray:
+        """"SGM+DDP": the input where it is valid, this result in its holes."""
+        return merge(input_depth, self.depth)
+
+
+@dataclass
+class ImageResult:
+    """What :func:`fit_image` returns: the restored image (H, W, C) and the history."""
+
+    image: np.ndarray
+    history: dict
+    iterations: int
+    best_iteration: int
+    seconds: float
+
+
+def merge(input_depth, ddp_depth) -> np.ndarray:
+    """(H, W) metres: ``input_depth`` where it is finite, ``ddp_depth`` in its holes ("SGM+DDP")."""
+    input_depth = np.asarray(input_depth, dtype=np.float32)
+    ddp_depth = np.asarray(ddp_depth, dtype=np.float32)
+    if input_depth.shape != ddp_depth.shape:
+        raise ValueError(f"input_depth {input_depth.shape} and ddp_depth {ddp_depth.shape} must have the same shape")
+    return np.where(np.isfinite(input_depth), input_depth, ddp_depth).astype(np.float32)
+
+
+# --------------------------------------------------------------------------- input checks
+
+def _device(config: FitConfig) -> torch.device:
+    if config.device is not None:
+        return torch.device(config.device)
+    if torch.cuda.is_available():
+        return torch.device("cuda")
+    if getattr(torch.backends, "mps", None) is not None and torch.backends.mps.is_available():
+        return torch.device("mps")
+    return torch.device("cpu")
+
+
+def _check_image(image, name: str, shape=None) -> np.ndarray:
+    if isinstance(image, torch.Tensor):
+        raise TypeError(f"{name} must be a NumPy array (H, W, 3), got a torch tensor")
+    array = np.asarray(image)
+    if array.dtype == np.uint8:
+        array = array.astype(np.float32) / 255.0
+    if not np.issubdtype(array.dtype, np.floating):
+        raise TypeError(f"{name} must be float in [0, 1] (or uint8), got dtype {array.dtype}")
+    if array.ndim != 3 or array.shape[2] != 3:
+        raise ValueError(f"{name} must have shape (H, W, 3), got {array.shape}")
+    if shape is not None and array.shape[:2] != shape:
+        raise ValueError(f"{name} must be {shape[0]}×{shape[1]} like depth, got {array.shape[0]}×{array.shape[1]}")
+    if not np.all(np.isfinite(array)):
+        raise ValueError(f"{name} must contain only finite values")
+    if array.min() < -1e-6 or array.max() > 1 + 1e-6:
+        raise ValueError(f"{name} must lie in [0, 1], got range [{array.min():.3g}, {array.max():.3g}]")
+    return np.clip(array, 0.0, 1.0).astype(np.float32)
+
+
+def _check_depth(depth, name: str = "depth", allow_holes: bool = True) -> np.ndarray:
+    if isinstance(depth, torch.Tensor):
+        raise TypeError(f"{name} must be a NumPy array (H, W), got a torch tensor")
+    array = np.asarray(depth)
+    if not np.issubdtype(array.dtype, np.floating):
+        raise TypeError(f"{name} must be float metres with NaN holes, got dtype {array.dtype}")
+    if array.ndim != 2:
+        raise ValueError(f"{name} must have shape (H, W), got {array.shape}")
+    finite = np.isfinite(array)
+    if np.any(np.isinf(array)):
+        raise ValueError(f"{name} contains inf; mark holes with NaN (loaders convert a dataset's own marker)")
+    if np.any(array[finite] <= 0):
+        raise ValueError(f"{name} must be positive metres where valid, got minimum {array[finite].min():.3g}")
+    if finite.sum() < MIN_VALID_PIXELS:
+        raise ValueError(f"{name} has {int(finite.sum())} valid pixels; need at least {MIN_VALID_PIXELS}")
+    if not allow_holes and not finite.all():
+        raise ValueError(f"{name} must have no holes")
+    return array.astype(np.float32)
+
+
+def _check_neighbors(neighbors) -> list[tuple[np.ndarray, Camera]]:
+    checked = []
+    for i, item in enumerate(neighbors):
+        rgb, camera = (item.rgb, item.camera) if hasattr(item, "camera") else item
+        if not isinstance(camera, Camera):
+            raise TypeError(f"neighbors[{i}] must be an (rgb, Camera) pair or a View, got camera {type(camera).__name__}")
+        checked.append((_check_image(rgb, f"neighbors[{i}] rgb", (camera.height, camera.width)), camera))
+    return checked
+
+
+def _to_tensor(array: np.ndarray, device) -> torch.Tensor:
+    """(H, W) → (1, 1, H, W); (H, W, C) → (1, C, H, W)."""
+    tensor = torch.from_numpy(np.ascontiguousarray(array, dtype=np.float32))
+    tensor = tensor[None, None] if tensor.ndim == 2 else tensor.permute(2, 0, 1)[None]
+    return tensor.contiguous().to(device)
+
+
+# --------------------------------------------------------------------------- the loop
+
+def _run(net, noise, loss_fn, config: FitConfig, iterations: int, heldout_error=None, evaluate=None,
+         callback=None, description: str = "fit"):
+    """Adam on ``loss_fn(net(noise))``; returns (kept output, history, iterations run, best iteration)."""
+    optimizer = torch.optim.Adam(net.parameters(), lr=config.lr)
+    milestones = [m for m in config.lr_milestones if m < iterations]
+    scheduler = torch.optim.lr_scheduler.MultiStepLR(optimizer, milestones, gamma=config.lr_gamma)
+    jitter = torch.Generator(device=noise.device).manual_seed(config.seed + 1) if config.reg_noise_std else None
+    terms_log = None  # (iterations, n_terms) kept on the device: no host read per iteration
+    evals = {"eval_iteration": [], "heldout": []}
+    averaged = best_output = None
+    best_error, best_iteration, since_best = float("inf"), 0, 0
+    stop_check = config.auto_stop and heldout_error is not None
+    bar = tqdm(range(iterations), desc=description, disable=not config.progress, leave=False)
+    it = -1
+    for it in bar:
+        net_input = noise
+        if jitter is not None:
+            net_input = noise + config.reg_noise_std * torch.randn(noise.shape, generator=jitter, device=noise.device)
+        output = net(net_input)
+        total, terms = loss_fn(output)
+        optimizer.zero_grad(set_to_none=True)
+        total.backward()
+        optimizer.step()
+        scheduler.step()
+        if terms_log is None:
+            names = ["loss", *terms]
+            terms_log = torch.zeros(iterations, len(names), device=noise.device)
+        terms_log[it] = torch.stack([total.detach(), *(t.detach() for t in terms.values())])
+        current = output.detach()
+        if config.average_outputs:
+            averaged = current if averaged is None else config.average_outputs * averaged + (1 - config.average_outputs) * current
+            current = averaged
+        last = it + 1 == iterations
+        if (it + 1) % config.eval_every == 0 or last:
+            evals["eval_iteration"].append(it + 1)
+            error = float(heldout_error(current)) if heldout_error is not None else float("nan")
+            evals["heldout"].append(error)
+            for key, value in (evaluate(current) if evaluate is not None else {}).items():
+                evals.setdefault(key, []).append(value)
+            if stop_check:
+                if error < best_error:
+                    best_error, best_iteration, since_best = error, it + 1, 0
+                    best_output = current.clone()
+                else:
+                    since_best += config.eval_every
+                bar.set_postfix(heldout=f"{error:.4f}", refresh=False)
+                if since_best >= config.patience:
+                    break
+        if callback is not None and config.callback_every and (it + 1) % config.callback_every == 0:
+            callback(it + 1, current)
+    bar.close()
+    history = {name: column.cpu().numpy()[: it + 1] for name, column in zip(names, terms_log.T)}
+    history.update({key: np.asarray(values) for key, values in evals.items()})
+    if best_output is None:
+        best_output, best_iteration = current, it + 1
+    return best_output, history, it + 1, best_iteration
+
+
+def _build(config: FitConfig, out_channels: int, height: int, width: int, device):
+    with torch.random.fork_rng(devices=[]):  # deterministic init without touching the caller's RNG
+        torch.manual_seed(config.seed)
+        net = build_net(config.net, config.noise_channels, out_channels, config.channels)
+    noise = make_noise(config.noise_channels, height, width, seed=config.seed)
+    return net.to(device), noise.to(device)
+
+
+def _holdout_mask(valid: np.ndarray, fraction: float, seed: int) -> np.ndarray:
+    """A random share of the valid pixels (H, W) bool, seeded."""
+    rng = np.random.default_rng(seed + 12345)
+    return valid & (rng.random(valid.shape) < fraction)
+
+
+def complete_depth(rgb, depth, camera: Camera | None = None, neighbors=(), variant: str = "rgbd+warp",
+                   config: FitConfig | None = None, gt_depth=None, transform: DisparityTransform | None = None,
+                   callback=None) -> DepthResult:
+    """Fill the holes (NaN) of ``depth`` (H, W, metres) with a Deep Depth Prior.
+
+    Args:
+        rgb: (H, W, 3) float in [0, 1], the reference image (unused by ``variant="d"``).
+        depth: (H, W) float metres, NaN = hole.
+        camera: the reference ``Camera`` (needed for the warp loss).
+        neighbors: ``(rgb, Camera)`` pairs or ``View`` objects of calibrated neighbouring views.
+        variant: ``"d"``, ``"rgbd"`` or ``"rgbd+warp"``.
+        config: a :class:`FitConfig`; None → ``FitConfig.for_profile(variant=variant)``.
+        gt_depth: (H, W) metres; when given, the hole error is tracked in ``history``.
+        transform: depth ↔ disparity map; None → derived from the valid input depth.
+        callback: ``callback(iteration, DepthResult-like dict)`` every ``config.callback_every``.
+    Returns:
+        :class:`DepthResult` with ``.depth`` (H, W) metres, ``.disparity``, ``.rgb``, ``.history``.
+
+    Example:
+        >>> depth = np.full((32, 32), 2.0, np.float32); depth[10:20, 10:20] = np.nan
+        >>> cfg = FitConfig(channels=(8, 16), lr=1e-2, iterations=5, progress=False)
+        >>> complete_depth(np.zeros((32, 32, 3), np.float32), depth, variant="d", config=cfg).depth.shape
+        (32, 32)
+    """
+    if variant not in VARIANTS:
+        raise ValueError(f"variant must be one of {VARIANTS}, got {variant!r}")
+    config = FitConfig.for_profile(variant=variant) if config is None else config
+    if not isinstance(config, FitConfig):
+        raise TypeError(f"config must be a FitConfig, got {type(config).__name__}")
+    config.validate()
+    depth = _check_depth(depth)
+    H, W = depth.shape
+    rgb = _check_image(rgb, "rgb", (H, W)) if variant != "d" or rgb is not None else None
+    neighbors = _check_neighbors(neighbors)
+    if camera is not None and not isinstance(camera, Camera):
+        raise TypeError(f"camera must be a ddp_lite.Camera, got {type(camera).__name__}")
+    if camera is not None and (camera.height, camera.width) != (H, W):
+        raise ValueError(f"camera is {camera.width}×{camera.height} but depth is {W}×{H}")
+    if variant == "rgbd+warp" and (camera is None or not neighbors):
+        raise ValueError("variant 'rgbd+warp' needs camera and at least one neighbor; use 'rgbd' without them")
+    if gt_depth is not None:
+        gt_depth = np.asarray(gt_depth, dtype=np.float32)
+        if gt_depth.shape != (H, W):
+            raise ValueError(f"gt_depth must be {(H, W)} like depth, got {gt_depth.shape}")
+    transform = DisparityTransform.from_depth(depth) if transform is None else transform
+    if not isinstance(transform, DisparityTransform):
+        raise TypeError(f"transform must be a DisparityTransform, got {type(transform).__name__}")
+
+    device = _device(config)
+    iterations = config.resolved_iterations(variant)
+    w_disp, w_rgb, w_warp = LossWeights.for_variant(variant, config.gammas)
+    valid = np.isfinite(depth)
+    heldout = _holdout_mask(valid, config.holdout_fraction, config.seed) if config.auto_stop else np.zeros_like(valid)
+    if (valid & ~heldout).sum() < MIN_VALID_PIXELS:
+        heldout = np.zeros_like(valid)
+    target = _to_tensor(np.nan_to_num(transform.to_disparity(depth), nan=0.0), device)  # (1, 1, H, W)
+    fit_mask = _to_tensor(valid & ~heldout, device).bool()  # (1, 1, H, W)
+    heldout_t = _to_tensor(heldout, device).bool()
+    rgb_t = _to_tensor(rgb, device) if rgb is not None and w_rgb + w_warp > 0 else None  # (1, 3, H, W)
+    warpers = [Warper(camera, cam, device=device) for _, cam in neighbors] if w_warp > 0 else []
+    nbr_images = [_to_tensor(img, device) for img, _ in neighbors] if w_warp > 0 else []
+    near, far, constant = transform.near, transform.far, transform.constant
+
+    def to_metres(disparity):  # differentiable twin of transform.to_depth
+        return 1.0 / (disparity * (near - far) + far) - constant
+
+    def loss_fn(output):
+        disparity = output[:, :1]  # (1, 1, H, W)
+        terms = {"disp": disparity_loss(disparity, target, fit_mask, config.lambda_z)}
+        total = w_disp * terms["disp"]
+        if w_rgb > 0:
+            terms["rgb"] = rgb_loss(output[:, 1:4], rgb_t, config.lambda_i)
+            total = total + w_rgb * terms["rgb"]
+        if w_warp > 0:
+            ref_depth = to_metres(disparity)
+            pairs = [warper(image, ref_depth) for warper, image in zip(warpers, nbr_images)]
+            terms["warp"] = warp_loss(rgb_t, [p[0] for p in pairs], [p[1] for p in pairs], config.lambda_w)
+            total = total + w_warp * terms["warp"]
+        return total, terms
+
+    heldout_error = None
+    if heldout.any():
+        n_heldout = float(heldout.sum())
+
+        def heldout_error(output):
+            return float(((output[:, :1] - target).abs() * heldout_t).sum() / n_heldout)
+
+    evaluate = None
+    if gt_depth is not None:
+        holes = ~valid & np.isfinite(gt_depth)
+        holes_t = _to_tensor(holes, device).bool()
+        gt_disp_t = _to_tensor(np.nan_to_num(transform.to_disparity(gt_depth), nan=0.0), device)
+        gt_m_t = _to_tensor(np.nan_to_num(np.clip(gt_depth, transform.d_min, transform.d_max), nan=0.0), device)
+        n_holes = max(float(holes.sum()), 1.0)
+
+        def evaluate(output):
+            disparity = output[:, :1]
+            err_disp = ((disparity - gt_disp_t) ** 2 * holes_t).sum() / n_holes
+            err_m = ((to_metres(disparity) - gt_m_t) ** 2 * holes_t).sum() / n_holes
+            return {"hole_rmse": float(err_disp.sqrt()), "hole_rmse_m": float(err_m.sqrt())}
+
+    user_callback = None
+    if callback is not None:
+        def user_callback(iteration, output):
+            disparity = output[0, 0].cpu().numpy()
+            callback(iteration, {"disparity": disparity, "depth": transform.to_depth(disparity),
+                                 "rgb": output[0, 1:4].permute(1, 2, 0).cpu().numpy() if output.shape[1] >= 4 else None})
+
+    net, noise = _build(config, 1 if variant == "d" else 4, H, W, device)
+    start = time.perf_counter()
+    output, history, ran, best = _run(net, noise, loss_fn, config, iterations, heldout_error, evaluate,
+                                      user_callback, description=f"DDP {variant}")
+    seconds = time.perf_counter() - start
+    disparity = output[0, 0].cpu().numpy().astype(np.float32)
+    out_rgb = output[0, 1:4].permute(1, 2, 0).cpu().numpy().astype(np.float32) if output.shape[1] >= 4 else None
+    return DepthResult(depth=transform.to_depth(disparity).astype(np.float32), disparity=disparity, rgb=out_rgb,
+                       history=history, transform=transform, iterations=ran, best_iteration=best, seconds=seconds)
+
+
+def fit_image(image, mask=None, config: FitConfig | None = None, clean=None, callback=None) -> ImageResult:
+    """Deep Image Prior on an image: fit ``image`` (H, W, 3) float [0, 1] where ``mask`` (H, W) bool
+    is True (default: everywhere) with a masked MSE; ``clean`` (H, W, 3), if given, is tracked as PSNR.
+
+    Denoising: pass the noisy image and no mask. Inpainting: pass the mask of known pixels.
+    """
+    config = FitConfig.for_profile(variant="rgbd") if config is None else config
+    config.validate()
+    image = _check_image(image, "image")
+    H, W, _ = image.shape
+    mask = np.ones((H, W), bool) if mask is None else np.asarray(mask)
+    if mask.shape != (H, W) or mask.dtype != bool:
+        raise ValueError(f"mask must be bool (H, W) = {(H, W)}, got {mask.dtype} {mask.shape}")
+    if mask.sum() < MIN_VALID_PIXELS:
+        raise ValueError(f"mask has {int(mask.sum())} known pixels; need at least {MIN_VALID_PIXELS}")
+    clean = _check_image(clean, "clean", (H, W)) if clean is not None else None
+    device = _device(config)
+    heldout = _holdout_mask(mask, config.holdout_fraction, config.seed) if config.auto_stop else np.zeros_like(mask)
+    target = _to_tensor(image, device)
+    fit_mask = _to_tensor(mask & ~heldout, device)
+    heldout_t = _to_tensor(heldout, device)
+    n_fit = float(fit_mask.sum()) * 3
+
+    def loss_fn(output):
+        mse = (((output - target) ** 2) * fit_mask).sum() / n_fit
+        return mse, {"mse": mse}
+
+    heldout_error = None
+    if heldout.any():
+        def heldout_error(output):
+            return float((((output - target) ** 2) * heldout_t).sum() / (float(heldout.sum()) * 3))
+
+    evaluate = None
+    if clean is not None:
+        clean_t = _to_tensor(clean, device)
+
+        def evaluate(output):
+            mse = float(((output.clamp(0, 1) - clean_t) ** 2).mean())
+            return {"psnr": 10.0 * np.log10(1.0 / max(mse, 1e-12))}
+
+    user_callback = None
+    if callback is not None:
+        def user_callback(iteration, output):
+            callback(iteration, output[0].permute(1, 2, 0).cpu().numpy())
+
+    net, noise = _build(config, 3, H, W, device)
+    start = time.perf_counter()
+    output, history, ran, best = _run(net, noise, loss_fn, config, config.resolved_iterations("rgbd"),
+                                      heldout_error, evaluate, user_callback, description="DIP")
+    return ImageResult(image=output[0].permute(1, 2, 0).cpu().numpy().astype(np.float32), history=history,
+                       iterations=ran, best_iteration=best, seconds=time.perf_counter() - start)

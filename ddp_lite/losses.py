@@ -1,0 +1,149 @@
+"""SSIM, masked L1 and the three DDP losses (paper Sec. 3.2, supplement "SSIM Index").
+
+Every loss here is ``λ · L1 + (1 - λ) · (1 - SSIM)`` on some pair of images; they differ in what
+is compared and which pixels count:
+
+- ``L_disp``: output vs input disparity, only where the input depth is valid;
+- ``L_rgb``: output vs input colour, everywhere;
+- ``L_warp``: the reference colour vs each neighbour warped through the output depth, only where
+  the warp lands inside the neighbour.
+
+Masking SSIM needs care: an 11×11 window centred on a valid pixel next to a hole would see the
+hole's values. So before SSIM both images get the *same* value wherever a pixel does not count
+(the target's value for the output, a constant for a target's holes): those pixels then agree
+exactly, contribute no error, and pass no gradient. The ground truth inside a hole never
+reaches the loss.
+"""
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+import torch
+import torch.nn.functional as F
+
+__all__ = ["ssim", "masked_l1", "disparity_loss", "rgb_loss", "warp_loss", "LossWeights"]
+
+C1_FACTOR, C2_FACTOR = 0.01, 0.03  # k1, k2 of Wang et al. 2004
+
+
+@functools.lru_cache(maxsize=16)
+def _gaussian_1d(window_size: int, sigma: float, dtype: torch.dtype, device: str) -> torch.Tensor:
+    offsets = torch.arange(window_size, dtype=torch.float64) - (window_size - 1) / 2
+    weights = torch.exp(-offsets ** 2 / (2 * sigma ** 2))
+    return (weights / weights.sum()).to(dtype=dtype, device=device)
+
+
+def _blur(x: torch.Tensor, kernel: torch.Tensor) -> torch.Tensor:
+    """Separable 'valid' Gaussian filter: (B, C, H, W) → (B, C, H - k + 1, W - k + 1)."""
+    C, k = x.shape[1], kernel.numel()
+    x = F.conv2d(x, kernel.reshape(1, 1, 1, k).expand(C, 1, 1, k), groups=C)
+    return F.conv2d(x, kernel.reshape(1, 1, k, 1).expand(C, 1, k, 1), groups=C)
+
+
+def ssim(x, y, data_range: float = 1.0, window_size: int = 11, sigma: float = 1.5, reduction: str = "mean"):
+    """Structural similarity of two images with an 11×11 Gaussian window (σ = 1.5).
+
+    Args:
+        x, y: (B, C, H, W) tensors, or NumPy (H, W) / (H, W, C) arrays; H, W ≥ ``window_size``.
+        reduction: ``"mean"`` → a scalar (tensor in, tensor out; float for NumPy), the mean over
+            the windows that fit inside the image — the number scikit-image's
+            ``structural_similarity(gaussian_weights=True, sigma=1.5,
+            use_sample_covariance=False)`` gives; ``"none"`` → the SSIM map
+            (B, C, H - 10, W - 10), one value per window centre.
+    Example:
+        >>> img = np.random.default_rng(0).random((32, 32)).astype(np.float32)
+        >>> round(ssim(img, img), 6)
+        1.0
+    """
+    as_numpy = not isinstance(x, torch.Tensor)
+    if as_numpy:
+        x_np, y_np = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
+        if x_np.shape != y_np.shape or x_np.ndim not in (2, 3):
+            raise ValueError(f"x and y must share an (H, W) or (H, W, C) shape, got {x_np.shape} and {y_np.shape}")
+        to_tensor = (lambda a: torch.from_numpy(a)[None, None]) if x_np.ndim == 2 else \
+                    (lambda a: torch.from_numpy(np.ascontiguousarray(a.transpose(2, 0, 1)))[None])
+        x, y = to_tensor(x_np), to_tensor(y_np)
+    if x.shape != y.shape or x.ndim != 4:
+        raise ValueError(f"x and y must share a (B, C, H, W) shape, got {tuple(x.shape)} and {tuple(y.shape)}")
+    if min(x.shape[-2:]) < window_size:
+        raise ValueError(f"images must be at least {window_size}×{window_size}, got {tuple(x.shape[-2:])}")
+    kernel = _gaussian_1d(window_size, float(sigma), x.dtype, str(x.device))
+    c1, c2 = (C1_FACTOR * data_range) ** 2, (C2_FACTOR * data_range) ** 2
+    # one batched blur for the five moments instead of five calls
+    moments = _blur(torch.cat([x, y, x * x, y * y, x * y], dim=1), kernel)
+    mu_x, mu_y, xx, yy, xy = moments.chunk(5, dim=1)
+    var_x, var_y, cov = xx - mu_x ** 2, yy - mu_y ** 2, xy - mu_x * mu_y
+    ssim_map = ((2 * mu_x * mu_y + c1) * (2 * cov + c2)) / ((mu_x ** 2 + mu_y ** 2 + c1) * (var_x + var_y + c2))
+    if reduction == "none":
+        return ssim_map
+    if reduction != "mean":
+        raise ValueError(f"reduction must be 'mean' or 'none', got {reduction!r}")
+    value = ssim_map.mean()
+    return float(value) if as_numpy else value
+
+
+def masked_l1(x: torch.Tensor, y: torch.Tensor, mask: torch.Tensor | None = None) -> torch.Tensor:
+    """Mean |x - y| over the pixels where ``mask`` (B, 1, H, W) is True; x, y (B, C, H, W)."""
+    error = (x - y).abs()
+    if mask is None:
+        return error.mean()
+    weights = mask.to(error.dtype)
+    return (error * weights).sum() / (weights.sum() * x.shape[1]).clamp(min=1.0)
+
+
+def _l1_ssim(x, y, mask, l1_weight: float) -> torch.Tensor:
+    """``l1_weight · L1 + (1 - l1_weight) · (1 - SSIM)``, with pixels outside ``mask`` made to agree."""
+    if mask is not None:
+        x = torch.where(mask, x, y)
+    return l1_weight * masked_l1(x, y, mask) + (1.0 - l1_weight) * (1.0 - ssim(x, y))
+
+
+def disparity_loss(output: torch.Tensor, target: torch.Tensor, mask: torch.Tensor, lambda_z: float = 0.8):
+    """L_disp: output (B, 1, H, W) vs target disparity, on pixels where ``mask`` (B, 1, H, W) is True.
+
+    The target's non-counting pixels may hold anything finite (NaN is refused: it would poison
+    SSIM); they never reach the loss or its gradient.
+    """
+    target = torch.where(mask, target, torch.zeros_like(target))
+    return _l1_ssim(output, target, mask, lambda_z)
+
+
+def rgb_loss(output: torch.Tensor, target: torch.Tensor, lambda_i: float = 0.5, mask=None):
+    """L_RGB: output colour (B, 3, H, W) vs the input image, on every pixel (or on ``mask``)."""
+    if mask is not None:
+        target = torch.where(mask, target, torch.zeros_like(target))
+    return _l1_ssim(output, target, mask, lambda_i)
+
+
+def warp_loss(reference: torch.Tensor, warped: list, valid: list, lambda_w: float = 0.5):
+    """L_warp: mean over neighbours of ``λw (1 - SSIM) + (1 - λw) L1`` between the reference image
+    (B, 3, H, W) and each warped neighbour (B, 3, H, W), on that neighbour's valid pixels (B, 1, H, W).
+
+    Note the paper weights SSIM by λw here (L1 by λ in the other two losses); with λw = 0.5 the
+    two readings agree.
+    """
+    if len(warped) == 0:
+        raise ValueError("warp_loss needs at least one warped neighbour")
+    losses = [_l1_ssim(w, reference, v, 1.0 - lambda_w) for w, v in zip(warped, valid)]
+    return torch.stack(losses).mean()
+
+
+class LossWeights:
+    """The paper's γ1, γ2 (L_total = γ1 L_disp + γ2 L_rgb + (1 - γ1 - γ2) L_warp) for a variant."""
+
+    MULTI_VIEW = (0.96, 0.02)  # Tanks and Temples
+    SINGLE_VIEW = (0.98, 0.01)  # everything else
+
+    @staticmethod
+    def for_variant(variant: str, gammas=None) -> tuple[float, float, float]:
+        """(w_disp, w_rgb, w_warp) for ``"d"``, ``"rgbd"`` or ``"rgbd+warp"``."""
+        if variant == "d":
+            return 1.0, 0.0, 0.0
+        if variant == "rgbd":
+            g1, g2 = gammas or LossWeights.SINGLE_VIEW
+            return g1, g2, 0.0
+        if variant == "rgbd+warp":
+            g1, g2 = gammas or LossWeights.MULTI_VIEW
+            return g1, g2, 1.0 - g1 - g2
+        raise ValueError(f"variant must be 'd', 'rgbd' or 'rgbd+warp', got {variant!r}")

@@ -1,0 +1,142 @@
+"""The generators: a UNet (the paper's choice) and Deep Image Prior's SkipNet.
+
+Both map a fixed noise tensor (B, 16, H, W) to an output (B, C_out, H, W) in [0, 1] (sigmoid).
+Nothing is pretrained: the architecture itself is the prior. Each network pads its input to a
+multiple of its total down-sampling factor (reflection padding) and crops the output back, so
+any image size works.
+"""
+from __future__ import annotations
+
+import torch
+import torch.nn as nn
+import torch.nn.functional as F
+
+__all__ = ["UNet", "SkipNet", "make_noise", "build_net", "count_parameters"]
+
+UNET_CHANNELS = (32, 64, 128, 256, 512)  # the paper's encoder
+SKIP_CHANNELS = (128, 128, 128, 128, 128)  # DIP's inpainting "skip" net
+SKIP_SKIP_CHANNELS = (4, 4, 4, 4, 4)
+
+
+def make_noise(channels: int, height: int, width: int, seed: int = 0, scale: float = 0.1) -> torch.Tensor:
+    """The fixed network input (1, channels, H, W): uniform noise in [0, scale), as DIP uses."""
+    generator = torch.Generator().manual_seed(seed)
+    return torch.rand(1, channels, height, width, generator=generator) * scale
+
+
+def _conv(c_in: int, c_out: int, kernel: int = 3, stride: int = 1) -> nn.Sequential:
+    """Conv (reflection padded) → BatchNorm → LeakyReLU(0.2): DIP's basic block."""
+    return nn.Sequential(
+        nn.ReflectionPad2d(kernel // 2) if kernel > 1 else nn.Identity(),
+        nn.Conv2d(c_in, c_out, kernel, stride=stride, bias=False),
+        nn.BatchNorm2d(c_out),
+        nn.LeakyReLU(0.2),
+    )
+
+
+class _PadCrop(nn.Module):
+    """Pads (B, C, H, W) to a multiple of ``factor`` before the body and crops after."""
+
+    factor = 1
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        H, W = x.shape[-2:]
+        pad_h, pad_w = (-H) % self.factor, (-W) % self.factor
+        if pad_h or pad_w:
+            mode = "reflect" if pad_h < H and pad_w < W else "replicate"
+            x = F.pad(x, (0, pad_w, 0, pad_h), mode=mode)
+        return torch.sigmoid(self.body(x))[..., :H, :W]
+
+
+class UNet(_PadCrop):
+    """Encoder-decoder with skip connections; 3×3 convs; encoder widths ``channels``.
+
+    Example:
+        >>> net = UNet(16, 4, channels=(8, 16, 32))
+        >>> net(torch.rand(1, 16, 30, 41)).shape
+        torch.Size([1, 4, 30, 41])
+    """
+
+    def __init__(self, in_channels: int = 16, out_channels: int = 4, channels=UNET_CHANNELS):
+        super().__init__()
+        channels = tuple(int(c) for c in channels)
+        if len(channels) < 2 or min(channels) < 1:
+            raise ValueError(f"channels must list at least two positive widths, got {channels}")
+        self.factor = 2 ** (len(channels) - 1)
+        self.inc = nn.Sequential(_conv(in_channels, channels[0]), _conv(channels[0], channels[0]))
+        self.downs = nn.ModuleList(
+            nn.Sequential(_conv(c_in, c_out, stride=2), _conv(c_out, c_out))
+            for c_in, c_out in zip(channels[:-1], channels[1:]))
+        self.ups = nn.ModuleList(
+            nn.Sequential(_conv(c_deep + c_skip, c_skip), _conv(c_skip, c_skip))
+            for c_deep, c_skip in zip(channels[:0:-1], channels[-2::-1]))
+        self.head = nn.Conv2d(channels[0], out_channels, 1)
+
+    def body(self, x: torch.Tensor) -> torch.Tensor:
+        skips = [self.inc(x)]  # (B, c0, H, W)
+        for down in self.downs:
+            skips.append(down(skips[-1]))  # (B, c_k, H / 2^k, W / 2^k)
+        x = skips.pop()
+        for up in self.ups:
+            skip = skips.pop()
+            x = F.interpolate(x, size=skip.shape[-2:], mode="bilinear", align_corners=False)
+            x = up(torch.cat([x, skip], dim=1))
+        return self.head(x)
+
+
+class SkipNet(_PadCrop):
+    """Deep Image Prior's "skip" architecture: strided-conv encoder, bilinear-upsampling decoder,
+    thin 1×1 skip branches concatenated at every scale.
+
+    Example:
+        >>> SkipNet(16, 4, channels=(8, 8), skip_channels=(2, 2))(torch.rand(1, 16, 20, 20)).shape
+        torch.Size([1, 4, 20, 20])
+    """
+
+    def __init__(self, in_channels: int = 16, out_channels: int = 4, channels=SKIP_CHANNELS,
+                 skip_channels=SKIP_SKIP_CHANNELS):
+        super().__init__()
+        channels, skip_channels = tuple(channels), tuple(skip_channels)
+        if len(channels) != len(skip_channels) or len(channels) < 1:
+            raise ValueError(f"channels and skip_channels must have the same non-zero length, "
+                             f"got {channels} and {skip_channels}")
+        self.factor = 2 ** len(channels)
+        self.levels = nn.ModuleList()
+        c_in = in_channels
+        for depth, (c, c_skip) in enumerate(zip(channels, skip_channels)):
+            c_deeper = channels[depth + 1] if depth + 1 < len(channels) else 0
+            self.levels.append(nn.ModuleDict({
+                "skip": _conv(c_in, c_skip, kernel=1) if c_skip else nn.Identity(),
+                "down": nn.Sequential(_conv(c_in, c, stride=2), _conv(c, c)),
+                "up": nn.Sequential(nn.BatchNorm2d(c_skip + (c_deeper or c)), _conv(c_skip + (c_deeper or c), c),
+                                    _conv(c, c, kernel=1)),
+            }))
+            c_in = c
+        self.head = nn.Conv2d(channels[0], out_channels, 1)
+
+    def _level(self, x: torch.Tensor, depth: int) -> torch.Tensor:
+        level = self.levels[depth]
+        deeper = level["down"](x)  # (B, c, H/2, W/2)
+        if depth + 1 < len(self.levels):
+            deeper = self._level(deeper, depth + 1)
+        deeper = F.interpolate(deeper, size=x.shape[-2:], mode="bilinear", align_corners=False)
+        parts = [level["skip"](x), deeper] if not isinstance(level["skip"], nn.Identity) else [deeper]
+        return level["up"](torch.cat(parts, dim=1))
+
+    def body(self, x: torch.Tensor) -> torch.Tensor:
+        return self.head(self._level(x, 0))
+
+
+def build_net(kind: str, in_channels: int, out_channels: int, channels=None) -> nn.Module:
+    """``"unet"`` or ``"skip"`` with the paper's widths unless ``channels`` is given."""
+    if kind == "unet":
+        return UNet(in_channels, out_channels, channels or UNET_CHANNELS)
+    if kind == "skip":
+        channels = tuple(channels or SKIP_CHANNELS)
+        return SkipNet(in_channels, out_channels, channels, tuple(min(4, c) for c in channels))
+    raise ValueError(f"net must be 'unet' or 'skip', got {kind!r}")
+
+
+def count_parameters(net: nn.Module) -> int:
+    """Number of trainable parameters."""
+    return sum(p.numel() for p in net.parameters() if p.requires_grad)

@@ -1,0 +1,85 @@
+"""One switch for sizes and schedules: the ``DDP_PROFILE`` environment variable.
+
+- ``ci``: seconds per notebook on a 2-core CPU (what nbval runs): tiny images, a narrow net;
+- ``class`` (default): minutes per notebook on a laptop CPU, sizes where the effects show;
+- ``paper``: the paper's sizes and schedules (lr 5e-5, ×0.01 at 12000 and 15000 of 16000
+  iterations; depth-only 6000), meant for a GPU.
+
+The paper's learning rate was tuned for 960×512 images and 16000 iterations; at our small
+sizes it fills nothing in 1000 iterations, so ``ci`` and ``class`` use a larger rate with
+their own decays, and stop automatically on a held-out share of the valid pixels.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+
+__all__ = ["Profile", "PROFILES", "get_profile", "current_profile_name"]
+
+ENV_VAR = "DDP_PROFILE"
+DEFAULT = "class"
+
+
+@dataclass(frozen=True)
+class Profile:
+    """Sizes and schedules one profile uses everywhere."""
+
+    name: str
+    size: tuple[int, int]  # (H, W) of scenes and images
+    channels: tuple[int, ...]  # UNet encoder widths
+    skip_channels: tuple[int, ...]  # SkipNet widths
+    iterations: int  # RGBD variants
+    iterations_depth_only: int
+    lr: float
+    lr_milestones: tuple[float, ...]  # ≤ 1: fractions of the iteration count; > 1: iterations
+    lr_gamma: float
+    auto_stop: bool
+    patience: int
+    eval_every: int
+    n_views: int  # views per synthetic multi-view scene
+    seeds: tuple[int, ...]  # seeds for "mean and spread" tables
+    image_iterations: int  # Deep Image Prior on a natural image
+
+    def milestones(self, iterations: int) -> tuple[int, ...]:
+        """The learning-rate decay iterations for a run of ``iterations``."""
+        steps = (round(m * iterations) if m <= 1 else int(m) for m in self.lr_milestones)
+        return tuple(s for s in steps if s < iterations)
+
+    def describe(self) -> str:
+        """One line for a notebook's first cell."""
+        H, W = self.size
+        return (f"profile '{self.name}': {H}×{W} images, UNet {'-'.join(map(str, self.channels))}, "
+                f"{self.iterations} iterations (depth-only {self.iterations_depth_only}), lr {self.lr:g}, "
+                f"auto-stop {'on' if self.auto_stop else 'off'}")
+
+
+PROFILES = {
+    "ci": Profile("ci", size=(48, 64), channels=(16, 32, 64, 128), skip_channels=(32, 32, 32, 32),
+                  iterations=150, iterations_depth_only=150, lr=1e-2, lr_milestones=(0.6, 0.85),
+                  lr_gamma=0.3, auto_stop=False, patience=60, eval_every=10, n_views=4, seeds=(0,),
+                  image_iterations=120),
+    "class": Profile("class", size=(96, 128), channels=(32, 64, 128, 256, 512), skip_channels=(128,) * 5,
+                     iterations=400, iterations_depth_only=400, lr=1e-2, lr_milestones=(0.6, 0.85),
+                     lr_gamma=0.3, auto_stop=True, patience=100, eval_every=10, n_views=6, seeds=(0, 1),
+                     image_iterations=600),
+    "paper": Profile("paper", size=(512, 960), channels=(32, 64, 128, 256, 512), skip_channels=(128,) * 5,
+                     iterations=16000, iterations_depth_only=6000, lr=5e-5, lr_milestones=(12000, 15000),
+                     lr_gamma=0.01, auto_stop=False, patience=2000, eval_every=100, n_views=8,
+                     seeds=(0, 1, 2), image_iterations=3000),
+}
+
+
+def current_profile_name() -> str:
+    """The profile named by ``DDP_PROFILE`` (default ``class``)."""
+    name = os.environ.get(ENV_VAR, DEFAULT).strip().lower() or DEFAULT
+    if name not in PROFILES:
+        raise ValueError(f"{ENV_VAR} must be one of {sorted(PROFILES)}, got {name!r}")
+    return name
+
+
+def get_profile(name: str | None = None) -> Profile:
+    """The named profile, or the one ``DDP_PROFILE`` selects."""
+    name = current_profile_name() if name is None else name
+    if name not in PROFILES:
+        raise ValueError(f"profile must be one of {sorted(PROFILES)}, got {name!r}")
+    return PROFILES[name]
