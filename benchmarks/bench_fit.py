@@ -1,0 +1,92 @@
+"""Seconds per iteration, peak memory and FLOP efficiency of the fit loop, per variant and size.
+
+    python benchmarks/bench_fit.py            # all variants at 48×64 and 96×128, UNet 32–512
+    python benchmarks/bench_fit.py --narrow   # also the ci profile's narrow net
+
+Prints a table; asserts nothing. Each configuration runs in a fresh subprocess so that its
+peak resident memory (ru_maxrss) is its own. "bound" is the iteration's floating-point work
+(torch.utils.flop_counter, forward + backward) divided by this machine's dense matrix-multiply
+rate measured in the same run with the same thread count; "ratio" = time / bound.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import resource
+import subprocess
+import sys
+import time
+
+import numpy as np
+import torch
+
+
+def matmul_rate(n: int = 2048, repeats: int = 5) -> float:
+    """Dense float32 matrix-multiply rate (FLOP/s) with the current thread count."""
+    a, b = torch.rand(n, n), torch.rand(n, n)
+    torch.mm(a, b)
+    start = time.perf_counter()
+    for _ in range(repeats):
+        torch.mm(a, b)
+    return 2 * n ** 3 * repeats / (time.perf_counter() - start)
+
+
+def case(height: int, width: int, seed: int = 0):
+    """A slanted plane with a textured image, 20 % holes and two shifted neighbours."""
+    from ddp_lite import Camera, look_at
+    rng = np.random.default_rng(seed)
+    ref = Camera.from_fov(width, height, 60.0)
+    u = np.arange(width, dtype=np.float32)
+    depth = np.broadcast_to(2.0 + 2.0 * u / width, (height, width)).astype(np.float32).copy()
+    depth[rng.random((height, width)) < 0.2] = np.nan
+    rgb = rng.random((height, width, 3)).astype(np.float32)
+    nbrs = [(rgb, Camera(ref.K, look_at([dx, 0, 0], [dx, 0, 3.0]), width, height)) for dx in (-0.1, 0.1)]
+    return rgb, depth, ref, nbrs
+
+
+def run_one(variant: str, height: int, width: int, channels, iterations: int) -> dict:
+    from torch.utils.flop_counter import FlopCounterMode
+    from ddp_lite import FitConfig, complete_depth
+    rgb, depth, ref, nbrs = case(height, width)
+    kwargs = dict(camera=ref, neighbors=nbrs) if variant == "rgbd+warp" else {}
+    config = FitConfig(channels=tuple(channels), lr=1e-2, progress=False, eval_every=10 ** 9)
+    with FlopCounterMode(display=False) as counter:
+        complete_depth(rgb, depth, variant=variant, config=config.replace(iterations=1), **kwargs)
+    flops = counter.get_total_flops()
+    rss_before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    short = complete_depth(rgb, depth, variant=variant, config=config.replace(iterations=5), **kwargs)
+    long = complete_depth(rgb, depth, variant=variant, config=config.replace(iterations=5 + iterations), **kwargs)
+    per_iteration = (long.seconds - short.seconds) / iterations
+    peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    rate = matmul_rate()
+    return dict(variant=variant, size=f"{height}x{width}", channels="-".join(map(str, channels)),
+                s_per_it=per_iteration, gflop=flops / 1e9, bound=flops / rate, mm_gflops=rate / 1e9,
+                peak_mb=peak_mb, rss_before_mb=rss_before / 1024)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--iterations", type=int, default=20)
+    parser.add_argument("--narrow", action="store_true", help="also the ci profile's 16–128 net")
+    parser.add_argument("--one", nargs=4, metavar=("VARIANT", "H", "W", "CHANNELS"), help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.one:
+        variant, height, width, channels = args.one
+        print(json.dumps(run_one(variant, int(height), int(width), [int(c) for c in channels.split("-")], args.iterations)))
+        return
+    widths = ["32-64-128-256-512"] + (["16-32-64-128"] if args.narrow else [])
+    print(f"torch {torch.__version__}, {torch.get_num_threads()} threads, {args.iterations} timed iterations")
+    print(f"{'variant':<10} {'size':>7} {'net':>18} {'s/it':>7} {'GFLOP':>6} {'bound s':>8} {'ratio':>6} {'peak MB':>8}")
+    for channels in widths:
+        for height, width in ((48, 64), (96, 128)):
+            for variant in ("d", "rgbd", "rgbd+warp"):
+                out = subprocess.run([sys.executable, __file__, "--iterations", str(args.iterations), "--one",
+                                      variant, str(height), str(width), channels],
+                                     capture_output=True, text=True, check=True)
+                r = json.loads(out.stdout.strip().splitlines()[-1])
+                print(f"{r['variant']:<10} {r['size']:>7} {r['channels']:>18} {r['s_per_it']:7.3f} {r['gflop']:6.2f} "
+                      f"{r['bound']:8.3f} {r['s_per_it'] / r['bound']:6.2f} {r['peak_mb']:8.0f}", flush=True)
+
+
+if __name__ == "__main__":
+    main()

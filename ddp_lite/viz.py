@@ -1,0 +1,106 @@
+"""Figures: depth with holes in a distinct colour, images, error maps, loss curves.
+
+Every depth panel has a colour bar (metres or disparity) and draws holes (NaN) in magenta, so a
+hole is never mistaken for a far or near value.
+"""
+from __future__ import annotations
+
+import os
+import tempfile
+
+import matplotlib
+import matplotlib.pyplot as plt
+import numpy as np
+
+__all__ = ["show_depth", "show_image", "show_error", "compare", "plot_history", "save_figure", "HOLE_COLOUR"]
+
+HOLE_COLOUR = "magenta"
+
+
+def show_depth(ax, depth, title: str = "", vmin=None, vmax=None, cmap: str = "viridis_r", label: str = "depth (m)"):
+    """Draw (H, W) depth on ``ax`` with a colour bar; NaN holes in magenta. Returns the image."""
+    depth = np.asarray(depth, dtype=np.float32)
+    colours = matplotlib.colormaps[cmap].copy()
+    colours.set_bad(HOLE_COLOUR)
+    finite = depth[np.isfinite(depth)]
+    vmin = float(finite.min()) if vmin is None and finite.size else vmin
+    vmax = float(finite.max()) if vmax is None and finite.size else vmax
+    image = ax.imshow(np.ma.masked_invalid(depth), cmap=colours, vmin=vmin, vmax=vmax, interpolation="nearest")
+    ax.figure.colorbar(image, ax=ax, fraction=0.046, pad=0.04, label=label)
+    ax.set_title(title)
+    ax.axis("off")
+    return image
+
+
+def show_image(ax, image, title: str = ""):
+    """Draw an (H, W, 3) image in [0, 1] on ``ax``."""
+    ax.imshow(np.clip(np.asarray(image), 0, 1), interpolation="nearest")
+    ax.set_title(title)
+    ax.axis("off")
+
+
+def show_error(ax, estimate, truth, title: str = "", vmax=None, mask=None):
+    """Absolute error |estimate - truth| (H, W) on ``ax``; pixels outside ``mask`` greyed out."""
+    error = np.abs(np.asarray(estimate, np.float32) - np.asarray(truth, np.float32))
+    if mask is not None:
+        error = np.where(mask, error, np.nan)
+    colours = matplotlib.colormaps["magma"].copy()
+    colours.set_bad("lightgrey")
+    vmax = float(np.nanpercentile(error, 99)) if vmax is None else vmax
+    image = ax.imshow(np.ma.masked_invalid(error), cmap=colours, vmin=0, vmax=max(vmax, 1e-6), interpolation="nearest")
+    ax.figure.colorbar(image, ax=ax, fraction=0.046, pad=0.04, label="|error| (m)")
+    ax.set_title(title)
+    ax.axis("off")
+    return image
+
+
+def compare(panels: dict, truth=None, ncols: int | None = None, size: float = 3.2):
+    """One row of depth panels {title: (H, W) depth} sharing one colour range. Returns the figure."""
+    ncols = ncols or len(panels)
+    nrows = int(np.ceil(len(panels) / ncols))
+    fig, axes = plt.subplots(nrows, ncols, figsize=(size * 1.25 * ncols, size * nrows), squeeze=False)
+    reference = truth if truth is not None else next(iter(panels.values()))
+    finite = np.asarray(reference)[np.isfinite(reference)]
+    vmin, vmax = float(finite.min()), float(finite.max())
+    for ax, (title, depth) in zip(axes.flat, panels.items()):
+        depth = np.asarray(depth)
+        if depth.ndim == 3:
+            show_image(ax, depth, title)
+        else:
+            show_depth(ax, depth, title, vmin=vmin, vmax=vmax)
+    for ax in list(axes.flat)[len(panels):]:
+        ax.axis("off")
+    fig.tight_layout()
+    return fig
+
+
+def plot_history(histories: dict, key: str = "hole_rmse", ax=None, ylabel: str | None = None, log: bool = False):
+    """Curves of ``history[key]`` against iterations for several runs {label: history}."""
+    if ax is None:
+        _, ax = plt.subplots(figsize=(6, 3.5))
+    for label, history in histories.items():
+        values = np.asarray(history[key])
+        x = history["eval_iteration"] if len(values) == len(history["eval_iteration"]) else np.arange(1, len(values) + 1)
+        ax.plot(x, values, label=label)
+    ax.set_xlabel("iteration")
+    ax.set_ylabel(ylabel or key)
+    if log:
+        ax.set_yscale("log")
+    ax.grid(alpha=0.3)
+    ax.legend()
+    return ax
+
+
+def save_figure(fig, path, dpi: int = 120) -> None:
+    """Save a figure atomically (temporary file in the same folder, then rename)."""
+    path = os.fspath(path)
+    suffix = os.path.splitext(path)[1] or ".png"
+    fd, tmp = tempfile.mkstemp(dir=os.path.dirname(os.path.abspath(path)), suffix=suffix)
+    os.close(fd)
+    try:
+        fig.savefig(tmp, dpi=dpi, bbox_inches="tight", format=suffix.lstrip("."))
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+        raise

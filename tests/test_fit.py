@@ -1,0 +1,157 @@
+"""The networks, the losses' masking, and short fits on analytic cases."""
+import numpy as np
+import pytest
+import torch
+from scipy.interpolate import griddata
+
+from ddp_lite import (Camera, FitConfig, SkipNet, UNet, complete_depth, disparity_loss, fit_image, look_at, merge,
+                      warp_loss, warp_to_reference)
+
+TINY = dict(channels=(8, 16, 32), lr=1e-2, progress=False)
+
+
+def slanted_plane(height=32, width=48):
+    """Depth of a plane tilted in x (metres) and a hole in its middle."""
+    u = np.arange(width, dtype=np.float32)
+    gt = np.broadcast_to(2.0 + 0.04 * u, (height, width)).astype(np.float32).copy()
+    depth = gt.copy()
+    depth[10:22, 18:30] = np.nan
+    return gt, depth
+
+
+def nearest_fill(depth):
+    valid = np.isfinite(depth)
+    rows, cols = np.nonzero(valid)
+    grid = np.stack(np.mgrid[0:depth.shape[0], 0:depth.shape[1]], axis=-1).reshape(-1, 2)
+    return griddata((rows, cols), depth[valid], grid, method="nearest").reshape(depth.shape)
+
+
+@pytest.mark.parametrize("net_class", [UNet, SkipNet])
+@pytest.mark.parametrize("size", [(17, 23), (48, 64), (5, 70)])
+def test_nets_keep_any_image_size(net_class, size):
+    net = net_class(16, 4, (8, 8, 8)) if net_class is UNet else net_class(16, 4, (8, 8), (2, 2))
+    out = net(torch.rand(1, 16, *size))
+    assert out.shape == (1, 4, *size) and out.min() >= 0 and out.max() <= 1
+
+
+def test_depth_loss_gradient_is_exactly_zero_inside_holes():
+    torch.manual_seed(0)
+    target = torch.rand(1, 1, 32, 32)
+    mask = torch.ones(1, 1, 32, 32, dtype=torch.bool)
+    mask[..., 10:20, 12:22] = False
+    target[~mask] = 123.0  # what the ground truth holds in the hole must not matter
+    output = torch.rand(1, 1, 32, 32, requires_grad=True)
+    disparity_loss(output, target, mask).backward()
+    assert torch.all(output.grad[~mask] == 0)
+    assert torch.all(output.grad[mask].abs().sum() > 0)
+    # and the loss value does not see the hole's ground truth either
+    other = target.clone()
+    other[~mask] = -5.0
+    assert disparity_loss(output, target, mask).item() == pytest.approx(disparity_loss(output, other, mask).item())
+
+
+def test_warp_loss_prefers_the_true_depth():
+    ref = Camera.from_fov(48, 32, 60.0)
+    nbr = Camera(ref.K, look_at([0.2, 0.0, 0.0], [0.2, 0.0, 3.0]), 48, 32)
+    rng = np.random.default_rng(0)
+    texture = rng.random((32, 64, 3)).astype(np.float32)
+    # neighbour image of a fronto-parallel textured plane at 2 m: ref pixel u ↔ nbr pixel u - f·b/Z
+    shift = ref.focal * 0.2 / 2.0
+    u = np.arange(48)
+    cols = np.clip(u + 8, 0, 63)
+    ref_img = texture[:, cols]
+    nbr_cols = np.clip(np.round(u + shift + 8).astype(int), 0, 63)
+    nbr_img = texture[:, nbr_cols]
+    losses = []
+    for depth in (2.0, 1.2):
+        warped, valid = warp_to_reference(nbr_img, np.full((32, 48), depth, np.float32), ref, nbr)
+        to_t = lambda a: torch.from_numpy(np.ascontiguousarray(a.transpose(2, 0, 1)))[None]
+        losses.append(warp_loss(to_t(ref_img), [to_t(warped)], [torch.from_numpy(valid)[None, None]]).item())
+    assert losses[0] < 0.5 * losses[1]
+
+
+def test_a_short_fit_fills_a_hole_better_than_nearest_neighbour():
+    gt, depth = slanted_plane()
+    rgb = np.zeros((32, 48, 3), np.float32)
+    result = complete_depth(rgb, depth, variant="d", gt_depth=gt, config=FitConfig(iterations=150, **TINY))
+    holes = np.isnan(depth)
+    rmse = lambda d: float(np.sqrt(np.mean((d[holes] - gt[holes]) ** 2)))
+    initial = result.history["hole_rmse_m"][0]
+    assert rmse(result.depth) < 0.5 * initial
+    assert rmse(result.depth) < 0.7 * rmse(nearest_fill(depth))
+    assert result.depth.shape == depth.shape and np.isfinite(result.depth).all()
+
+
+def test_same_seed_same_numbers_and_inputs_untouched():
+    gt, depth = slanted_plane()
+    rgb = np.random.default_rng(0).random((32, 48, 3)).astype(np.float32)
+    before = (depth.copy(), rgb.copy())
+    config = FitConfig(iterations=12, **TINY)
+    a = complete_depth(rgb, depth, variant="rgbd", config=config)
+    b = complete_depth(rgb, depth, variant="rgbd", config=config)
+    np.testing.assert_array_equal(a.depth, b.depth)
+    np.testing.assert_array_equal(a.history["loss"], b.history["loss"])
+    c = complete_depth(rgb, depth, variant="rgbd", config=config.replace(seed=1))
+    assert not np.array_equal(a.depth, c.depth)
+    np.testing.assert_array_equal(depth, before[0])
+    np.testing.assert_array_equal(rgb, before[1])
+
+
+def test_rgbd_warp_runs_with_neighbours_and_auto_stop_keeps_the_best():
+    gt, depth = slanted_plane()
+    rgb = np.random.default_rng(0).random((32, 48, 3)).astype(np.float32)
+    ref = Camera.from_fov(48, 32, 60.0)
+    nbr = Camera(ref.K, look_at([0.1, 0, 0], [0.1, 0, 3]), 48, 32)
+    config = FitConfig(iterations=40, auto_stop=True, patience=10, eval_every=5, **TINY)
+    result = complete_depth(rgb, depth, ref, [(rgb, nbr)], variant="rgbd+warp", config=config, gt_depth=gt)
+    assert {"disp", "rgb", "warp"} <= set(result.history)
+    assert result.best_iteration <= result.iterations <= 40
+    heldout = result.history["heldout"]
+    best_index = list(result.history["eval_iteration"]).index(result.best_iteration)
+    assert heldout[best_index] == pytest.approx(np.min(heldout[: len(heldout)]))
+
+
+def test_merge_keeps_valid_input():
+    depth = np.array([[1.0, np.nan], [np.nan, 4.0]], np.float32)
+    np.testing.assert_array_equal(merge(depth, np.full((2, 2), 9.0, np.float32)), [[1.0, 9.0], [9.0, 4.0]])
+
+
+def test_fit_image_inpaints_a_smooth_image():
+    v, u = np.mgrid[0:32, 0:32] / 32.0
+    image = np.stack([u, v, 0.5 * (u + v)], axis=2).astype(np.float32)
+    mask = np.ones((32, 32), bool)
+    mask[8:24, 8:24] = False
+    result = fit_image(image * mask[..., None], mask, FitConfig(iterations=150, **TINY), clean=image)
+    error = np.abs(result.image - image)[~mask].mean()
+    assert error < 0.5 * np.abs(image[~mask]).mean()  # better than the zeros it was given
+    assert result.history["psnr"][-1] > result.history["psnr"][0]
+
+
+@pytest.mark.parametrize("make_bad, pattern", [
+    (lambda d, r: (np.where(np.isnan(d), np.inf, d), r), "inf"),
+    (lambda d, r: (-d, r), "positive"),
+    (lambda d, r: (np.full_like(d, np.nan), r), "valid pixels"),
+    (lambda d, r: (d[:, :-1], r), "rgb"),
+    (lambda d, r: (np.ones(d.shape, np.int32), r), "float"),
+    (lambda d, r: (d, r + 2.0), r"\[0, 1\]"),
+    (lambda d, r: (d, r[..., :2]), r"\(H, W, 3\)"),
+])
+def test_bad_inputs_raise_naming_the_argument(make_bad, pattern):
+    _, depth = slanted_plane()
+    rgb = np.zeros((32, 48, 3), np.float32)
+    depth, rgb = make_bad(depth, rgb)
+    with pytest.raises((ValueError, TypeError), match=pattern):
+        complete_depth(rgb, depth, variant="rgbd", config=FitConfig(iterations=1, **TINY))
+
+
+def test_bad_variant_config_and_missing_neighbours():
+    _, depth = slanted_plane()
+    rgb = np.zeros((32, 48, 3), np.float32)
+    with pytest.raises(ValueError, match="variant"):
+        complete_depth(rgb, depth, variant="rgb")
+    with pytest.raises(ValueError, match="neighbor"):
+        complete_depth(rgb, depth, variant="rgbd+warp", config=FitConfig(iterations=1, **TINY))
+    with pytest.raises(ValueError, match="config.lr"):
+        complete_depth(rgb, depth, variant="d", config=FitConfig(lr=-1.0))
+    with pytest.raises(ValueError, match="gt_depth"):
+        complete_depth(rgb, depth, variant="d", gt_depth=np.zeros((3, 3)), config=FitConfig(iterations=1, **TINY))
