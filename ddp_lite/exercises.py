@@ -1,0 +1,207 @@
+"""Checks for the notebooks' exercises: a student's function against an independent reference.
+
+Each ``check_*`` takes the student's function, runs it on a few seeded cases, compares with a
+reference that does not come from the student's code (scikit-image, SciPy, a hand-computed
+value or the kit's tested implementation) and prints ``PASS`` or ``FAIL: <what is wrong>``.
+It returns True or False so an instructor's script can count passes.
+
+    >>> from ddp_lite.exercises import check_psnr
+    >>> check_psnr(lambda a, b: 10 * np.log10(1 / np.mean((a - b) ** 2)))
+    PASS psnr: matches scikit-image on 3 cases
+    True
+"""
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["check_psnr", "check_masked_mse", "check_disparity_transform", "check_hole_rmse", "check_ssim",
+           "check_masked_l1", "check_backproject", "check_warp", "check_fscore", "check_nearest_fill",
+           "check_d1"]
+
+
+def _report(name: str, failures: list[str], cases: int, reference: str) -> bool:
+    if failures:
+        print(f"FAIL {name}: {failures[0]}" + (f" (and {len(failures) - 1} more)" if len(failures) > 1 else ""))
+        return False
+    print(f"PASS {name}: matches {reference} on {cases} cases")
+    return True
+
+
+def _run(name, fn, cases, reference_name, compare):
+    failures = []
+    for i, (args, expected) in enumerate(cases):
+        try:
+            got = fn(*args)
+        except Exception as error:  # a student's bug should be reported, not raised
+            failures.append(f"case {i} raised {type(error).__name__}: {error}")
+            continue
+        problem = compare(got, expected)
+        if problem:
+            failures.append(f"case {i}: {problem}")
+    return _report(name, failures, len(cases), reference_name)
+
+
+def _close(atol):
+    def compare(got, expected):
+        got = np.asarray(got, dtype=np.float64)
+        expected = np.asarray(expected, dtype=np.float64)
+        if got.shape != expected.shape:
+            return f"shape {got.shape}, expected {expected.shape}"
+        bad = ~np.isclose(got, expected, atol=atol, rtol=0, equal_nan=True)
+        if bad.any():
+            index = np.argwhere(bad)[0] if got.ndim else ()
+            return f"got {got[tuple(index)]:.6g}, expected {expected[tuple(index)]:.6g} at index {tuple(index)}"
+        return None
+    return compare
+
+
+def check_psnr(student_psnr) -> bool:
+    """``student_psnr(a, b)`` for images in [0, 1] vs ``skimage.metrics.peak_signal_noise_ratio``."""
+    from skimage.metrics import peak_signal_noise_ratio
+    rng = np.random.default_rng(0)
+    cases = []
+    for sigma in (0.01, 0.05, 0.2):
+        a = rng.random((16, 20, 3))
+        b = np.clip(a + sigma * rng.standard_normal(a.shape), 0, 1)
+        cases.append(((a, b), peak_signal_noise_ratio(a, b, data_range=1.0)))
+    return _run("psnr", student_psnr, cases, "scikit-image", _close(1e-6))
+
+
+def check_masked_mse(student_mse) -> bool:
+    """``student_mse(output, target, mask)`` (H, W, C), (H, W, C), (H, W) bool: mean over masked pixels."""
+    rng = np.random.default_rng(1)
+    cases = []
+    for _ in range(3):
+        out, target = rng.random((8, 9, 3)), rng.random((8, 9, 3))
+        mask = rng.random((8, 9)) > 0.4
+        by_hand = sum(((out[r, c] - target[r, c]) ** 2).sum() for r, c in zip(*np.nonzero(mask))) / (mask.sum() * 3)
+        cases.append(((out, target, mask), by_hand))
+    return _run("masked mse", student_mse, cases, "a per-pixel loop", _close(1e-9))
+
+
+def check_disparity_transform(student_to_disparity) -> bool:
+    """``student_to_disparity(depth, d_min, d_max, constant)`` → [0, 1], 1 = nearest (paper Sec. 3.2)."""
+    cases = []
+    for d_min, d_max, c in ((1.0, 9.0, 1.0), (2.0, 7.5, 0.0), (0.2, 25.0, 4.0)):
+        depth = np.array([d_min / 2, d_min, (d_min + d_max) / 2, d_max, 2 * d_max])
+        inverse = 1 / (np.clip(depth, d_min, d_max) + c)
+        cases.append(((depth, d_min, d_max, c), (inverse - 1 / (d_max + c)) / (1 / (d_min + c) - 1 / (d_max + c))))
+    cases.append(((np.array([4.0]), 1.0, 9.0, 1.0), np.array([0.25])))  # by hand: (1/5 - 1/10) / (1/2 - 1/10)
+    return _run("disparity transform", student_to_disparity, cases, "the paper's formula", _close(1e-9))
+
+
+def check_hole_rmse(student_hole_rmse) -> bool:
+    """``student_hole_rmse(pred, gt, input_depth)``: RMSE over pixels that are holes (NaN) in the input."""
+    gt = np.array([[1.0, 2.0], [3.0, 4.0]])
+    pred = np.array([[9.0, 2.5], [3.0, 2.0]])
+    inp = np.array([[1.0, np.nan], [3.0, np.nan]])
+    cases = [((pred, gt, inp), np.sqrt((0.5 ** 2 + 2.0 ** 2) / 2))]
+    inp2 = np.array([[np.nan, np.nan], [3.0, 4.0]])
+    cases.append(((pred, gt, inp2), np.sqrt((8.0 ** 2 + 0.5 ** 2) / 2)))
+    return _run("hole rmse", student_hole_rmse, cases, "hand-computed values", _close(1e-9))
+
+
+def check_ssim(student_ssim) -> bool:
+    """``student_ssim(x, y)`` for grey images in [0, 1] vs scikit-image (Gaussian 11×11, σ = 1.5)."""
+    from skimage.metrics import structural_similarity
+    rng = np.random.default_rng(2)
+    cases = []
+    for sigma in (0.05, 0.3):
+        x = rng.random((32, 40))
+        y = np.clip(x + sigma * rng.standard_normal(x.shape), 0, 1)
+        cases.append(((x, y), structural_similarity(x, y, gaussian_weights=True, sigma=1.5,
+                                                     use_sample_covariance=False, data_range=1.0)))
+    return _run("ssim", student_ssim, cases, "scikit-image", _close(1e-4))
+
+
+def check_masked_l1(student_l1) -> bool:
+    """``student_l1(x, y, mask)`` (H, W) arrays: mean |x - y| over mask only."""
+    rng = np.random.default_rng(3)
+    cases = []
+    for _ in range(3):
+        x, y, mask = rng.random((6, 7)), rng.random((6, 7)), rng.random((6, 7)) > 0.5
+        cases.append(((x, y, mask), np.abs(x - y)[mask].mean()))
+    return _run("masked L1", student_l1, cases, "NumPy", _close(1e-9))
+
+
+def check_backproject(student_backproject) -> bool:
+    """``student_backproject(depth (H, W), K)`` → camera-frame points (H, W, 3), OpenCV convention."""
+    K = np.array([[50.0, 0, 15.5], [0, 50.0, 11.5], [0, 0, 1]])
+    depth = np.full((24, 32), 2.0)
+    depth[5, 7] = 4.0
+    expected = np.zeros((24, 32, 3))
+    v, u = np.mgrid[0:24, 0:32]
+    expected[..., 0] = (u - 15.5) / 50.0 * depth
+    expected[..., 1] = (v - 11.5) / 50.0 * depth
+    expected[..., 2] = depth
+    return _run("backproject", student_backproject, [((depth, K), expected)], "the pinhole model", _close(1e-9))
+
+
+def check_warp(student_warp) -> bool:
+    """``student_warp(nbr_image, ref_depth, ref_cam, nbr_cam)`` → (H, W, 3) vs the kit's tested warp
+    (compared where the kit's warp is valid)."""
+    from .camera import Camera, look_at
+    from .warp import warp_to_reference
+    rng = np.random.default_rng(4)
+    ref = Camera.from_fov(32, 24, 60.0)
+    failures = []
+    for i, eye in enumerate(([0.1, 0.0, 0.0], [0.05, -0.05, 0.1])):
+        nbr = Camera(ref.K, look_at(eye, [0.0, 0.0, 3.0]), 32, 24)
+        image = rng.random((24, 32, 3)).astype(np.float32)
+        depth = (2.0 + rng.random((24, 32))).astype(np.float32)
+        expected, valid = warp_to_reference(image, depth, ref, nbr)
+        try:
+            got = np.asarray(student_warp(image, depth, ref, nbr), dtype=np.float64)
+        except Exception as error:
+            failures.append(f"case {i} raised {type(error).__name__}: {error}")
+            continue
+        if got.shape != expected.shape:
+            failures.append(f"case {i}: shape {got.shape}, expected {expected.shape}")
+        elif np.abs(got - expected)[valid].max() > 1e-3:
+            failures.append(f"case {i}: max error {np.abs(got - expected)[valid].max():.4f} on valid pixels "
+                            "(pixel centres? u is the column, v the row)")
+    return _report("warp", failures, 2, "the kit's warp_to_reference")
+
+
+def check_fscore(student_fscore) -> bool:
+    """``student_fscore(precision, recall)`` → the harmonic mean (0 when both are 0)."""
+    cases = [((0.5, 0.5), 0.5), ((1.0, 0.0), 0.0), ((0.0, 0.0), 0.0), ((0.3, 0.6), 2 * 0.18 / 0.9)]
+    return _run("f-score", student_fscore, cases, "hand-computed values", _close(1e-9))
+
+
+def check_nearest_fill(student_fill) -> bool:
+    """``student_fill(depth_with_nans)`` → every hole takes the depth of a nearest valid pixel
+    (Euclidean distance in pixels; any of several equally near ones is accepted); valid pixels kept."""
+    rng = np.random.default_rng(5)
+    failures = []
+    for case in range(2):
+        depth = rng.random((12, 15)) + 1.0
+        depth[rng.random(depth.shape) < 0.3] = np.nan
+        valid = np.isfinite(depth)
+        try:
+            got = np.asarray(student_fill(depth.copy()), dtype=np.float64)
+        except Exception as error:
+            failures.append(f"case {case} raised {type(error).__name__}: {error}")
+            continue
+        if got.shape != depth.shape:
+            failures.append(f"case {case}: shape {got.shape}, expected {depth.shape}")
+            continue
+        known, holes = np.argwhere(valid), np.argwhere(~valid)  # (N, 2), (M, 2) rows, cols
+        distance = ((holes[:, None, :] - known[None, :, :]) ** 2).sum(-1)  # (M, N)
+        nearest = distance == distance.min(axis=1, keepdims=True)
+        candidates = np.where(nearest, depth[valid][None, :], np.nan)  # (M, N)
+        ok = np.any(np.isclose(candidates, got[~valid][:, None], atol=1e-9), axis=1)
+        if not np.allclose(got[valid], depth[valid]):
+            failures.append(f"case {case}: valid pixels were changed")
+        elif not ok.all():
+            r, c = holes[np.argmin(ok)]
+            failures.append(f"case {case}: hole ({r}, {c}) got {got[r, c]:.4g}, not the depth of a nearest valid pixel")
+    return _report("nearest fill", failures, 2, "a brute-force nearest search")
+
+
+def check_d1(student_d1) -> bool:
+    """``student_d1(pred_disp, gt_disp)`` → percentage of bad pixels (error > 3 px and > 5 %)."""
+    gt = np.array([10.0, 10.0, 100.0, 100.0, np.nan])
+    pred = np.array([13.5, 12.9, 104.0, 106.0, 1.0])
+    # bad: 3.5 > 3 and > 0.5 ✓; 2.9 ✗; 4 > 3 but < 5 ✗; 6 > 3 and > 5 ✓ → 2 of 4 valid
+    return _run("D1", student_d1, [((pred, gt), 50.0)], "a hand-computed case", _close(1e-9))
