@@ -63,6 +63,8 @@ class FitConfig:
     eval_every: int = 10
     seed: int = 0
     device: str | None = None  # None → cuda or mps when available, else cpu
+    bf16: bool = False  # run the network (not the losses) under bfloat16 autocast
+    channels_last: bool = False  # memory format of the network's activations
     progress: bool = True
     callback_every: int = 0
 
@@ -117,6 +119,7 @@ class DepthResult:
     iterations: int  # iterations run
     best_iteration: int  # the iteration whose output is returned
     seconds: float
+    state: dict | None = field(default=None, repr=False)  # the net's final weights (CPU), for warm starts
 
     def merged(self, input_depth) -> np.ndarray:
         """"SGM+DDP": the input where it is valid, this result in its holes."""
@@ -219,6 +222,9 @@ def _run(net, noise, loss_fn, config: FitConfig, iterations: int, heldout_error=
     optimizer = torch.optim.Adam(net.parameters(), lr=config.lr)
     milestones = [m for m in config.lr_milestones if m < iterations]
     scheduler = torch.optim.lr_scheduler.MultiStepLR(optimizer, milestones, gamma=config.lr_gamma)
+    autocast = torch.autocast(noise.device.type, dtype=torch.bfloat16, enabled=config.bf16)
+    if config.channels_last:
+        net, noise = net.to(memory_format=torch.channels_last), noise.contiguous(memory_format=torch.channels_last)
     jitter = torch.Generator(device=noise.device).manual_seed(config.seed + 1) if config.reg_noise_std else None
     terms_log = None  # (iterations, n_terms) kept on the device: no host read per iteration
     evals = {"eval_iteration": [], "heldout": []}
@@ -231,7 +237,9 @@ def _run(net, noise, loss_fn, config: FitConfig, iterations: int, heldout_error=
         net_input = noise
         if jitter is not None:
             net_input = noise + config.reg_noise_std * torch.randn(noise.shape, generator=jitter, device=noise.device)
-        output = net(net_input)
+        with autocast:
+            output = net(net_input)
+        output = output.float().contiguous()
         total, terms = loss_fn(output)
         optimizer.zero_grad(set_to_none=True)
         total.backward()
@@ -271,10 +279,15 @@ def _run(net, noise, loss_fn, config: FitConfig, iterations: int, heldout_error=
     return best_output, history, it + 1, best_iteration
 
 
-def _build(config: FitConfig, out_channels: int, height: int, width: int, device):
+def _build(config: FitConfig, out_channels: int, height: int, width: int, device, init_state=None):
     with torch.random.fork_rng(devices=[]):  # deterministic init without touching the caller's RNG
         torch.manual_seed(config.seed)
         net = build_net(config.net, config.noise_channels, out_channels, config.channels)
+    if init_state is not None:
+        try:
+            net.load_state_dict(init_state)
+        except RuntimeError as error:
+            raise ValueError(f"init: its weights do not fit this config's network ({error.args[0].splitlines()[0]})")
     noise = make_noise(config.noise_channels, height, width, seed=config.seed)
     return net.to(device), noise.to(device)
 
@@ -287,7 +300,7 @@ def _holdout_mask(valid: np.ndarray, fraction: float, seed: int) -> np.ndarray:
 
 def complete_depth(rgb, depth, camera: Camera | None = None, neighbors=(), variant: str = "rgbd+warp",
                    config: FitConfig | None = None, gt_depth=None, transform: DisparityTransform | None = None,
-                   callback=None) -> DepthResult:
+                   callback=None, init: DepthResult | None = None) -> DepthResult:
     """Fill the holes (NaN) of ``depth`` (H, W, metres) with a Deep Depth Prior.
 
     Args:
@@ -300,6 +313,8 @@ def complete_depth(rgb, depth, camera: Camera | None = None, neighbors=(), varia
         gt_depth: (H, W) metres; when given, the hole error is tracked in ``history``.
         transform: depth ↔ disparity map; None → derived from the valid input depth.
         callback: ``callback(iteration, DepthResult-like dict)`` every ``config.callback_every``.
+        init: a previous result (same variant and net) whose weights start this fit: a warm start
+            for the next view of a sequence.
     Returns:
         :class:`DepthResult` with ``.depth`` (H, W) metres, ``.disparity``, ``.rgb``, ``.history``.
 
@@ -393,15 +408,19 @@ def complete_depth(rgb, depth, camera: Camera | None = None, neighbors=(), varia
             callback(iteration, {"disparity": disparity, "depth": transform.to_depth(disparity),
                                  "rgb": output[0, 1:4].permute(1, 2, 0).cpu().numpy() if output.shape[1] >= 4 else None})
 
-    net, noise = _build(config, 1 if variant == "d" else 4, H, W, device)
+    if init is not None and not isinstance(init, DepthResult):
+        raise TypeError(f"init must be a DepthResult, got {type(init).__name__}")
+    net, noise = _build(config, 1 if variant == "d" else 4, H, W, device, init.state if init is not None else None)
     start = time.perf_counter()
     output, history, ran, best = _run(net, noise, loss_fn, config, iterations, heldout_error, evaluate,
                                       user_callback, description=f"DDP {variant}")
+    state = {name: value.detach().cpu().clone() for name, value in net.state_dict().items()}
     seconds = time.perf_counter() - start
     disparity = output[0, 0].cpu().numpy().astype(np.float32)
     out_rgb = output[0, 1:4].permute(1, 2, 0).cpu().numpy().astype(np.float32) if output.shape[1] >= 4 else None
     return DepthResult(depth=transform.to_depth(disparity).astype(np.float32), disparity=disparity, rgb=out_rgb,
-                       history=history, transform=transform, iterations=ran, best_iteration=best, seconds=seconds)
+                       history=history, transform=transform, iterations=ran, best_iteration=best, seconds=seconds,
+                       state=state)
 
 
 def fit_image(image, mask=None, config: FitConfig | None = None, clean=None, callback=None) -> ImageResult:

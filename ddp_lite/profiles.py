@@ -61,7 +61,7 @@ PROFILES = {
     "class": Profile("class", size=(96, 128), channels=(32, 64, 128, 256, 512), skip_channels=(128,) * 5,
                      iterations=400, iterations_depth_only=400, lr=1e-2, lr_milestones=(0.6, 0.85),
                      lr_gamma=0.3, auto_stop=True, patience=100, eval_every=10, n_views=6, seeds=(0, 1),
-                     image_iterations=600),
+                     image_iterations=300),
     "paper": Profile("paper", size=(512, 960), channels=(32, 64, 128, 256, 512), skip_channels=(128,) * 5,
                      iterations=16000, iterations_depth_only=6000, lr=5e-5, lr_milestones=(12000, 15000),
                      lr_gamma=0.01, auto_stop=False, patience=2000, eval_every=100, n_views=8,

@@ -155,3 +155,24 @@ def test_bad_variant_config_and_missing_neighbours():
         complete_depth(rgb, depth, variant="d", config=FitConfig(lr=-1.0))
     with pytest.raises(ValueError, match="gt_depth"):
         complete_depth(rgb, depth, variant="d", gt_depth=np.zeros((3, 3)), config=FitConfig(iterations=1, **TINY))
+
+
+def test_warm_start_begins_where_the_previous_fit_ended():
+    gt, depth = slanted_plane()
+    rgb = np.zeros((32, 48, 3), np.float32)
+    config = FitConfig(iterations=60, **TINY)
+    first = complete_depth(rgb, depth, variant="d", config=config)
+    warm = complete_depth(rgb, depth, variant="d", config=config.replace(iterations=2), init=first)
+    cold = complete_depth(rgb, depth, variant="d", config=config.replace(iterations=2))
+    assert warm.history["loss"][0] < 0.2 * cold.history["loss"][0]
+    with pytest.raises(ValueError, match="init"):
+        complete_depth(rgb, depth, variant="rgbd", config=config.replace(iterations=1), init=first)
+
+
+def test_bfloat16_and_channels_last_still_fill_the_hole():
+    gt, depth = slanted_plane()
+    holes = np.isnan(depth)
+    config = FitConfig(iterations=150, bf16=True, channels_last=True, **TINY)
+    result = complete_depth(np.zeros((32, 48, 3), np.float32), depth, variant="d", config=config)
+    rmse = float(np.sqrt(np.mean((result.depth[holes] - gt[holes]) ** 2)))
+    assert rmse < 0.7 * float(np.sqrt(np.mean((nearest_fill(depth)[holes] - gt[holes]) ** 2)))
