@@ -1,0 +1,134 @@
+"""The notebooks' shared experiment plumbing: one scene → inputs → DDP variants → error table.
+
+A notebook tells a story; the bookkeeping behind it (which view, which holes, which neighbours,
+which disparity range, which error in which region) lives here so that every notebook measures
+the same way. Errors are RMSE of *normalised disparity* ×100 (the representation DDP fits and
+the unit the paper's Middlebury table uses), inside the holes, and inside the holes' part of the
+band around depth edges, where depth-only filling bleeds (paper Fig. 3).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import ndimage
+
+from .camera import Camera
+from .disparity import DisparityTransform
+from .fit import DepthResult, FitConfig, complete_depth
+from .profiles import Profile, get_profile
+
+__all__ = ["Case", "make_case", "edge_band", "disparity_rmse", "run_variants", "error_table", "format_table"]
+
+
+@dataclass
+class Case:
+    """One reference view prepared for depth completion, with its ground truth."""
+
+    name: str
+    rgb: np.ndarray  # (H, W, 3) [0, 1]
+    depth: np.ndarray  # (H, W) metres, NaN holes: the input
+    gt: np.ndarray  # (H, W) metres, finite: the truth
+    camera: Camera
+    neighbors: list = field(default_factory=list)  # Views used by the warp loss
+    transform: DisparityTransform | None = None
+    scene: object = None
+    ref: int = 0
+
+    @property
+    def holes(self) -> np.ndarray:
+        """(H, W) bool: pixels to be filled (NaN in the input)."""
+        return ~np.isfinite(self.depth)
+
+    def edge_holes(self, width: int = 3) -> np.ndarray:
+        """(H, W) bool: holes within ``width`` px of a ground-truth depth edge."""
+        return self.holes & edge_band(self.gt, width)
+
+
+def edge_band(depth, width: int = 3, relative_jump: float = 0.05) -> np.ndarray:
+    """(H, W) bool: pixels within ``width`` px of a depth discontinuity (a jump > 5 % between
+    4-neighbours) of a hole-free depth map (H, W) metres."""
+    depth = np.asarray(depth, dtype=np.float64)
+    jump = np.zeros(depth.shape, bool)
+    dx = np.abs(np.diff(depth, axis=1)) > relative_jump * np.minimum(depth[:, 1:], depth[:, :-1])
+    dy = np.abs(np.diff(depth, axis=0)) > relative_jump * np.minimum(depth[1:], depth[:-1])
+    jump[:, 1:] |= dx
+    jump[:, :-1] |= dx
+    jump[1:] |= dy
+    jump[:-1] |= dy
+    return ndimage.binary_dilation(jump, iterations=max(int(width), 0)) if width else jump
+
+
+def disparity_rmse(depth, gt, mask, transform: DisparityTransform) -> float:
+    """RMSE ×100 of normalised disparity between two depth maps (H, W metres) on ``mask``."""
+    mask = np.asarray(mask, bool) & np.isfinite(depth) & np.isfinite(gt)
+    if not mask.any():
+        return float("nan")
+    error = transform.to_disparity(np.asarray(depth, np.float64)) - transform.to_disparity(np.asarray(gt, np.float64))
+    return float(100.0 * np.sqrt(np.mean(error[mask] ** 2)))
+
+
+def make_case(scene_name: str = "house", profile: Profile | str | None = None, ref: int = 0, holes: str = "sgm",
+              seed: int = 0, n_neighbors: int = 2, sgm_params: str = "sparse") -> Case:
+    """Render a named scene at the profile's size and cut holes into view ``ref``'s depth.
+
+    ``holes``: ``"sgm"`` (real OpenCV SGM holes), ``"random"`` (seeded blobs) or ``"edge"`` (a band
+    across a depth edge plus random blobs).
+    """
+    from .holes import edge_band_holes, random_holes, sgm_depth
+    from .scenes import make_scene, select_neighbors
+
+    profile = get_profile(profile) if profile is None or isinstance(profile, str) else profile
+    scene = make_scene(scene_name, size=profile.size, n_views=profile.n_views, seed=seed)
+    view = scene[ref]
+    if holes == "sgm":
+        depth, _ = sgm_depth(scene, ref, params=sgm_params)
+    elif holes == "random":
+        depth, _ = random_holes(view.depth, seed=seed)
+    elif holes == "edge":
+        banded, _ = edge_band_holes(view.depth, seed=seed)
+        depth, _ = random_holes(banded, seed=seed)
+    else:
+        raise ValueError(f"holes must be 'sgm', 'random' or 'edge', got {holes!r}")
+    neighbors = [scene[i] for i in select_neighbors(scene, ref, n_neighbors)] if n_neighbors else []
+    meta = scene.meta
+    if "d_min" in meta and "d_max" in meta:
+        transform = DisparityTransform(meta["d_min"], meta["d_max"], meta.get("constant", 0.0))
+    else:
+        transform = DisparityTransform.from_depth(depth)
+    return Case(scene_name, view.rgb, depth.astype(np.float32), view.depth, view.camera, neighbors, transform,
+                scene, ref)
+
+
+def run_variants(case: Case, variants=("d", "rgbd", "rgbd+warp"), profile=None, net: str = "unet",
+                 **config_overrides) -> dict[str, DepthResult]:
+    """Fit each DDP variant on ``case`` with the profile's config; {variant: DepthResult}."""
+    results = {}
+    for variant in variants:
+        config = FitConfig.for_profile(profile, variant=variant, net=net, **config_overrides)
+        neighbors = case.neighbors if variant == "rgbd+warp" else ()
+        results[variant] = complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant,
+                                          config=config, gt_depth=case.gt, transform=case.transform)
+    return results
+
+
+def error_table(case: Case, estimates: dict, band: int = 3) -> dict[str, dict[str, float]]:
+    """{method: {"holes": RMSE×100, "edge band": RMSE×100}} of normalised disparity for depth maps
+    or :class:`DepthResult` values in ``estimates``."""
+    table = {}
+    for name, estimate in estimates.items():
+        depth = estimate.depth if isinstance(estimate, DepthResult) else estimate
+        table[name] = {"holes": disparity_rmse(depth, case.gt, case.holes, case.transform),
+                       "edge band": disparity_rmse(depth, case.gt, case.edge_holes(band), case.transform)}
+    return table
+
+
+def format_table(table: dict[str, dict[str, float]], digits: int = 2, title: str = "") -> str:
+    """A plain-text table of ``{row: {column: value}}``, rows in the given order."""
+    columns = list(next(iter(table.values())).keys())
+    width = max(len(str(r)) for r in table) + 2
+    lines = [title] if title else []
+    lines.append(" " * width + "".join(f"{c:>12}" for c in columns))
+    for row, values in table.items():
+        lines.append(f"{str(row):<{width}}" + "".join(f"{values[c]:>12.{digits}f}" for c in columns))
+    return "\n".join(lines)
