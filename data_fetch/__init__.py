@@ -1,0 +1,1 @@
+"""Download, verify and unpack the paper's real datasets (python -m data_fetch)."""
