@@ -83,13 +83,14 @@ from a stable URL, so fetch it by hand:
 
   1. Open https://www.tanksandtemples.org/download/ and accept the licence.
   2. Under "Training Data", for each scene you want (Barn, Caterpillar, Church, Courthouse,
-     Ignatius, Meetingroom, Truck) download the image set <Scene>.zip and, where published, the
-     ground truth <Scene>.ply, camera poses <Scene>_COLMAP_SfM.log, alignment <Scene>_trans.txt
-     and crop <Scene>.json.
+     Ignatius, Meetingroom, Truck) download the image set <Scene>.zip. Optional, for the P/R/F
+     evaluation: the ground truth <Scene>.ply, camera poses <Scene>_COLMAP_SfM.log, alignment
+     <Scene>_trans.txt and crop <Scene>.json (kept as they are; fetch does not hash them).
   3. For cameras in MVSNet format (``cams/<id>_cam.txt``, read by ddp_lite.datasets.load_tnt),
      use the MVSNet authors' preprocessed "tankandtemples" folder (see github.com/YoYo000/MVSNet).
-  4. Put every file, unchanged, in {dest}
-  5. Run this command again: it hashes the files, records or checks the hashes, and unpacks the zips.
+  4. Put the zips, unchanged, in {dest}
+  5. Run this command again (with --only '<Scene>.zip' for a subset): it hashes the zips, records
+     or checks the hashes, and unpacks them.
 """
 
 _KITTI_MANUAL = """\
@@ -119,7 +120,7 @@ _add(Dataset(
     use="Stereo pairs with dense GT disparity (PFM) + calib.txt: SGM holes on real images, "
         "DDP vs classical completion (load_middlebury).",
     size_note="Not measured: the server was unreachable when this registry was written. Each zip holds "
-              "~6-megapixel PNGs and full-resolution PFMs (tens to a few hundred MB); use --only to pick scenes.",
+              "full-resolution (about 6-megapixel) PNGs and PFMs, so expect large files; use --only to pick scenes.",
     homepage="https://vision.middlebury.edu/stereo/data/scenes2014/",
 ))
 
@@ -140,11 +141,10 @@ _add(Dataset(
     files=tuple(RemoteFile(f"{s}.zip", None, unpack=True) for s in TNT_TRAINING_SCENES),
     licence="See https://www.tanksandtemples.org/license/ (accept it before downloading).",
     use="Multi-view DDP (RGBD + warp loss over N=2 neighbours), fusion and P/R/F-score (Tables 1-3).",
-    size_note="Not measured: image sets are hundreds of MB to several GB per scene.",
+    size_note="Not measured (manual download); each image set holds a few hundred full-HD frames.",
     homepage="https://www.tanksandtemples.org/download/",
     manual=_TNT_MANUAL,
-    notes=("Only the image-set zips are listed as required; .ply/.log/.txt/.json files placed next to them "
-           "are hashed and recorded too.",),
+    notes=("Only the image-set zips are verified; GT .ply/.log/.txt/.json files are optional and not hashed.",),
 ))
 
 _add(Dataset(

@@ -14,6 +14,7 @@ from .fit import VARIANTS, DepthResult, FitConfig, ImageResult, complete_depth, 
 from .losses import disparity_loss, masked_l1, rgb_loss, ssim, warp_loss
 from .nets import SkipNet, UNet, build_net, make_noise
 from .profiles import PROFILES, Profile, get_profile
+from . import baselines, datasets, fusion, metrics
 from .holes import edge_band_holes, kinect_noise, random_holes, sgm_depth, sgm_disparity
 from .scenes import Scene, View, list_scenes, make_scene, select_neighbors
 from .warp import Warper, warp_to_reference

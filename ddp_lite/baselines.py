@@ -160,12 +160,15 @@ _OFFSETS = [(dy, dx) for dy in (-1, 0, 1) for dx in (-1, 0, 1) if (dy, dx) != (0
 
 
 def fill_colorization(depth, rgb=None, alpha: float = 1.0) -> np.ndarray:
-    """Levin et al. colorization fill as in NYU v2's ``fill_depth_colorization.m``: (H, W) metres + rgb (H, W, 3) → (H, W) float32.
+    """Levin et al. colorization fill (NYU v2's ``fill_depth_colorization.m``): depth, rgb → (H, W) float32.
 
-    Minimises Σ_p (z_p - Σ_q w_pq z_q)² + α Σ_valid (z_p - d_p)² over the 3×3 neighbours q of p, with
-    w_pq ∝ exp(-(g_q - g_p)² / σ_p²) on the grey image g, σ_p² = max(0.6·var(window),
-    -min_q (g_q - g_p)² / ln 0.01, 2e-6), normalised so Σ_q w_pq = 1. Valid pixels keep their
-    input value in the output (as the toolbox does).
+    ``depth`` (H, W) metres with NaN holes; ``rgb`` (H, W, 3) in [0, 1] (required).
+
+    Solves one sparse system, for every pixel p: z_p - Σ_q w_pq z_q + α·[p valid]·(z_p - d_p) = 0,
+    q over p's 3×3 neighbours: each depth is a weighted mean of its neighbours', pulled to the input
+    d where that is valid. Weights w_pq ∝ exp(-(g_q - g_p)² / σ_p²) on the grey image g, with
+    σ_p² = max(0.6·var(window), -min_q (g_q - g_p)² / ln 0.01, 2e-6), normalised so Σ_q w_pq = 1.
+    Valid pixels keep their input value in the output (as the toolbox does).
     """
     depth, valid, image = _check(depth, rgb, need_rgb=True)
     if not (np.isscalar(alpha) and np.isfinite(alpha) and alpha > 0):
@@ -210,11 +213,11 @@ BASELINES = {
 
 
 def fill(depth, rgb=None, method: str = "linear") -> np.ndarray:
-    """Fill the NaN holes of (H, W) depth in metres with a classical ``method`` (a key of ``BASELINES``) → (H, W) float32.
+    """Fill the NaN holes of (H, W) depth (metres) with ``method``, a key of ``BASELINES`` → (H, W) float32.
 
     Example:
-        >>> fill(np.array([[1.0, np.nan, 3.0], [1.0, 2.0, 3.0]]), method="linear")[0, 1]
-        2.0
+        >>> fill(np.array([[1.0, np.nan, 3.0], [1.0, 2.0, 3.0]]), method="linear").tolist()
+        [[1.0, 2.0, 3.0], [1.0, 2.0, 3.0]]
     """
     if method not in BASELINES:
         raise ValueError(f"method must be one of {sorted(BASELINES)}, got {method!r}")

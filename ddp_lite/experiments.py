@@ -18,7 +18,7 @@ from .disparity import DisparityTransform
 from .fit import DepthResult, FitConfig, complete_depth
 from .profiles import Profile, get_profile
 
-__all__ = ["Case", "make_case", "edge_band", "disparity_rmse", "run_variants", "error_table", "format_table",
+__all__ = ["Case", "make_case", "sgm_depth_at_scale", "edge_band", "disparity_rmse", "run_variants", "error_table", "format_table",
            "texture_leakage"]
 
 
@@ -35,11 +35,22 @@ class Case:
     transform: DisparityTransform | None = None
     scene: object = None
     ref: int = 0
+    labels: np.ndarray | None = None  # (H, W) uint8 texture classes (0 = sky), see scenes.LABELS
+
+    @property
+    def scored(self) -> np.ndarray:
+        """(H, W) bool: where ground truth is scored (everything but the sky)."""
+        return np.ones(self.gt.shape, bool) if self.labels is None else self.labels != 0
+
+    @property
+    def scored_gt(self) -> np.ndarray:
+        """(H, W) metres: the ground truth with NaN where it is not scored (pass as ``gt_depth``)."""
+        return np.where(self.scored, self.gt, np.nan).astype(np.float32)
 
     @property
     def holes(self) -> np.ndarray:
-        """(H, W) bool: pixels to be filled (NaN in the input)."""
-        return ~np.isfinite(self.depth)
+        """(H, W) bool: pixels to be filled (NaN in the input) and scored (not sky)."""
+        return ~np.isfinite(self.depth) & self.scored
 
     def edge_holes(self, width: int = 3) -> np.ndarray:
         """(H, W) bool: holes within ``width`` px of a ground-truth depth edge."""
@@ -69,6 +80,29 @@ def disparity_rmse(depth, gt, mask, transform: DisparityTransform) -> float:
     return float(100.0 * np.sqrt(np.mean(error[mask] ** 2)))
 
 
+def sgm_depth_at_scale(scene_name: str, size, n_views: int, seed: int, ref: int, params="sparse",
+                       scale: int | None = None) -> np.ndarray:
+    """SGM depth (H, W) metres with NaN holes for a scene rendered at ``size``, matched at ``scale``× size.
+
+    Semi-global matching needs texture detail that a 48×64 image does not have: there it fails
+    almost everywhere, and what it returns is mostly wrong. So small images are matched at 3×
+    the size and every 3rd pixel is kept, the centre one of each 3×3 block. With pinhole
+    intrinsics scaled by 3 (f' = 3f, c' = 3c + 1, pixel (0, 0) at the centre of the top-left
+    pixel) that pixel's ray is *exactly* the small pixel's ray, so the kept depth belongs to the
+    small image's geometry. ``scale=None`` → 3 below 96 rows, else 1.
+    """
+    from .holes import sgm_depth
+    from .scenes import make_scene
+
+    H, W = size
+    scale = (3 if H < 96 else 1) if scale is None else int(scale)
+    if scale < 1 or scale % 2 == 0:
+        raise ValueError(f"scale must be an odd positive integer (so a pixel has a centre sample), got {scale}")
+    scene = make_scene(scene_name, size=(H * scale, W * scale), n_views=n_views, seed=seed)
+    depth, _ = sgm_depth(scene, ref, params=params)
+    return depth[scale // 2::scale, scale // 2::scale].astype(np.float32)  # (H, W)
+
+
 def make_case(scene_name: str = "house", profile: Profile | str | None = None, ref: int = 0, holes: str = "sgm",
               seed: int = 0, n_neighbors: int = 2, sgm_params: str = "sparse") -> Case:
     """Render a named scene at the profile's size and cut holes into view ``ref``'s depth.
@@ -76,14 +110,14 @@ def make_case(scene_name: str = "house", profile: Profile | str | None = None, r
     ``holes``: ``"sgm"`` (real OpenCV SGM holes), ``"random"`` (seeded blobs) or ``"edge"`` (a band
     across a depth edge plus random blobs).
     """
-    from .holes import edge_band_holes, random_holes, sgm_depth
+    from .holes import edge_band_holes, random_holes
     from .scenes import make_scene, select_neighbors
 
     profile = get_profile(profile) if profile is None or isinstance(profile, str) else profile
     scene = make_scene(scene_name, size=profile.size, n_views=profile.n_views, seed=seed)
     view = scene[ref]
     if holes == "sgm":
-        depth, _ = sgm_depth(scene, ref, params=sgm_params)
+        depth = sgm_depth_at_scale(scene_name, profile.size, profile.n_views, seed, ref, sgm_params)
     elif holes == "random":
         depth, _ = random_holes(view.depth, seed=seed)
     elif holes == "edge":
@@ -97,8 +131,9 @@ def make_case(scene_name: str = "house", profile: Profile | str | None = None, r
         transform = DisparityTransform(meta["d_min"], meta["d_max"], meta.get("constant", 0.0))
     else:
         transform = DisparityTransform.from_depth(depth)
+    labels = scene.labels[ref] if scene.labels else None
     return Case(scene_name, view.rgb, depth.astype(np.float32), view.depth, view.camera, neighbors, transform,
-                scene, ref)
+                scene, ref, labels)
 
 
 def run_variants(case: Case, variants=("d", "rgbd", "rgbd+warp"), profile=None, net: str = "unet",
@@ -109,7 +144,7 @@ def run_variants(case: Case, variants=("d", "rgbd", "rgbd+warp"), profile=None, 
         config = FitConfig.for_profile(profile, variant=variant, net=net, **config_overrides)
         neighbors = case.neighbors if variant == "rgbd+warp" else ()
         results[variant] = complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant,
-                                          config=config, gt_depth=case.gt, transform=case.transform)
+                                          config=config, gt_depth=case.scored_gt, transform=case.transform)
     return results
 
 

@@ -153,18 +153,22 @@ def sgm_disparity(scene, ref: int, params="dense"):
 
 
 def sgm_depth(scene, ref: int, params="dense"):
-    """SGM depth of view ``ref`` → depth (H, W) float32 metres (NaN holes), mask (H, W) bool; z = f·B/d."""
+    """SGM depth of view ``ref`` → depth (H, W) float32 metres (NaN holes), mask (H, W) bool;
+    z = f·B/(d + doffs), ``doffs`` = ``scene.meta["doffs"]`` (Middlebury's principal-point offset, 0 if absent)."""
     disparity, mask = sgm_disparity(scene, ref, params)
     f, baseline = float(scene.views[ref].camera.K[0, 0]), float(scene.meta["baseline"])
+    shifted = disparity + float(scene.meta.get("doffs", 0.0))
+    mask = mask & (shifted > 0)
     depth = np.full(disparity.shape, np.nan, np.float32)
-    depth[mask] = f * baseline / disparity[mask]
+    depth[mask] = f * baseline / shifted[mask]
     return depth, mask
 
 
 def gt_disparity(scene, ref: int) -> np.ndarray:
-    """Ground-truth disparity of view ``ref`` (H, W) float32 px: f·B / depth (for KITTI's D1)."""
+    """Ground-truth disparity of view ``ref`` (H, W) float32 px: f·B / depth − doffs (for KITTI's D1)."""
     view, _, baseline = _stereo_pair(scene, ref)
-    return (float(view.camera.K[0, 0]) * baseline / view.depth.astype(np.float64)).astype(np.float32)
+    doffs = float(scene.meta.get("doffs", 0.0))
+    return (float(view.camera.K[0, 0]) * baseline / view.depth.astype(np.float64) - doffs).astype(np.float32)
 
 
 def random_holes(depth, fraction: float = 0.15, seed: int = 0, blob_size: float | None = None):

@@ -1,0 +1,41 @@
+"""``python -m data_fetch list`` / ``python -m data_fetch fetch NAME [--dest DIR] ...``."""
+from __future__ import annotations
+
+import argparse
+import sys
+
+from . import DATASETS, FetchError, ManualDownloadRequired, describe, fetch
+
+
+def main(argv=None) -> int:
+    """Command-line entry point; returns the exit code (0 ok, 1 error, 2 manual step needed)."""
+    parser = argparse.ArgumentParser(prog="python -m data_fetch", description="Fetch the paper's datasets, verified.")
+    sub = parser.add_subparsers(dest="command", required=True)
+    sub.add_parser("list", help="every dataset with its size, licence and what the kit uses it for")
+    get = sub.add_parser("fetch", help="download (or take a manual download), verify and unpack a dataset")
+    get.add_argument("name", choices=sorted(DATASETS))
+    get.add_argument("--dest", help="data root (default: $DDP_DATA, else the user data dir)")
+    get.add_argument("--only", action="append", metavar="GLOB", help="only files matching GLOB (repeatable)")
+    get.add_argument("--trust-first-download", action="store_true",
+                     help="accept unverified files once, record their SHA-256 next to the data, verify later fetches")
+    get.add_argument("--retries", type=int, default=3, help="retries after a dropped connection (default 3)")
+    get.add_argument("--no-progress", action="store_true", help="no progress bar")
+    args = parser.parse_args(argv)
+    if args.command == "list":
+        print(describe())
+        return 0
+    try:
+        paths = fetch(args.name, dest=args.dest, only=args.only, trust_first_download=args.trust_first_download,
+                      retries=args.retries, progressbar=not args.no_progress)
+    except ManualDownloadRequired as error:
+        print(error)
+        return 2
+    except (FetchError, ValueError) as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 1
+    print(f"{args.name}: {len(paths)} file(s) verified in {paths[0].parent if paths else '-'}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

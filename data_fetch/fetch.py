@@ -1,0 +1,170 @@
+"""``fetch``: download (or take the user's manual download), verify, record and unpack a dataset.
+
+Layout under the data root (``--dest``, else ``$DDP_DATA``, else platformdirs'
+``user_data_dir("ddp-lite")``)::
+
+    <root>/<dataset>/<file>             the verified file (final name only after its hash matched)
+    <root>/<dataset>/<file>.part        an interrupted download, resumed by the next fetch
+    <root>/<dataset>/registry.json      hashes recorded by --trust-first-download (and when)
+    <root>/<dataset>/.<file>.unpacked   marker: this archive (this hash) was unpacked here
+"""
+from __future__ import annotations
+
+import datetime
+import fnmatch
+import json
+import os
+import tempfile
+from pathlib import Path
+
+import platformdirs
+import pooch
+
+from .download import ChecksumError, FetchError, ResumableDownloader
+from .registry import Dataset, RemoteFile, get_dataset
+from .unpack import safe_extract
+
+__all__ = ["fetch", "data_dir", "ManualDownloadRequired", "UnpinnedFileError", "ENV_VAR", "REGISTRY_FILE"]
+
+ENV_VAR = "DDP_DATA"
+REGISTRY_FILE = "registry.json"
+
+
+class ManualDownloadRequired(FetchError):
+    """The dataset sits behind a form; the message says what to download and where to put it."""
+
+
+class UnpinnedFileError(FetchError):
+    """A file has no pinned SHA-256 and ``trust_first_download`` was not given."""
+
+
+def data_dir(dest=None) -> Path:
+    """The data root: ``dest`` if given, else ``$DDP_DATA``, else ``user_data_dir('ddp-lite')``."""
+    if dest is not None:
+        return Path(dest).expanduser()
+    if os.environ.get(ENV_VAR):
+        return Path(os.environ[ENV_VAR]).expanduser()
+    return Path(platformdirs.user_data_dir("ddp-lite"))
+
+
+def _read_records(folder: Path) -> dict:
+    path = folder / REGISTRY_FILE
+    if not path.exists():
+        return {}
+    try:
+        records = json.loads(path.read_text())
+    except json.JSONDecodeError as error:
+        raise FetchError(f"{path} is not valid JSON ({error}); fix or delete it") from None
+    return records if isinstance(records, dict) else {}
+
+
+def _write_atomic(path: Path, text: str) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w") as handle:
+            handle.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+        raise
+
+
+def _record(folder: Path, entry: RemoteFile, sha256: str, how: str) -> None:
+    records = _read_records(folder)
+    records[entry.name] = {"sha256": sha256, "url": entry.url, "how": how,
+                           "recorded": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")}
+    _write_atomic(folder / REGISTRY_FILE, json.dumps(records, indent=2, sort_keys=True) + "\n")
+
+
+def _known_hash(folder: Path, entry: RemoteFile, trust: bool) -> str | None:
+    """The pinned hash, else the recorded one, else None (allowed only with ``trust``)."""
+    known = entry.sha256 or _read_records(folder).get(entry.name, {}).get("sha256")
+    if known is None and not trust:
+        raise UnpinnedFileError(
+            f"{entry.name} has no pinned SHA-256 (the registry marks it unverified: nobody has checked its bytes "
+            f"yet) and none is recorded in {folder / REGISTRY_FILE}.\nRe-run with --trust-first-download to accept "
+            f"what arrives now, record its SHA-256 there, and verify every later fetch against it.")
+    return known
+
+
+def _unpack(folder: Path, entry: RemoteFile, sha256: str, say) -> None:
+    marker = folder / f".{Path(entry.name).name}.unpacked"
+    if marker.exists() and marker.read_text().strip() == sha256:
+        return
+    say(f"unpacking {entry.name} into {folder}")
+    safe_extract(folder / entry.name, folder)
+    _write_atomic(marker, sha256 + "\n")
+
+
+def _select(dataset: Dataset, only) -> list[RemoteFile]:
+    if not only:
+        return list(dataset.files)
+    patterns = [only] if isinstance(only, str) else list(only)
+    chosen = [f for f in dataset.files if any(fnmatch.fnmatchcase(f.name, p) for p in patterns)]
+    if not chosen:
+        raise ValueError(f"only={patterns!r} matches none of {dataset.name}'s files: "
+                         f"{', '.join(f.name for f in dataset.files)}")
+    return chosen
+
+
+def _download(folder: Path, entry: RemoteFile, known: str | None, retries: int, progressbar: bool,
+              backoff: float) -> Path:
+    path = folder / entry.name
+    downloader = ResumableDownloader(path.with_name(path.name + ".part"), retries=retries,
+                                     progressbar=progressbar, backoff=backoff)
+    try:
+        pooch.retrieve(entry.url, known_hash=known, fname=entry.name, path=folder, downloader=downloader)
+    except ValueError as error:  # pooch: hash mismatch; its temporary file is already deleted
+        if "hash" not in str(error).lower():
+            raise
+        raise ChecksumError(f"{entry.name}: {error}\nThe download was deleted (nothing is kept under its final "
+                            f"name). If the server's file really changed, update the registry.") from None
+    return path
+
+
+def _verify_manual(folder: Path, entry: RemoteFile, known: str) -> None:
+    path = folder / entry.name
+    actual = pooch.file_hash(str(path), alg=known.split(":")[0] if ":" in known else "sha256")
+    if actual != known.split(":")[-1]:
+        rejected = path.with_name(path.name + ".rejected")
+        os.replace(path, rejected)
+        raise ChecksumError(f"{entry.name}: SHA-256 is {actual}, expected {known}. The file was moved to "
+                            f"{rejected} (not deleted: it was yours); download it again.")
+
+
+def fetch(dataset, dest=None, only=None, trust_first_download: bool = False, retries: int = 3,
+          progressbar: bool = True, backoff: float = 1.0, say=print) -> list[Path]:
+    """Fetch ``dataset`` (a name from ``DATASETS`` or a ``Dataset``) into ``<root>/<name>/``; returns
+    the verified file paths. ``only``: glob pattern(s) on file names (e.g. ``"Adirondack-*"``).
+    Raises ``UnpinnedFileError``, ``ChecksumError``, ``ManualDownloadRequired`` or ``FetchError``."""
+    if isinstance(dataset, str):
+        dataset = get_dataset(dataset)
+    if not isinstance(dataset, Dataset):
+        raise TypeError(f"dataset must be a name or a Dataset, got {type(dataset).__name__}")
+    folder = data_dir(dest) / dataset.name
+    entries = _select(dataset, only)
+    manual = dataset.manual is not None or any(f.url is None for f in entries)
+    if manual:
+        missing = [f.name for f in entries if not (folder / f.name).exists()]
+        if missing:
+            text = (dataset.manual or "Download these files by hand from {dest}.").format(dest=folder)
+            raise ManualDownloadRequired(f"{text}\nStill missing in {folder}: {', '.join(missing)}")
+    paths = []
+    for entry in entries:
+        known = _known_hash(folder, entry, trust_first_download)
+        if manual:
+            if known is not None:
+                _verify_manual(folder, entry, known)
+        else:
+            _download(folder, entry, known, retries, progressbar, backoff)
+        path = folder / entry.name
+        if known is None:
+            known = pooch.file_hash(str(path))
+            _record(folder, entry, known, "trust-first-download")
+            say(f"recorded SHA-256 {known} for {entry.name} in {folder / REGISTRY_FILE} (trusted on first use)")
+        if entry.unpack:
+            _unpack(folder, entry, known, say)
+        paths.append(path)
+    return paths
