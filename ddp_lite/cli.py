@@ -1,6 +1,6 @@
 """``ddp-lite``: the kit's main job without a browser.
 
-    ddp-lite demo [--out ddp_demo.png] [--scene house] [--iterations 300]
+    ddp-lite demo [--out ddp_demo.png] [--scene house] [--holes edge|sgm|random] [--iterations 300]
     ddp-lite scenes
     ddp-lite complete --rgb image.png --depth depth.png --depth-scale 0.001 --out filled.npy
 """
@@ -16,47 +16,47 @@ import numpy as np
 
 
 def _demo(args) -> int:
+    import dataclasses
+
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from .baselines import fill_linear
+    from .baselines import fill_colorization, fill_linear
+    from .experiments import error_table, format_table, make_case
     from .fit import FitConfig, complete_depth
-    from .holes import sgm_depth
     from .metrics import hole_rmse
-    from .scenes import make_scene, select_neighbors
+    from .profiles import get_profile
     from .viz import save_figure, show_depth, show_error, show_image
 
     start = time.perf_counter()
-    height, width = args.size
-    scene = make_scene(args.scene, size=(height, width), seed=args.seed)
-    ref = 0
-    view = scene[ref]
-    depth, _ = sgm_depth(scene, ref)
-    neighbors = [scene[i] for i in select_neighbors(scene, ref, 2)]
-    print(f"{scene}\nSGM leaves {np.isnan(depth).mean():.0%} of the reference view as holes; "
-          f"warp loss uses views {[n.name for n in neighbors]}")
-    config = FitConfig.for_profile("class", variant="rgbd+warp", iterations=args.iterations, seed=args.seed,
+    profile = dataclasses.replace(get_profile("class"), size=tuple(args.size))
+    case = make_case(args.scene, profile, holes=args.holes, seed=args.seed)
+    print(f"{case.scene}\n{args.holes} holes: {np.isnan(case.depth).mean():.0%} of the reference view; "
+          f"warp loss uses views {[n.name for n in case.neighbors]}")
+    config = FitConfig.for_profile(profile, variant="rgbd+warp", iterations=args.iterations, seed=args.seed,
                                    device=args.device)
-    result = complete_depth(view.rgb, depth, view.camera, neighbors, variant="rgbd+warp", config=config,
-                            gt_depth=view.depth)
-    classical = fill_linear(depth, view.rgb)
-    ddp_error = hole_rmse(result.depth, view.depth, depth)
-    classical_error = hole_rmse(classical, view.depth, depth)
-    print(f"hole RMSE  DDP (rgbd+warp, {result.iterations} it): {ddp_error:.3f} m   "
-          f"linear interpolation: {classical_error:.3f} m")
+    result = complete_depth(case.rgb, case.depth, case.camera, case.neighbors, variant="rgbd+warp", config=config,
+                            gt_depth=case.scored_gt, transform=case.transform)
+    estimates = {"linear": fill_linear(case.depth), "colorization": fill_colorization(case.depth, case.rgb),
+                 "DDP rgbd+warp": result.depth}
+    table = error_table(case, estimates)
+    for name, depth in estimates.items():
+        table[name]["holes (m)"] = hole_rmse(depth, case.gt, case.holes)
+    print(format_table(table, 3, f"RMSE in the holes (sky not scored), DDP after {result.iterations} iterations: "
+                                 "normalised disparity ×100, its part near depth edges, metres"))
 
-    holes = np.isnan(depth)
-    finite = view.depth[np.isfinite(view.depth)]
-    vmin, vmax = float(finite.min()), float(np.percentile(finite, 99))
+    ddp_error, linear_error = table["DDP rgbd+warp"]["holes (m)"], table["linear"]["holes (m)"]
+    vmin, vmax = float(np.nanmin(case.gt)), float(np.nanmax(case.scored_gt))
     fig, axes = plt.subplots(2, 3, figsize=(13, 6.5))
-    show_image(axes[0, 0], view.rgb, f"'{scene.name}' reference view")
-    show_depth(axes[0, 1], depth, f"SGM input ({holes.mean():.0%} holes)", vmin, vmax)
-    show_depth(axes[0, 2], view.depth, "ground truth", vmin, vmax)
+    show_image(axes[0, 0], case.rgb, f"'{case.name}' reference view")
+    show_depth(axes[0, 1], case.depth, f"input ({np.isnan(case.depth).mean():.0%} holes)", vmin, vmax)
+    show_depth(axes[0, 2], case.gt, "ground truth", vmin, vmax)
     show_depth(axes[1, 0], result.depth, f"DDP (hole RMSE {ddp_error:.3f} m)", vmin, vmax)
-    show_error(axes[1, 1], result.depth, view.depth, "DDP |error| in holes", mask=holes)
-    show_error(axes[1, 2], classical, view.depth, f"linear fill |error| (RMSE {classical_error:.3f} m)",
-               mask=holes, vmax=float(np.nanpercentile(np.abs(result.depth - view.depth)[holes], 99)))
+    error_vmax = float(np.nanpercentile(np.abs(result.depth - case.gt)[case.holes], 99))
+    show_error(axes[1, 1], result.depth, case.gt, "DDP |error| in holes", mask=case.holes, vmax=error_vmax)
+    show_error(axes[1, 2], estimates["linear"], case.gt, f"linear fill |error| (RMSE {linear_error:.3f} m)",
+               mask=case.holes, vmax=error_vmax)
     fig.tight_layout()
     save_figure(fig, args.out)
     print(f"figure written to {os.path.abspath(args.out)}; took {time.perf_counter() - start:.1f} s")
@@ -111,9 +111,11 @@ def _complete(args) -> int:
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="ddp-lite", description="Depth completion with a Deep Depth Prior.")
     sub = parser.add_subparsers(dest="command", required=True)
-    demo = sub.add_parser("demo", help="fill SGM holes in a synthetic scene; compare with linear fill")
+    demo = sub.add_parser("demo", help="fill the holes of a synthetic scene with DDP; compare with classical fills")
     demo.add_argument("--out", default="ddp_demo.png", help="figure path (default: ddp_demo.png)")
     demo.add_argument("--scene", default="house")
+    demo.add_argument("--holes", choices=("edge", "sgm", "random"), default="edge",
+                      help="a band across a depth edge plus blobs (default), real SGM holes, or blobs")
     demo.add_argument("--iterations", type=int, default=300)
     demo.add_argument("--size", type=int, nargs=2, default=(96, 128), metavar=("H", "W"))
     demo.add_argument("--seed", type=int, default=0)

@@ -170,19 +170,22 @@ def format_table(table: dict[str, dict[str, float]], digits: int = 2, title: str
     return "\n".join(lines)
 
 
-def texture_leakage(depth, gt, transform: DisparityTransform, band: int = 3) -> float:
+def texture_leakage(depth, gt, transform: DisparityTransform, band: int = 3, region=None) -> float:
     """Mean |Laplacian| ×100 of the normalised disparity of ``depth`` (H, W metres) on the pixels
     where the truth ``gt`` is locally planar (its own Laplacian ≈ 0) and away from depth edges.
 
     For a plane, inverse depth is an affine function of the pixel coordinates, so its Laplacian is
     zero; with ``transform.constant == 0`` the same holds for normalised disparity. Colour texture
     copied into the depth (paper Fig. 4: wooden planks on a flat wall) shows up as a non-zero
-    Laplacian exactly there.
+    Laplacian exactly there. ``region`` (H, W) bool restricts the measure further (for example
+    to the planks: ``case.labels == LABELS_PLANKS``).
     """
     kernel = np.array([[0.0, 1.0, 0.0], [1.0, -4.0, 1.0], [0.0, 1.0, 0.0]])
     out = ndimage.convolve(transform.to_disparity(np.asarray(depth, np.float64)), kernel, mode="nearest")
     truth = ndimage.convolve(transform.to_disparity(np.asarray(gt, np.float64)), kernel, mode="nearest")
     planar = (np.abs(truth) < 1e-4) & ~edge_band(gt, band)
+    if region is not None:
+        planar &= np.asarray(region, bool)
     planar = ndimage.binary_erosion(planar, iterations=1)
     if not planar.any():
         return float("nan")
