@@ -36,7 +36,7 @@ from .camera import Camera
 from .scenes import Scene, View, make_scene
 
 __all__ = ["read_pfm", "write_pfm", "MiddleburyCalib", "parse_middlebury_calib", "read_middlebury_calib",
-           "disparity_to_depth", "load_middlebury", "load_middlebury2006", "make_middlebury_fixture",
+           "disparity_to_depth", "load_middlebury", "load_middlebury2006", "make_middlebury_fixture", "resize_scene",
            "read_kitti_disparity", "read_kitti_calib", "load_kitti", "read_mvsnet_cam", "load_tnt",
            "read_depth_image", "load_nyu", "NYU_K"]
 
@@ -107,14 +107,41 @@ def _check_size(size):
 
 
 def _resize(rgb, depth, camera: Camera, size):
-    """Resample a view to ``size`` (H, W): colour by area/linear, depth by nearest (no invented depths)."""
-    if size is None or size == depth.shape:
+    """Resample a view to ``size`` (H, W): colour by area/linear, depth by nearest (no invented depths).
+
+    Nearest is OpenCV's ``INTER_NEAREST_EXACT``: a new pixel takes the old pixel under its *centre*
+    ((u + 0.5)·s − 0.5), the convention ``Camera.resized`` uses. Plain ``INTER_NEAREST`` takes the
+    top-left one of each block, which shifts depth against colour and K by (s − 1)/2 old pixels."""
+    if size is None or tuple(size) == depth.shape:
         return rgb, depth, camera
     H, W = size
     shrink = H < depth.shape[0] and W < depth.shape[1]
     rgb = cv2.resize(rgb, (W, H), interpolation=cv2.INTER_AREA if shrink else cv2.INTER_LINEAR)
-    depth = cv2.resize(depth, (W, H), interpolation=cv2.INTER_NEAREST)
+    depth = cv2.resize(depth, (W, H), interpolation=cv2.INTER_NEAREST_EXACT)
     return rgb, depth, camera.resized(W, H)
+
+
+_PIXEL_META = ("doffs", "ndisp", "focal")  # meta entries in pixels: they scale with the image width
+
+
+def resize_scene(scene: Scene, size) -> Scene:
+    """A copy of ``scene`` with every view (and right view) resampled to ``size`` (H, W): colour by
+    area (linear when enlarging), depth and labels by the nearest pixel centre (no invented depths),
+    cameras by ``Camera.resized``; pixel-unit ``meta`` (doffs, ndisp, focal) scaled by the x factor,
+    metre-unit ``meta`` (baseline, d_min, d_max, ...) kept. The input scene is not modified."""
+    if not isinstance(scene, Scene):
+        raise TypeError(f"scene must be a ddp_lite.Scene, got {type(scene).__name__}")
+    if not scene.views:
+        raise ValueError("scene has no views to resize")
+    H, W = _check_size(size)
+    sx = W / scene.views[0].camera.width
+
+    def view(v: View) -> View:
+        rgb, depth, camera = _resize(v.rgb, v.depth, v.camera, (H, W))
+        return View(rgb.copy(), depth.copy(), camera, v.name)
+    labels = [cv2.resize(np.asarray(l), (W, H), interpolation=cv2.INTER_NEAREST_EXACT) for l in scene.labels]
+    meta = {k: (float(v) * sx if k in _PIXEL_META else v) for k, v in scene.meta.items()}
+    return Scene(scene.name, [view(v) for v in scene.views], [view(v) for v in scene.right], meta, labels)
 
 
 def _depth_range(depths) -> dict:
@@ -269,12 +296,11 @@ def _stereo_scene(name, rgb0, rgb1, depth0, depth1, calib: MiddleburyCalib, size
     for what, array in (("left image", rgb0), ("right image", rgb1), ("left depth", depth0), ("right depth", depth1)):
         if array.shape[:2] != (calib.height, calib.width):
             raise ValueError(f"{what} is {array.shape[1]}×{array.shape[0]} but calib says {calib.width}×{calib.height}")
-    rgb0, depth0, cam0 = _resize(rgb0, depth0, cam0, size)
-    rgb1, depth1, cam1 = _resize(rgb1, depth1, cam1, size)
-    sx = cam0.width / calib.width
-    meta = {"baseline": float(calib.baseline), "doffs": float(calib.doffs) * sx, "ndisp": float(calib.ndisp) * sx,
+    # the depth range comes from the full-resolution map, so it does not depend on ``size``
+    meta = {"baseline": float(calib.baseline), "doffs": float(calib.doffs), "ndisp": float(calib.ndisp),
             "focal": cam0.focal, **_depth_range([depth0])}
-    return Scene(name, [View(rgb0, depth0, cam0, f"{name}-left")], [View(rgb1, depth1, cam1, f"{name}-right")], meta)
+    scene = Scene(name, [View(rgb0, depth0, cam0, f"{name}-left")], [View(rgb1, depth1, cam1, f"{name}-right")], meta)
+    return scene if size is None else resize_scene(scene, size)
 
 
 def load_middlebury(folder, size=None, name: str | None = None) -> Scene:

@@ -19,7 +19,7 @@ from .fit import DepthResult, FitConfig, complete_depth
 from .profiles import Profile, get_profile
 
 __all__ = ["Case", "make_case", "sgm_depth_at_scale", "edge_band", "disparity_rmse", "run_variants", "error_table", "format_table",
-           "texture_leakage"]
+           "texture_leakage", "format_mean_spread", "cloud_scores"]
 
 
 @dataclass
@@ -80,9 +80,10 @@ def disparity_rmse(depth, gt, mask, transform: DisparityTransform) -> float:
     return float(100.0 * np.sqrt(np.mean(error[mask] ** 2)))
 
 
-def sgm_depth_at_scale(scene_name: str, size, n_views: int, seed: int, ref: int, params="sparse",
-                       scale: int | None = None) -> np.ndarray:
-    """SGM depth (H, W) metres with NaN holes for a scene rendered at ``size``, matched at ``scale``× size.
+def sgm_depth_at_scale(scene_name: str, size, n_views: int, seed: int, ref=0, params="sparse",
+                       scale: int | None = None):
+    """SGM depth (H, W) metres with NaN holes for a scene rendered at ``size``, matched at ``scale``× size;
+    ``ref`` an int (one map) or a sequence of view indices (a list of maps, one render).
 
     Semi-global matching needs texture detail that a 48×64 image does not have: there it fails
     almost everywhere, and what it returns is mostly wrong. So small images are matched at 3×
@@ -99,8 +100,10 @@ def sgm_depth_at_scale(scene_name: str, size, n_views: int, seed: int, ref: int,
     if scale < 1 or scale % 2 == 0:
         raise ValueError(f"scale must be an odd positive integer (so a pixel has a centre sample), got {scale}")
     scene = make_scene(scene_name, size=(H * scale, W * scale), n_views=n_views, seed=seed)
-    depth, _ = sgm_depth(scene, ref, params=params)
-    return depth[scale // 2::scale, scale // 2::scale].astype(np.float32)  # (H, W)
+    refs = [ref] if np.isscalar(ref) else list(ref)
+    depths = [sgm_depth(scene, i, params=params)[0][scale // 2::scale, scale // 2::scale].astype(np.float32)
+              for i in refs]  # each (H, W)
+    return depths[0] if np.isscalar(ref) else depths
 
 
 def make_case(scene_name: str = "house", profile: Profile | str | None = None, ref: int = 0, holes: str = "sgm",
@@ -190,3 +193,30 @@ def texture_leakage(depth, gt, transform: DisparityTransform, band: int = 3, reg
     if not planar.any():
         return float("nan")
     return float(100.0 * np.mean(np.abs(out[planar])))
+
+
+def format_mean_spread(runs: list[dict[str, dict[str, float]]], digits: int = 2, title: str = "") -> str:
+    """A plain-text table of "mean ± std" over several ``{row: {column: value}}`` tables (same rows
+    and columns, e.g. one per scene and seed), rows in the order of the first; std is the sample
+    std (0 for a single run)."""
+    rows, columns = list(runs[0]), list(next(iter(runs[0].values())))
+    width = max(len(str(r)) for r in rows) + 2
+    cell = 2 * (digits + 5) + 3
+    lines = [title] if title else []
+    lines.append(" " * width + "".join(f"{c:>{cell}}" for c in columns))
+    for row in rows:
+        text = f"{str(row):<{width}}"
+        for column in columns:
+            values = np.array([run[row][column] for run in runs], dtype=float)
+            spread = values.std(ddof=1) if len(values) > 1 else 0.0
+            text += f"{f'{values.mean():.{digits}f} ± {spread:.{digits}f}':>{cell}}"
+        lines.append(text)
+    return "\n".join(lines)
+
+
+def cloud_scores(points, gt_points, tau: float) -> dict[str, float]:
+    """Tanks-and-Temples precision, recall and F-score in % of a point cloud ((N, 3) world metres or
+    an Open3D cloud) against ``gt_points`` at distance ``tau`` metres."""
+    from .metrics import point_cloud_prf
+    scores = point_cloud_prf(points, gt_points, tau)
+    return {"P": 100 * scores["precision"], "R": 100 * scores["recall"], "F": 100 * scores["fscore"]}

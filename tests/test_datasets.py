@@ -6,9 +6,10 @@ import numpy as np
 import pytest
 
 from ddp_lite.datasets import (NYU_K, disparity_to_depth, load_kitti, load_middlebury, load_nyu, load_tnt,
-                               make_middlebury_fixture, parse_middlebury_calib, read_depth_image,
+                               make_middlebury_fixture, parse_middlebury_calib, read_depth_image, resize_scene,
                                read_kitti_calib, read_kitti_disparity, read_mvsnet_cam, read_pfm, write_pfm)
-from ddp_lite.scenes import Scene, make_scene
+from ddp_lite.camera import Camera
+from ddp_lite.scenes import Scene, View, make_scene
 
 
 @pytest.mark.parametrize("shape", [(5, 7), (5, 7, 3)])
@@ -115,6 +116,52 @@ def test_middlebury_fixture_round_trip(tmp_path):
     assert small.size == (24, 32) and small[0].camera.K[0, 0] == pytest.approx(ref[0].camera.K[0, 0] / 2)
     scene.save(tmp_path / "s.npz")  # notebooks' save/load path accepts it
     assert Scene.load(tmp_path / "s.npz").meta == scene.meta
+
+
+def test_resize_scene_by_hand():
+    # 27×24 → 9×8: a factor of exactly 3, so each small pixel covers one 3×3 block whose centre is (3i+1, 3j+1)
+    rows, cols = np.mgrid[0:27, 0:24]
+    depth = (1.0 + rows + 100.0 * cols).astype(np.float32)
+    depth[4, 7] = np.nan  # the centre of block (1, 2): the small pixel must be a hole
+    depth[0, 0] = np.nan  # a corner of block (0, 0): nearest-by-centre must not see it
+    block = (rows // 3 + 10 * (cols // 3)).astype(np.float32) / 100.0  # constant on every 3×3 block
+    rgb = np.stack([block, 0.5 * block, np.full_like(block, 0.25)], axis=2)
+    K = np.array([[30.0, 0.0, 11.5], [0.0, 30.0, 13.0], [0.0, 0.0, 1.0]])
+    right_pose = np.eye(4)
+    right_pose[0, 3] = -0.1
+    labels = [(rows % 2).astype(np.uint8)]
+    scene = Scene("toy", [View(rgb, depth, Camera(K, np.eye(4), 24, 27), "l")],
+                  [View(rgb[:, ::-1], depth[:, ::-1], Camera(K, right_pose, 24, 27), "r")],
+                  {"baseline": 0.1, "doffs": 6.0, "ndisp": 30.0, "focal": 30.0, "d_min": 0.5, "d_max": 3000.0}, labels)
+    before = depth.copy()
+    small = resize_scene(scene, (9, 8))
+    assert small.size == (9, 8) and small.name == "toy" and len(small.right) == 1
+    expected = depth[1::3, 1::3]
+    np.testing.assert_array_equal(small[0].depth, expected)
+    assert np.isnan(small[0].depth[1, 2]) and small[0].depth[0, 0] == depth[1, 1]
+    np.testing.assert_allclose(small[0].rgb, rgb[1::3, 1::3], atol=1e-6)  # area of a constant block
+    np.testing.assert_array_equal(small.right[0].depth, depth[:, ::-1][1::3, 1::3])
+    np.testing.assert_array_equal(small.labels[0], labels[0][1::3, 1::3])
+    # K: f/3, c' = (c + 0.5)/3 - 0.5; the pose is kept
+    np.testing.assert_allclose(small[0].camera.K, [[10.0, 0.0, 3.5], [0.0, 10.0, 4.0], [0.0, 0.0, 1.0]])
+    np.testing.assert_allclose(small.right[0].camera.center, [0.1, 0.0, 0.0])
+    assert small.meta == {"baseline": 0.1, "doffs": 2.0, "ndisp": 10.0, "focal": 10.0, "d_min": 0.5, "d_max": 3000.0}
+    np.testing.assert_array_equal(scene[0].depth, before)  # the input is untouched
+    assert scene.size == (27, 24) and scene.meta["doffs"] == 6.0
+    with pytest.raises(ValueError, match="size"):
+        resize_scene(scene, (4, 4))
+    with pytest.raises(TypeError, match="scene"):
+        resize_scene("scene", (9, 8))
+
+
+def test_load_middlebury_size_equals_resize_scene(tmp_path):
+    folder = make_middlebury_fixture(tmp_path / "Toy-perfect", size=(48, 64), seed=1)
+    direct, later = load_middlebury(folder, size=(24, 32)), resize_scene(load_middlebury(folder), (24, 32))
+    assert direct.meta == later.meta
+    for a, b in zip(direct.views + direct.right, later.views + later.right):
+        np.testing.assert_array_equal(a.depth, b.depth)
+        np.testing.assert_array_equal(a.rgb, b.rgb)
+        np.testing.assert_array_equal(a.camera.K, b.camera.K)
 
 
 def test_kitti_disparity_and_loader(tmp_path):
