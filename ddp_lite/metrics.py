@@ -94,7 +94,7 @@ def hole_rmse(pred, gt, holes) -> float:
     return float(np.sqrt(np.mean(errors ** 2)))
 
 
-def d1_error(disp_pred, disp_gt, fg_mask=None) -> dict:
+def d1_error(disp_pred, disp_gt, fg_mask=None, abs_threshold: float = 3.0, rel_threshold: float = 0.05) -> dict:
     """KITTI 2015 D1 outlier fractions in [0, 1]: ``{'d1_all', 'd1_bg', 'd1_fg'}``.
 
     A pixel is *bad* when |pred - gt| > 3 px **and** |pred - gt| > 5 % of gt. Only pixels with a
@@ -103,7 +103,9 @@ def d1_error(disp_pred, disp_gt, fg_mask=None) -> dict:
     predictions by background interpolation before scoring; we do not, so holes are penalised.)
     ``fg_mask`` (H, W) bool marks foreground (cars in KITTI); ``d1_bg`` is over the rest. Without
     it every pixel is background: ``d1_bg == d1_all`` and ``d1_fg`` is NaN; a set with no valid
-    pixel also gives NaN.
+    pixel also gives NaN. ``abs_threshold`` (px) and ``rel_threshold`` are KITTI's 3 px and 5 %;
+    3 px is meant for 1242 px wide images: on smaller images scale it with the width
+    (3 · W / 1242), or nothing is ever an outlier.
 
     Example:
         >>> d1_error(np.array([10.0, 13.5, 100.0]), np.array([10.0, 10.0, 96.0]))["d1_all"]
@@ -114,9 +116,11 @@ def d1_error(disp_pred, disp_gt, fg_mask=None) -> dict:
     valid = np.isfinite(gt) & (gt > 0)
     if not valid.any():
         raise ValueError("disp_gt has no valid pixel (finite and > 0); D1 is undefined")
+    if not (abs_threshold >= 0 and rel_threshold >= 0):
+        raise ValueError(f"abs_threshold and rel_threshold must be ≥ 0, got {abs_threshold!r}, {rel_threshold!r}")
     with np.errstate(invalid="ignore"):
         err = np.abs(pred - gt)
-        bad = ~np.isfinite(pred) | ((err > 3.0) & (err > 0.05 * gt))
+        bad = ~np.isfinite(pred) | ((err > abs_threshold) & (err > rel_threshold * gt))
 
     def fraction(region):
         count = int(region.sum())

@@ -39,7 +39,7 @@ def show_image(ax, image, title: str = ""):
     ax.axis("off")
 
 
-def show_error(ax, estimate, truth, title: str = "", vmax=None, mask=None):
+def show_error(ax, estimate, truth, title: str = "", vmax=None, mask=None, label: str = "|error| (m)"):
     """Absolute error |estimate - truth| (H, W) on ``ax``; pixels outside ``mask`` greyed out."""
     error = np.abs(np.asarray(estimate, np.float32) - np.asarray(truth, np.float32))
     if mask is not None:
@@ -48,7 +48,7 @@ def show_error(ax, estimate, truth, title: str = "", vmax=None, mask=None):
     colours.set_bad("lightgrey")
     vmax = float(np.nanpercentile(error, 99)) if vmax is None else vmax
     image = ax.imshow(np.ma.masked_invalid(error), cmap=colours, vmin=0, vmax=max(vmax, 1e-6), interpolation="nearest")
-    ax.figure.colorbar(image, ax=ax, fraction=0.046, pad=0.04, label="|error| (m)")
+    ax.figure.colorbar(image, ax=ax, fraction=0.046, pad=0.04, label=label)
     ax.set_title(title)
     ax.axis("off")
     return image

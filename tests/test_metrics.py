@@ -104,3 +104,13 @@ def test_point_cloud_prf_on_point_sets_with_known_distances():
     assert point_cloud_prf(cloud, gt, tau=0.5) == point_cloud_prf(pred, gt, tau=0.5)  # clouds or arrays
     r = point_cloud_prf(pred, gt + 100.0, tau=0.5)
     assert r == {"precision": 0.0, "recall": 0.0, "fscore": 0.0}  # F is 0, not NaN, when P = R = 0
+
+
+def test_d1_scaled_threshold_by_hand():
+    # errors 0.2, 0.1, 0.6 px on truths 2, 2, 10: with 0.15 px and 5 % (0.1, 0.1, 0.5 px) pixels 0 and 2 are bad
+    gt = np.array([2.0, 2.0, 10.0])
+    pred = np.array([2.2, 2.1, 10.6])
+    assert d1_error(pred, gt, abs_threshold=0.15)["d1_all"] == pytest.approx(2 / 3)
+    assert d1_error(pred, gt)["d1_all"] == 0.0  # KITTI's 3 px: nothing is an outlier at this scale
+    with pytest.raises(ValueError, match="abs_threshold"):
+        d1_error(pred, gt, abs_threshold=-1.0)
