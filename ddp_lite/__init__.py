@@ -10,7 +10,8 @@ top-left pixel. ``DDP_PROFILE`` (ci / class / paper) sets sizes and schedules.
 """
 from .camera import Camera, backproject, look_at, pixel_grid, project, relative_pose
 from .disparity import DisparityTransform
-from .fit import VARIANTS, DepthResult, FitConfig, ImageResult, complete_depth, fit_image, merge
+from .fit import (VARIANTS, DepthResult, FitConfig, ImageResult, complete_depth, complete_depth_coarse_to_fine, fit_image,
+                  merge)
 from .losses import disparity_loss, masked_l1, rgb_loss, ssim, warp_loss
 from .nets import SkipNet, UNet, build_net, make_noise
 from .profiles import PROFILES, Profile, get_profile
