@@ -119,7 +119,7 @@ def test_warp_uses_per_view_intrinsics():
 def test_backproject_then_project_round_trip_and_relative_pose():
     ref = Camera.from_fov(16, 12, 50.0)
     nbr = Camera(ref.K, look_at([0.3, 0.0, 0.0], [0.0, 0.0, 3.0]), 16, 12)
-    K = torch.as_tensor(ref.K, dtype=torch.float64)
+    K = torch.tensor(ref.K, dtype=torch.float64)  # a copy: Camera arrays are read-only
     depth = torch.full((1, 1, 12, 16), 3.0, dtype=torch.float64)
     points = backproject(depth, K)
     uv, z = project(points, K)
