@@ -332,9 +332,8 @@ def complete_depth(rgb, depth, camera: Camera | None = None, neighbors=(), varia
     return _complete_depth(rgb, depth, camera, neighbors, variant, config, gt_depth, transform, callback, init)
 
 
-def _complete_depth(rgb, depth, camera, neighbors, variant, config, gt_depth, transform, callback, init,
-                    noise=None) -> DepthResult:
-    """:func:`complete_depth` with an optional fixed network input ``noise`` (1, C, H, W)."""
+def _check_fit_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth, transform):
+    """Validate a depth fit's inputs before any work: (config, depth, rgb, neighbors, gt_depth, transform)."""
     if variant not in VARIANTS:
         raise ValueError(f"variant must be one of {VARIANTS}, got {variant!r}")
     config = FitConfig.for_profile(variant=variant) if config is None else config
@@ -358,6 +357,15 @@ def _complete_depth(rgb, depth, camera, neighbors, variant, config, gt_depth, tr
     transform = DisparityTransform.from_depth(depth) if transform is None else transform
     if not isinstance(transform, DisparityTransform):
         raise TypeError(f"transform must be a DisparityTransform, got {type(transform).__name__}")
+    return config, depth, rgb, neighbors, gt_depth, transform
+
+
+def _complete_depth(rgb, depth, camera, neighbors, variant, config, gt_depth, transform, callback, init,
+                    noise=None) -> DepthResult:
+    """:func:`complete_depth` with an optional fixed network input ``noise`` (1, C, H, W)."""
+    config, depth, rgb, neighbors, gt_depth, transform = _check_fit_inputs(
+        rgb, depth, camera, neighbors, variant, config, gt_depth, transform)
+    H, W = depth.shape
 
     device = _device(config)
     iterations = config.resolved_iterations(variant)
@@ -507,20 +515,10 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
         raise ValueError(f"scale must be an integer ≥ 2, got {scale!r}")
     if not 0.0 < float(coarse_fraction) < 1.0:
         raise ValueError(f"coarse_fraction must lie in (0, 1), got {coarse_fraction!r}")
-    if variant not in VARIANTS:
-        raise ValueError(f"variant must be one of {VARIANTS}, got {variant!r}")
-    config = FitConfig.for_profile(variant=variant) if config is None else config
-    if not isinstance(config, FitConfig):
-        raise TypeError(f"config must be a FitConfig, got {type(config).__name__}")
-    config.validate()
+    config, depth, rgb, neighbors, gt_depth, transform = _check_fit_inputs(
+        rgb, depth, camera, neighbors, variant, config, gt_depth, transform)
     scale = int(scale)
-    depth = _check_depth(depth)
     H, W = depth.shape
-    rgb = _check_image(rgb, "rgb", (H, W)) if variant != "d" or rgb is not None else None
-    neighbors = _check_neighbors(neighbors)
-    if camera is not None and not isinstance(camera, Camera):
-        raise TypeError(f"camera must be a ddp_lite.Camera, got {type(camera).__name__}")
-    transform = DisparityTransform.from_depth(depth) if transform is None else transform
     iterations = config.resolved_iterations(variant)
     n_coarse = min(max(int(round(coarse_fraction * iterations)), 1), iterations - 1)
     if n_coarse < 1:
