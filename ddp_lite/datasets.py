@@ -33,7 +33,7 @@ import cv2
 import numpy as np
 
 from .camera import Camera
-from .scenes import Scene, View, make_scene
+from .scenes import Scene, View, check_size, make_scene
 
 __all__ = ["read_pfm", "write_pfm", "MiddleburyCalib", "parse_middlebury_calib", "read_middlebury_calib",
            "disparity_to_depth", "load_middlebury", "load_middlebury2006", "make_middlebury_fixture", "resize_scene",
@@ -95,15 +95,7 @@ def _png_bytes(rgb: np.ndarray) -> bytes:
 
 
 def _check_size(size):
-    if size is None:
-        return None
-    try:
-        H, W = (int(v) for v in size)
-    except (TypeError, ValueError):
-        raise ValueError(f"size must be (H, W) or None, got {size!r}") from None
-    if H < 8 or W < 8 or tuple(size) != (H, W):
-        raise ValueError(f"size must be two integers >= 8, got {size!r}")
-    return H, W
+    return None if size is None else check_size(size)
 
 
 def _resize(rgb, depth, camera: Camera, size):

@@ -605,18 +605,24 @@ def _path_offsets(n_views: int) -> np.ndarray:
     return np.where(k % 2 == 1, -(k + 1) // 2, k // 2).astype(float)
 
 
-def make_scene(name: str, size=(96, 128), n_views: int = 5, seed: int = 0, fov_x_deg: float | None = None,
-               supersample: int = 3) -> Scene:
-    """Render the named synthetic scene: ``n_views`` views of ``size`` (H, W) with exact depth
-    (metres), a rectified right view each, texture labels, and ``meta`` (d_min, d_max, baseline, ...)."""
-    if not isinstance(name, str) or name not in SCENES:
-        raise ValueError(f"name must be one of {sorted(SCENES)}, got {name!r}")
+def check_size(size) -> tuple[int, int]:
+    """``size`` as (H, W) ints, each ≥ 8; ``ValueError`` naming ``size`` otherwise."""
     try:
         H, W = (int(v) for v in size)
     except (TypeError, ValueError):
         raise ValueError(f"size must be (H, W), got {size!r}") from None
     if H < 8 or W < 8 or tuple(size) != (H, W):
         raise ValueError(f"size must be two integers >= 8, got {size!r}")
+    return H, W
+
+
+def make_scene(name: str, size=(96, 128), n_views: int = 5, seed: int = 0, fov_x_deg: float | None = None,
+               supersample: int = 3) -> Scene:
+    """Render the named synthetic scene: ``n_views`` views of ``size`` (H, W) with exact depth
+    (metres), a rectified right view each, texture labels, and ``meta`` (d_min, d_max, baseline, ...)."""
+    if not isinstance(name, str) or name not in SCENES:
+        raise ValueError(f"name must be one of {sorted(SCENES)}, got {name!r}")
+    H, W = check_size(size)
     if int(n_views) != n_views or n_views < 1:
         raise ValueError(f"n_views must be a positive integer, got {n_views!r}")
     if int(seed) != seed or seed < 0:
