@@ -6,6 +6,7 @@ from scipy.interpolate import griddata
 
 from ddp_lite import (Camera, FitConfig, SkipNet, UNet, complete_depth, disparity_loss, fit_image, look_at, merge,
                       warp_loss, warp_to_reference)
+from ddp_lite.fit import PlateauStopper
 
 TINY = dict(channels=(8, 16, 32), lr=1e-2, progress=False)
 
@@ -109,6 +110,39 @@ def test_rgbd_warp_runs_with_neighbours_and_auto_stop_keeps_the_best():
     heldout = result.history["heldout"]
     best_index = list(result.history["eval_iteration"]).index(result.best_iteration)
     assert heldout[best_index] == pytest.approx(np.min(heldout[: len(heldout)]))
+
+
+@pytest.mark.parametrize("decays, expected", [
+    # patience 30 at eval_every 10: the 3rd evaluation without a new best is a plateau
+    (0, ["improved", "", "", "stop"]),
+    (1, ["improved", "", "", "decay", "", "improved", "", "", "stop"]),
+    (2, ["improved", "", "", "decay", "", "improved", "", "", "decay", "improved", "", "", "stop"]),
+])
+def test_plateau_stopper_events_by_hand(decays, expected):
+    errors = [5.0, 5.0, 6.0, 5.5, 5.2, 4.0, 4.0, 4.1, 4.0, 3.9, 4.5, 4.5, 4.5]
+    stopper = PlateauStopper(patience=30, eval_every=10, decays=decays)
+    events = []
+    for error in errors:
+        events.append(stopper.update(error))
+        if events[-1] == "stop":
+            break
+    assert events == expected
+
+
+def test_plateau_decay_continues_the_same_run_and_cuts_the_rate():
+    gt, depth = slanted_plane()
+    base = FitConfig(iterations=300, auto_stop=True, patience=10, eval_every=5, **TINY)
+    plain = complete_depth(None, depth, variant="d", config=base)
+    assert plain.iterations < 300, "the tiny case should plateau within 300 iterations"
+    decayed = complete_depth(None, depth, variant="d", config=base.replace(plateau_decays=1))
+    # same seed, same thread count: identical up to the first plateau, which now cuts lr instead of stopping
+    assert list(decayed.history["lr_decay_iteration"]) == [plain.iterations]
+    n = plain.iterations
+    np.testing.assert_array_equal(decayed.history["loss"][:n], plain.history["loss"][:n])
+    assert decayed.iterations > n
+    # a rate cut by lr_gamma (0.01) moves the weights less: the loss changes less per step after the cut
+    step = np.abs(np.diff(decayed.history["loss"]))
+    assert np.median(step[n: n + 10]) < np.median(step[n - 10: n])
 
 
 def test_merge_keeps_valid_input():
