@@ -120,7 +120,7 @@ class DepthResult:
     depth: np.ndarray  # metres, holes filled
     disparity: np.ndarray  # [0, 1], see ``transform``
     rgb: np.ndarray | None  # the net's colour output (None for depth only)
-    history: dict  # per-iteration loss terms; per-evaluation held-out and hole errors
+    history: dict  # per-iteration loss terms; per-evaluation held-out and hole errors; lr_decay_iteration
     transform: DisparityTransform
     iterations: int  # iterations run
     best_iteration: int  # the iteration whose output is returned
