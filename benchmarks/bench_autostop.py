@@ -17,17 +17,16 @@ Errors are RMSE ×100 of normalised disparity in the (non-sky) holes. Prints a t
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import os
-import time
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
 import torch  # noqa: E402
 
-from ddp_lite import FitConfig, complete_depth, get_profile  # noqa: E402
+from ddp_lite import FitConfig, complete_depth  # noqa: E402
 from ddp_lite.experiments import make_case  # noqa: E402
+from _common import add_profile_args, profile_from_args  # noqa: E402
 from ddp_lite.fit import PlateauStopper  # noqa: E402
 
 SCENES = ("house", "desk", "room", "street")
@@ -48,18 +47,13 @@ def replay(heldout, patience: int, eval_every: int, decays: int):
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--size", type=int, nargs=2, metavar=("H", "W"), help="image size (default: the profile's)")
-    parser.add_argument("--profile", default="class")
+    add_profile_args(parser)
     parser.add_argument("--iterations", type=int, default=800, help="long-run length")
     parser.add_argument("--scenes", nargs="+", default=list(SCENES))
     parser.add_argument("--variants", nargs="+", default=list(VARIANTS))
     parser.add_argument("--seeds", type=int, nargs="+", default=[0])
-    parser.add_argument("--threads", type=int, default=1)
     args = parser.parse_args()
-    torch.set_num_threads(args.threads)
-    profile = get_profile(args.profile)
-    if args.size:
-        profile = dataclasses.replace(profile, size=tuple(args.size))
+    profile = profile_from_args(args)
     print(f"torch {torch.__version__}, {torch.get_num_threads()} thread(s); {profile.describe()}")
     rows = []
     for scene in args.scenes:

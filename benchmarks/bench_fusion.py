@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import time
 
-import numpy as np
 
 from ddp_lite.baselines import BASELINES
 from ddp_lite.fusion import fuse_depths, tsdf_fuse

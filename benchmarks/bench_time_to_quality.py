@@ -26,17 +26,16 @@ coarse-to-fine run) from its total time. Prints tables; asserts nothing.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import os
-import time
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
 import torch  # noqa: E402
 
-from ddp_lite import FitConfig, complete_depth, get_profile  # noqa: E402
+from ddp_lite import FitConfig, complete_depth  # noqa: E402
 from ddp_lite.experiments import make_case  # noqa: E402
+from _common import add_profile_args, profile_from_args  # noqa: E402
 from ddp_lite.fit import complete_depth_coarse_to_fine  # noqa: E402
 
 SCENES = ("house", "desk", "room", "street")
@@ -104,8 +103,7 @@ HEAD = f"{'':<22} {'it→tgt':>6} {'s→tgt':>8} {'best':>7} {'kept':>7} {'ran':
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--size", type=int, nargs=2, metavar=("H", "W"), help="image size (default: the profile's)")
-    parser.add_argument("--profile", default="class")
+    add_profile_args(parser)
     parser.add_argument("--budget", type=int, help="iterations of the fixed-budget recipes (default: 2 × the profile's)")
     parser.add_argument("--tolerance", type=float, default=0.05)
     parser.add_argument("--scenes", nargs="+", default=list(SCENES))
@@ -113,12 +111,8 @@ def main() -> None:
     parser.add_argument("--parts", nargs="+", default=["main", "warm", "precision", "c2f"],
                         choices=["main", "warm", "precision", "c2f"])
     parser.add_argument("--seed", type=int, default=0, help="fit seed (net init, noise, held-out pixels)")
-    parser.add_argument("--threads", type=int, default=1)
     args = parser.parse_args()
-    torch.set_num_threads(args.threads)
-    profile = get_profile(args.profile)
-    if args.size:
-        profile = dataclasses.replace(profile, size=tuple(args.size))
+    profile = profile_from_args(args)
     budget = args.budget or 2 * profile.iterations
     tol = 1 + args.tolerance
     print(f"torch {torch.__version__}, {torch.get_num_threads()} thread(s); {profile.describe()}; "
