@@ -59,6 +59,7 @@ def _read_records(folder: Path) -> dict:
 
 
 def _write_atomic(path: Path, text: str) -> None:
+    """Text to ``path`` atomically (like ``ddp_lite.atomic``, which data_fetch does not import: it would pull in torch)."""
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
     try:

@@ -9,10 +9,11 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-import tempfile
 import time
 
 import numpy as np
+
+from .atomic import atomic_path
 
 
 def _demo(args) -> int:
@@ -100,10 +101,8 @@ def _complete(args) -> int:
                                    **({"iterations": args.iterations} if args.iterations else {}))
     result = complete_depth(rgb, depth, variant=args.variant, config=config)
     filled = result.merged(depth) if args.keep_input else result.depth
-    fd, tmp = tempfile.mkstemp(dir=os.path.dirname(os.path.abspath(args.out)), suffix=".npy")
-    with os.fdopen(fd, "wb") as handle:
+    with atomic_path(args.out) as tmp, open(tmp, "wb") as handle:
         np.save(handle, filled)
-    os.replace(tmp, args.out)
     print(f"filled {np.isnan(depth).mean():.1%} holes in {result.seconds:.1f} s → {args.out}")
     return 0
 

@@ -23,15 +23,14 @@ tests and notebooks can run the real-data path offline.
 """
 from __future__ import annotations
 
-import os
 import re
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import cv2
 import numpy as np
 
+from .atomic import write_bytes_atomic
 from .camera import Camera
 from .scenes import Scene, View, check_size, make_scene
 
@@ -55,20 +54,6 @@ def _existing(path, name: str) -> Path:
     if not path.exists():
         raise FileNotFoundError(f"{name}: {path} does not exist")
     return path
-
-
-def _write_bytes_atomic(path, data: bytes) -> None:
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=path.suffix + ".tmp")
-    try:
-        with os.fdopen(fd, "wb") as handle:
-            handle.write(data)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.remove(tmp)
-        raise
 
 
 def _read_rgb(path, name: str = "path") -> np.ndarray:
@@ -185,7 +170,7 @@ def write_pfm(path, array) -> None:
     height, width = values.shape[:2]
     header = f"{'PF' if values.ndim == 3 else 'Pf'}\n{width} {height}\n-1.0\n".encode("ascii")
     body = np.ascontiguousarray(np.flipud(values).astype("<f4")).tobytes()  # a copy: the caller's array is untouched
-    _write_bytes_atomic(path, header + body)
+    write_bytes_atomic(path, header + body)
 
 
 # ------------------------------------------------------------------------------------------------
@@ -361,11 +346,11 @@ def make_middlebury_fixture(folder, size=(48, 64), seed: int = 0, scene: str = "
     calib = (f"cam0={matrix(K)}\ncam1={matrix(right.camera.K)}\ndoffs=0\nbaseline={baseline * 1000.0!r}\n"
              f"width={size[1]}\nheight={size[0]}\nndisp={int(np.ceil(finite.max())) + 1}\nisint=0\n"
              f"vmin={int(np.floor(finite.min()))}\nvmax={int(np.ceil(finite.max()))}\n")
-    _write_bytes_atomic(folder / "im0.png", _png_bytes(left.rgb))
-    _write_bytes_atomic(folder / "im1.png", _png_bytes(right.rgb))
+    write_bytes_atomic(folder / "im0.png", _png_bytes(left.rgb))
+    write_bytes_atomic(folder / "im1.png", _png_bytes(right.rgb))
     write_pfm(folder / "disp0.pfm", disp0)
     write_pfm(folder / "disp1.pfm", disp1)
-    _write_bytes_atomic(folder / "calib.txt", calib.encode("ascii"))
+    write_bytes_atomic(folder / "calib.txt", calib.encode("ascii"))
     return folder
 
 

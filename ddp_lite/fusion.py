@@ -31,10 +31,10 @@ Open3D's ``ScalableTSDFVolume``); ``render_point_cloud`` draws a cloud without a
 from __future__ import annotations
 
 import os
-import tempfile
 
 import numpy as np
 
+from .atomic import atomic_path
 from .camera import Camera
 
 __all__ = ["points_from_depth", "fuse_depths", "tsdf_fuse", "save_ply", "render_point_cloud"]
@@ -243,17 +243,9 @@ def save_ply(cloud, path) -> None:
     path = os.fspath(path)
     if not path.lower().endswith(".ply"):
         raise ValueError(f"path must end in .ply, got {path!r}")
-    directory = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(dir=directory, suffix=".tmp.ply")  # Open3D picks the format from the suffix
-    os.close(fd)
-    try:
+    with atomic_path(path, suffix=".ply") as tmp:  # Open3D picks the format from the suffix
         if not o3d.io.write_point_cloud(tmp, cloud):
             raise OSError(f"open3d could not write {path!r}")
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.remove(tmp)
-        raise
 
 
 def _default_camera(points: np.ndarray) -> Camera:

@@ -49,11 +49,11 @@ camera's x axis, so a stereo matcher can run on any view.
 from __future__ import annotations
 
 import os
-import tempfile
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from .atomic import atomic_path
 from .camera import Camera, look_at
 
 __all__ = ["View", "Scene", "Texture", "Plane", "Box", "Sphere", "Cylinder", "render", "make_scene",
@@ -144,17 +144,8 @@ class Scene:
                 arrays[f"{prefix}{i}_name"] = np.array(view.name)
         for i, label in enumerate(self.labels):
             arrays[f"labels{i}"] = np.asarray(label)
-        path = os.fspath(path)
-        directory = os.path.dirname(os.path.abspath(path))
-        fd, tmp = tempfile.mkstemp(dir=directory, suffix=".npz.tmp")
-        try:
-            with os.fdopen(fd, "wb") as handle:
-                np.savez_compressed(handle, **arrays)
-            os.replace(tmp, path)
-        except BaseException:
-            if os.path.exists(tmp):
-                os.remove(tmp)
-            raise
+        with atomic_path(path) as tmp, open(tmp, "wb") as handle:
+            np.savez_compressed(handle, **arrays)
 
     @classmethod
     def load(cls, path) -> "Scene":

@@ -6,11 +6,12 @@ hole is never mistaken for a far or near value.
 from __future__ import annotations
 
 import os
-import tempfile
 
 import matplotlib
 import matplotlib.pyplot as plt
 import numpy as np
+
+from .atomic import atomic_path
 
 __all__ = ["show_depth", "show_image", "show_error", "compare", "plot_history", "save_figure", "HOLE_COLOUR"]
 
@@ -95,12 +96,5 @@ def save_figure(fig, path, dpi: int = 120) -> None:
     """Save a figure atomically (temporary file in the same folder, then rename)."""
     path = os.fspath(path)
     suffix = os.path.splitext(path)[1] or ".png"
-    fd, tmp = tempfile.mkstemp(dir=os.path.dirname(os.path.abspath(path)), suffix=suffix)
-    os.close(fd)
-    try:
+    with atomic_path(path, suffix=suffix) as tmp:
         fig.savefig(tmp, dpi=dpi, bbox_inches="tight", format=suffix.lstrip("."))
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.remove(tmp)
-        raise
