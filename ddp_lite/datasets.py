@@ -462,7 +462,8 @@ def load_tnt(folder, indices=None, size=None, depth_dir=None, name: str | None =
                 raise ValueError(f"depth_dir: {stem}.pfm must be 1-channel")
             depth = np.where(np.isfinite(depth) & (depth > 0), depth, np.nan).astype(np.float32)
             if depth.shape != (H, W):
-                depth = cv2.resize(depth, (W, H), interpolation=cv2.INTER_NEAREST)
+                # MVSNet depth maps are often smaller than the images: pixel centres, as in _resize
+                depth = cv2.resize(depth, (W, H), interpolation=cv2.INTER_NEAREST_EXACT)
         rgb, depth, camera = _resize(rgb, depth, camera, size)
         views.append(View(rgb, depth, camera, stem))
     meta = _depth_range([v.depth for v in views])

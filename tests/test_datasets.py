@@ -218,6 +218,14 @@ def test_mvsnet_cam_and_tnt_loader(tmp_path):
     assert info == {"depth_min": 0.44, "depth_interval": 0.0055, "depth_num": 192.0, "depth_max": 1.49}
     scene = load_tnt(tmp_path, indices=[0, 1])
     assert len(scene) == 2 and np.isnan(scene[0].depth).all() and scene.meta == {"d_min": 0.44, "d_max": 1.49}
+    # a depth map at 3/5 of the image size is upsampled by pixel centres: image column u takes
+    # depth column floor((u + 0.5)·3/5), i.e. 0 0 1 2 2 | 3 3 4 5 5 ... (plain nearest gives 0 0 1 1 2)
+    (tmp_path / "depth").mkdir()
+    for i in range(2):
+        write_pfm(tmp_path / "depth" / f"{i:08d}.pfm", np.tile(np.arange(1, 19, dtype=np.float32), (12, 1)))
+    scene = load_tnt(tmp_path, indices=[0], depth_dir=tmp_path / "depth")
+    expected = 1 + np.concatenate([[0, 0, 1, 2, 2]] * 6) + np.repeat(np.arange(6) * 3, 5)
+    np.testing.assert_array_equal(scene[0].depth[7], expected)
     (tmp_path / "cams" / "00000000_cam.txt").write_text(CAM.replace("intrinsic", "intrinsics_missing"))
     with pytest.raises(ValueError, match="MVSNet"):
         read_mvsnet_cam(tmp_path / "cams" / "00000000_cam.txt", 10, 10)
