@@ -16,7 +16,7 @@ Formats:
   ``P_rect_02``/``P_rect_03`` (3×4), baseline = (P2[0,3] − P3[0,3]) / f.
 * **Tanks and Temples, MVSNet cams** ``<id>_cam.txt``: ``extrinsic`` + 4×4 world→camera,
   ``intrinsic`` + 3×3, then ``depth_min depth_interval [depth_num depth_max]``.
-* **NYU Depth v2**: labelled ``.mat`` (HDF5, needs h5py) or an image + a depth PNG/NPY in mm.
+* **NYU Depth v2**: labelled ``.mat`` (HDF5, read with h5py) or an image + a depth PNG/NPY in mm.
 
 ``make_middlebury_fixture`` writes a tiny Middlebury-format scene from the kit's renderer, so
 tests and notebooks can run the real-data path offline.

@@ -245,3 +245,27 @@ def test_nyu_depth_in_millimetres(tmp_path):
     assert scene.meta["d_max"] == pytest.approx(2.5) and scene[0].mask.sum() == 100 * 200
     with pytest.raises(ValueError, match="depth_path"):
         load_nyu(tmp_path / "rgb.png")
+
+
+def test_nyu_labelled_mat(tmp_path):
+    """The labelled .mat is MATLAB v7.3 (HDF5): MATLAB's H×W×3×N is stored N×3×W×H (axes reversed)."""
+    import h5py  # pinned in environment.txt
+    H, W = 4, 6
+    rgb = np.arange(2 * H * W * 3, dtype=np.uint8).reshape(2, H, W, 3)
+    raw = np.full((2, H, W), 1.5, np.float32)
+    raw[1, 0, :2] = 0.0  # Kinect holes are stored as 0
+    filled = np.full((2, H, W), 2.0, np.float32)
+    with h5py.File(tmp_path / "nyu.mat", "w") as f:
+        f["images"] = rgb.transpose(0, 3, 2, 1)
+        f["rawDepths"] = raw.transpose(0, 2, 1)
+        f["depths"] = filled.transpose(0, 2, 1)
+    K = np.array([[5.0, 0, 2.5], [0, 5.0, 1.5], [0, 0, 1]])
+    scene = load_nyu(tmp_path / "nyu.mat", index=1, K=K)
+    np.testing.assert_allclose(scene[0].rgb, rgb[1] / 255.0, atol=1e-7)
+    assert np.isnan(scene[0].depth[0, :2]).all() and scene[0].depth[3, 5] == 1.5 and scene[0].mask.sum() == H * W - 2
+    assert scene.name == "nyu0001-raw"
+    assert np.all(load_nyu(tmp_path / "nyu.mat", index=1, raw=False, K=K)[0].depth == 2.0)
+    with pytest.raises(ValueError, match="index"):
+        load_nyu(tmp_path / "nyu.mat", index=2, K=K)
+    with pytest.raises(ValueError, match="K must be given"):
+        load_nyu(tmp_path / "nyu.mat")
