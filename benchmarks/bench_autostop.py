@@ -1,6 +1,6 @@
 """How much does auto-stop give away? The automatic stop against the hole-error oracle.
 
-    python benchmarks/bench_autostop.py                 # class size 96×128, UNet 32–512 (~35 min on one core)
+    python benchmarks/bench_autostop.py                 # class size 96×128, UNet 32–512 (~45 min on one core)
     python benchmarks/bench_autostop.py --size 48 64    # 4× less work, same net
     python benchmarks/bench_autostop.py --seeds 0 1 --scenes house desk
 
@@ -11,8 +11,9 @@ the profile's ``plateau_decays`` would have followed the same curve up to its st
 rule (:class:`ddp_lite.fit.PlateauStopper`) is therefore replayed exactly on the recorded
 held-out curve. "kept" is the hole error of the output auto-stop returns, "oracle" the lowest
 hole error of the whole long run (known only through the ground truth), "final" the error at
-its end (drift). "plain" replays the same curve with no lr cut (stop at the first plateau). "near %" is the share
-of evaluations from iteration 100 on that lie within 5 % of the oracle: how lucky a stop must be.
+its end (drift). "plain" replays the same curve with no lr cut (stop at the first plateau).
+"near %" is the share of evaluations from iteration 100 on that lie within 5 % of the oracle:
+how lucky a stop must be.
 ``--constant-lr`` runs Deep Image Prior's recipe instead (no lr cut ever; "kept" = plain stop).
 Errors are RMSE ×100 of normalised disparity in the (non-sky) holes. Prints a table; asserts nothing.
 """
@@ -28,8 +29,8 @@ import torch  # noqa: E402
 
 from ddp_lite import FitConfig, complete_depth  # noqa: E402
 from ddp_lite.experiments import make_case  # noqa: E402
-from _common import add_profile_args, profile_from_args  # noqa: E402
 from ddp_lite.fit import PlateauStopper  # noqa: E402
+from _common import add_profile_args, profile_from_args  # noqa: E402
 
 SCENES = ("house", "desk", "room", "street")
 VARIANTS = ("d", "rgbd", "rgbd+warp")

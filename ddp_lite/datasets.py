@@ -497,16 +497,12 @@ def read_depth_image(path, scale: float = 0.001) -> np.ndarray:
 
 def load_nyu(path, index: int = 0, depth_path=None, raw: bool = True, depth_scale: float = 0.001, K=None) -> Scene:
     """NYU Depth v2 → one-view ``Scene``. ``path`` is either the labelled ``.mat`` (frame ``index``;
-    ``raw`` picks rawDepths (Kinect holes) over the toolbox's filled depths; needs h5py) or an RGB
+    ``raw`` picks rawDepths (Kinect holes) over the toolbox's filled depths) or an RGB
     image with ``depth_path`` a depth PNG/NPY in millimetres (× ``depth_scale``). ``K`` defaults to
     ``NYU_K`` (640×480)."""
     path = _existing(path, "path")
     if path.suffix.lower() == ".mat":
-        try:
-            import h5py
-        except ImportError:
-            raise ImportError("reading nyu_depth_v2_labeled.mat needs h5py (pip install h5py); or pass an RGB "
-                              "image and depth_path=<depth PNG/NPY in mm>") from None
+        import h5py  # a dependency, imported here because only this branch needs it
         with h5py.File(path, "r") as f:
             count = f["images"].shape[0]
             if isinstance(index, bool) or int(index) != index or not 0 <= index < count:
