@@ -6,7 +6,23 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.ddp-lite-installed
 
-.PHONY: lab test install clean-venv
+.PHONY: lab lab-command test install clean-venv
+
+# `make lab` serves notebooks/ on $(IP):$(PORT) and prints the URL with its token.  --allow-root
+# only for root (Jupyter refuses root without it); --no-browser on Linux & co. without a display
+# (macOS always has one).  tests/test_lab.py runs exactly $(LAB_CMD), via `make -s lab-command`.
+PORT ?= 8888
+IP   ?= 127.0.0.1
+LAB_ARGS := notebooks/ --ip=$(IP) --port=$(PORT)
+ifeq ($(shell id -u),0)
+LAB_ARGS += --allow-root
+endif
+ifneq ($(shell uname -s),Darwin)
+ifeq ($(strip $(DISPLAY)$(WAYLAND_DISPLAY)),)
+LAB_ARGS += --no-browser
+endif
+endif
+LAB_CMD := $(VENV)/bin/jupyter lab $(LAB_ARGS)
 
 install: $(STAMP)
 
@@ -22,7 +38,10 @@ $(STAMP): $(PY) environment.txt pyproject.toml
 	touch $(STAMP)
 
 lab: $(STAMP)
-	$(VENV)/bin/jupyter lab notebooks/
+	$(LAB_CMD)
+
+lab-command:
+	@echo '$(LAB_CMD)'
 
 test: $(STAMP)
 	DDP_PROFILE=ci MPLBACKEND=Agg $(PY) -m pytest tests --nbval-lax --nbval-current-env notebooks -p no:cacheprovider
