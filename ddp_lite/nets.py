@@ -24,11 +24,18 @@ def make_noise(channels: int, height: int, width: int, seed: int = 0, scale: flo
     return torch.rand(1, channels, height, width, generator=generator) * scale
 
 
-def _conv(c_in: int, c_out: int, kernel: int = 3, stride: int = 1) -> nn.Sequential:
-    """Conv (reflection padded) → BatchNorm → LeakyReLU(0.2): DIP's basic block."""
+PADDINGS = ("reflect", "zeros")
+DOWNSAMPLINGS = ("stride", "pool")
+UPSAMPLINGS = ("bilinear", "nearest")
+
+
+def _conv(c_in: int, c_out: int, kernel: int = 3, stride: int = 1, pad: str = "reflect") -> nn.Sequential:
+    """Conv → BatchNorm → LeakyReLU(0.2): DIP's basic block. ``pad="reflect"`` is DIP's border;
+    ``"zeros"`` lets the convolution pad by itself (one op less per layer)."""
+    reflect = pad == "reflect" and kernel > 1
     return nn.Sequential(
-        nn.ReflectionPad2d(kernel // 2) if kernel > 1 else nn.Identity(),
-        nn.Conv2d(c_in, c_out, kernel, stride=stride, bias=False),
+        nn.ReflectionPad2d(kernel // 2) if reflect else nn.Identity(),
+        nn.Conv2d(c_in, c_out, kernel, stride=stride, padding=0 if reflect else kernel // 2, bias=False),
         nn.BatchNorm2d(c_out),
         nn.LeakyReLU(0.2),
     )
@@ -51,24 +58,36 @@ class _PadCrop(nn.Module):
 class UNet(_PadCrop):
     """Encoder-decoder with skip connections; 3×3 convs; encoder widths ``channels``.
 
+    ``down``: ``"stride"`` (a stride-2 conv, DIP's choice) or ``"pool"`` (2×2 max-pool then a conv,
+    Ronneberger's UNet, which the paper cites); ``up``: ``"bilinear"`` or ``"nearest"``
+    up-sampling in the decoder; ``pad``: ``"reflect"`` or ``"zeros"`` at every 3×3 conv.
+
     Example:
         >>> net = UNet(16, 4, channels=(8, 16, 32))
         >>> net(torch.rand(1, 16, 30, 41)).shape
         torch.Size([1, 4, 30, 41])
     """
 
-    def __init__(self, in_channels: int = 16, out_channels: int = 4, channels=UNET_CHANNELS):
+    def __init__(self, in_channels: int = 16, out_channels: int = 4, channels=UNET_CHANNELS, down: str = "stride",
+                 up: str = "bilinear", pad: str = "reflect"):
         super().__init__()
         channels = tuple(int(c) for c in channels)
         if len(channels) < 2 or min(channels) < 1:
             raise ValueError(f"channels must list at least two positive widths, got {channels}")
+        for name, value, allowed in (("down", down, DOWNSAMPLINGS), ("up", up, UPSAMPLINGS), ("pad", pad, PADDINGS)):
+            if value not in allowed:
+                raise ValueError(f"{name} must be one of {allowed}, got {value!r}")
         self.factor = 2 ** (len(channels) - 1)
-        self.inc = nn.Sequential(_conv(in_channels, channels[0]), _conv(channels[0], channels[0]))
-        self.downs = nn.ModuleList(
-            nn.Sequential(_conv(c_in, c_out, stride=2), _conv(c_out, c_out))
-            for c_in, c_out in zip(channels[:-1], channels[1:]))
+        self.up_mode = up
+        self.inc = nn.Sequential(_conv(in_channels, channels[0], pad=pad), _conv(channels[0], channels[0], pad=pad))
+
+        def down_block(c_in, c_out):
+            first = [nn.MaxPool2d(2), _conv(c_in, c_out, pad=pad)] if down == "pool" else [_conv(c_in, c_out, stride=2, pad=pad)]
+            return nn.Sequential(*first, _conv(c_out, c_out, pad=pad))
+
+        self.downs = nn.ModuleList(down_block(c_in, c_out) for c_in, c_out in zip(channels[:-1], channels[1:]))
         self.ups = nn.ModuleList(
-            nn.Sequential(_conv(c_deep + c_skip, c_skip), _conv(c_skip, c_skip))
+            nn.Sequential(_conv(c_deep + c_skip, c_skip, pad=pad), _conv(c_skip, c_skip, pad=pad))
             for c_deep, c_skip in zip(channels[:0:-1], channels[-2::-1]))
         self.head = nn.Conv2d(channels[0], out_channels, 1)
 
@@ -79,7 +98,8 @@ class UNet(_PadCrop):
         x = skips.pop()
         for up in self.ups:
             skip = skips.pop()
-            x = F.interpolate(x, size=skip.shape[-2:], mode="bilinear", align_corners=False)
+            x = F.interpolate(x, size=skip.shape[-2:], mode=self.up_mode,
+                              **({"align_corners": False} if self.up_mode == "bilinear" else {}))
             x = up(torch.cat([x, skip], dim=1))
         return self.head(x)
 
@@ -127,10 +147,11 @@ class SkipNet(_PadCrop):
         return self.head(self._level(x, 0))
 
 
-def build_net(kind: str, in_channels: int, out_channels: int, channels=None) -> nn.Module:
-    """``"unet"`` or ``"skip"`` with the paper's widths unless ``channels`` is given."""
+def build_net(kind: str, in_channels: int, out_channels: int, channels=None, **unet_options) -> nn.Module:
+    """``"unet"`` or ``"skip"`` with the paper's widths unless ``channels`` is given; ``unet_options``
+    (``down``, ``up``, ``pad``) go to :class:`UNet`."""
     if kind == "unet":
-        return UNet(in_channels, out_channels, channels or UNET_CHANNELS)
+        return UNet(in_channels, out_channels, channels or UNET_CHANNELS, **unet_options)
     if kind == "skip":
         channels = tuple(channels or SKIP_CHANNELS)
         return SkipNet(in_channels, out_channels, channels, tuple(min(4, c) for c in channels))

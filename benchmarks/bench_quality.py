@@ -1,0 +1,245 @@
+"""Does DDP beat the classical fills? Hole error of DDP recipes vs every fill in ``ddp_lite.baselines``.
+
+    python benchmarks/bench_quality.py --quick                           # a few cases, the profile's recipe
+    python benchmarks/bench_quality.py --recipes default ens3 --seeds 0 1 --out q.jsonl --lane 0/2 &
+    python benchmarks/bench_quality.py --recipes default ens3 --seeds 0 1 --out q.jsonl --lane 1/2
+    python benchmarks/bench_quality.py --report q.jsonl                  # the table, from recorded rows
+
+The suite is fixed (cases are never dropped because DDP loses on them):
+- the four named scenes (piecewise planar: linear interpolation is exact in disparity on a plane),
+  each with OpenCV SGM holes of both parameter sets and with large Depthcomp-like blob holes;
+- the curved, photo-textured scenes of ``ddp_lite.organic`` (when present), with the same holes;
+- notebook 09's Middlebury-format fixture: SGM holes on the left view, the right view as the
+  warp loss's neighbour.
+SGM runs at 3× the working size below 96 rows and keeps each block's centre (as the notebooks do).
+
+Every classical fill works on disparity in pixels (d = f·B/Z, where linear is exact on planes).
+DDP's transform is the default one a user gets (from the input depth). A recipe is a set of
+``FitConfig`` overrides on top of the profile's config; ``name:key=value,key=value`` adds one
+on the command line. Scores: hole RMSE in disparity pixels (sky and unknown truth excluded);
+"ratio" = DDP / the best classical fill of that case; mean and worst over the cases, per seed
+and for the mean over seeds. Rows go to ``--out`` as JSON lines (one per fit), so lanes can run
+in parallel (one thread each) and ``--report`` prints the tables. Asserts nothing.
+"""
+from __future__ import annotations
+
+import argparse
+import ast
+import json
+import os
+import tempfile
+import time
+from pathlib import Path
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402
+
+import ddp_lite as ddp  # noqa: E402
+from ddp_lite import baselines  # noqa: E402
+from ddp_lite.datasets import load_middlebury, make_middlebury_fixture, resize_scene  # noqa: E402
+from ddp_lite.experiments import Case, make_case, sgm_depth_at_scale  # noqa: E402
+from ddp_lite.holes import random_holes  # noqa: E402
+from ddp_lite.scenes import SCENES  # noqa: E402
+from _common import add_profile_args, profile_from_args  # noqa: E402
+
+NAMED = ("house", "desk", "room", "street")
+HOLES = ("sgm-dense", "sgm-sparse", "blobs")
+QUICK = ("desk/sgm-dense", "house/blobs", "fixture/sgm-dense")
+
+# name → FitConfig overrides on top of the profile's config
+RECIPES = {
+    "default": {},
+}
+
+
+def organic_scenes() -> tuple[str, ...]:
+    """The curved scenes registered by ``ddp_lite.organic`` (empty if it is not there)."""
+    return tuple(name for name in SCENES if name not in NAMED)
+
+
+def suite(quick: bool = False) -> list[str]:
+    names = [f"{scene}/{holes}" for scene in NAMED + organic_scenes() for holes in HOLES] + ["fixture/sgm-dense"]
+    if quick:
+        names = [n for n in names if n in QUICK or n.startswith(tuple(f"{s}/sgm-dense" for s in organic_scenes()[:1]))]
+    return names
+
+
+def build_case(name: str, profile) -> tuple[Case, float]:
+    """The case ``scene/holes`` at the profile's size and its f·B (px · m) for disparity in pixels."""
+    scene_name, holes = name.split("/")
+    H, W = profile.size
+    if scene_name == "fixture":
+        with tempfile.TemporaryDirectory(prefix="ddp-quality-") as tmp:
+            full = load_middlebury(make_middlebury_fixture(Path(tmp) / "Fixture-perfect", size=(3 * H, 3 * W), seed=0))
+        scene, matching = resize_scene(full, profile.size), resize_scene(full, (3 * H, 3 * W))
+        depth = np.ascontiguousarray(ddp.sgm_depth(matching, 0, holes.split("-")[1])[0][1::3, 1::3])
+        view = scene[0]
+        case = Case(name, view.rgb, depth.astype(np.float32), view.depth, view.camera, [scene.right[0]],
+                    ddp.DisparityTransform.from_depth(view.depth, margin=1.0), scene, 0, None)
+        return case, view.camera.focal * scene.meta["baseline"]
+    if holes == "blobs":  # Depthcomp-like: large smooth blobs cut into the complete depth
+        case = make_case(scene_name, profile, holes="random")
+        case.depth, _ = random_holes(case.gt, fraction=0.2, seed=1, blob_size=min(H, W) / 10)
+    else:
+        case = make_case(scene_name, profile, holes="sgm", sgm_params=holes.split("-")[1])
+    return case, case.camera.K[0, 0] * case.scene.meta["baseline"]
+
+
+def scored(case: Case) -> np.ndarray:
+    return case.holes & np.isfinite(case.gt)
+
+
+def rmse_px(depth, case: Case, fb: float) -> float:
+    mask = scored(case)
+    return float(np.sqrt(np.mean((fb / depth[mask] - fb / case.gt[mask]) ** 2)))
+
+
+def parse_recipe(text: str) -> tuple[str, dict]:
+    """``name`` (from RECIPES) or ``name:key=value,key=value`` → (name, overrides)."""
+    if ":" not in text:
+        if text not in RECIPES:
+            raise SystemExit(f"unknown recipe {text!r}; known: {sorted(RECIPES)} (or name:key=value,...)")
+        return text, RECIPES[text]
+    name, body = text.split(":", 1)
+    overrides = {}
+    for item in body.split(";") if ";" in body else _split_top(body):
+        key, value = item.split("=", 1)
+        overrides[key.strip()] = ast.literal_eval(value.strip())
+    return name, {**RECIPES.get(name, {}), **overrides}
+
+
+def _split_top(body: str) -> list[str]:
+    """Split on commas that are not inside brackets: ``channels=(16, 32),lr=0.01``."""
+    parts, depth, current = [], 0, ""
+    for ch in body:
+        depth += ch in "([{"
+        depth -= ch in ")]}"
+        if ch == "," and depth == 0:
+            parts.append(current)
+            current = ""
+        else:
+            current += ch
+    return parts + [current] if current else parts
+
+
+def run(args) -> None:
+    profile = profile_from_args(args)
+    names = args.cases or suite(args.quick)
+    lane, lanes = (int(v) for v in args.lane.split("/"))
+    recipes = [parse_recipe(r) for r in args.recipes]
+    out = open(args.out, "a") if args.out else None
+    done = set()
+    if args.out and Path(args.out).exists():
+        for line in Path(args.out).read_text().splitlines():
+            row = json.loads(line)
+            done.add((row["case"], row["method"], row.get("variant"), row.get("seed"), row["size"]))
+    size = f"{profile.size[0]}x{profile.size[1]}"
+    for index, name in enumerate(names):
+        if index % lanes != lane:
+            continue
+        case, fb = build_case(name, profile)
+        rows = []
+        if (name, "linear", None, None, size) not in done:
+            disparity_in = fb / case.depth
+            for method, fill in baselines.BASELINES.items():
+                start = time.perf_counter()
+                filled = fill(disparity_in, case.rgb)
+                rows.append(dict(case=name, method=method, variant=None, seed=None, size=size,
+                                 px=rmse_px(fb / filled, case, fb), seconds=time.perf_counter() - start))
+        for recipe, overrides in recipes:
+            for variant in args.variants:
+                if variant == "rgbd+warp" and not case.neighbors:
+                    continue
+                for seed in args.seeds:
+                    if (name, recipe, variant, seed, size) in done:
+                        continue
+                    config = ddp.FitConfig.for_profile(profile, variant=variant, progress=False,
+                                                       **{"seed": seed, **overrides})
+                    neighbors = case.neighbors if variant == "rgbd+warp" else ()
+                    start = time.perf_counter()
+                    result = ddp.complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant,
+                                                config=config)
+                    rows.append(dict(case=name, method=recipe, variant=variant, seed=seed, size=size,
+                                     px=rmse_px(result.merged(case.depth), case, fb),
+                                     seconds=time.perf_counter() - start, iterations=result.iterations,
+                                     overrides=repr(overrides)))
+                    print(f"{name:<22} {recipe:<14} {variant:<10} seed {seed}: {rows[-1]['px']:.3f} px "
+                          f"({rows[-1]['seconds']:.0f} s)", flush=True)
+        for row in rows:
+            if out:
+                out.write(json.dumps(row) + "\n")
+                out.flush()
+    if out:
+        out.close()
+
+
+def report(path: str, size: str | None = None) -> None:
+    rows = [json.loads(line) for line in Path(path).read_text().splitlines() if line.strip()]
+    sizes = sorted({r["size"] for r in rows}) if size is None else [size]
+    for size in sizes:
+        here = [r for r in rows if r["size"] == size]
+        classical = {}
+        for r in here:
+            if r["variant"] is None:
+                classical.setdefault(r["case"], {})[r["method"]] = r["px"]
+        fits = {}
+        for r in here:
+            if r["variant"] is not None and r["case"] in classical:
+                fits.setdefault((r["method"], r["variant"]), {}).setdefault(r["case"], {})[r["seed"]] = r
+        print(f"\n=== {size}: hole RMSE (disparity px); ratio = DDP / best classical fill of the case ===")
+        cases = sorted(classical)
+        best = {c: min(classical[c].values()) for c in cases}
+        winner = {c: min(classical[c], key=classical[c].get) for c in cases}
+        wins = {}
+        for c in cases:
+            wins[winner[c]] = wins.get(winner[c], 0) + 1
+        print("best classical fill per case: " + ", ".join(f"{k} {v}" for k, v in sorted(wins.items(), key=lambda x: -x[1])))
+        header = f"{'recipe':<18}{'variant':<11}{'cases':>6}{'seeds':>6}{'mean':>7}{'worst':>7}{'mean/seed':>10}" \
+                 f"{'real mean':>10}{'real worst':>11}{'wins':>6}{'s/fit':>7}"
+        print(header)
+        print("-" * len(header))
+        for (recipe, variant), per_case in sorted(fits.items()):
+            common = sorted(per_case)
+            seeds = sorted(set.intersection(*(set(per_case[c]) for c in common)))
+            if not seeds:
+                continue
+            mean_px = {c: np.mean([per_case[c][s]["px"] for s in seeds]) for c in common}
+            ratios = np.array([mean_px[c] / best[c] for c in common])
+            per_seed = [np.mean([per_case[c][s]["px"] / best[c] for c in common]) for s in seeds]
+            real = np.array([mean_px[c] / best[c] for c in common if c.split("/")[0] not in NAMED])
+            seconds = np.mean([per_case[c][s]["seconds"] for c in common for s in seeds])
+            print(f"{recipe:<18}{variant:<11}{len(common):>6}{len(seeds):>6}{ratios.mean():>7.3f}{ratios.max():>7.3f}"
+                  f"{np.mean(per_seed):>10.3f}{(real.mean() if real.size else np.nan):>10.3f}"
+                  f"{(real.max() if real.size else np.nan):>11.3f}{int((ratios < 1).sum()):>6}{seconds:>7.1f}")
+        if os.environ.get("QUALITY_PER_CASE"):
+            for (recipe, variant), per_case in sorted(fits.items()):
+                print(f"\n{recipe} {variant}")
+                for c in sorted(per_case):
+                    vals = [per_case[c][s]["px"] for s in sorted(per_case[c])]
+                    print(f"  {c:<24} best {winner[c]:<13} {best[c]:.3f}  ddp " + " ".join(f"{v:.3f}" for v in vals)
+                          + f"  ratio {np.mean(vals) / best[c]:.2f}")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    add_profile_args(parser)
+    parser.add_argument("--quick", action="store_true", help="a small subset of the suite, for iterating")
+    parser.add_argument("--cases", nargs="+", help="case names (scene/holes); default: the whole suite")
+    parser.add_argument("--recipes", nargs="+", default=["default"])
+    parser.add_argument("--variants", nargs="+", default=["rgbd", "rgbd+warp"])
+    parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1])
+    parser.add_argument("--lane", default="0/1", help="i/n: run every n-th case starting at i (parallel lanes)")
+    parser.add_argument("--out", help="append one JSON line per fit here (and skip fits already in it)")
+    parser.add_argument("--report", metavar="JSONL", help="print the tables of a results file and exit")
+    args = parser.parse_args()
+    if args.report:
+        report(args.report)
+        return
+    run(args)
+    if args.out:
+        report(args.out)
+
+
+if __name__ == "__main__":
+    main()
