@@ -50,6 +50,22 @@ QUICK = ("desk/sgm-dense", "house/blobs", "fixture/sgm-dense")
 # name → FitConfig overrides on top of the profile's config
 RECIPES = {
     "default": {},
+    "ens3": dict(ensemble=3),
+    "ema": dict(average_outputs=0.9),
+    "cosine": dict(schedule="cosine"),
+    "lr3e-3": dict(lr=3e-3),
+    "lr3e-2": dict(lr=3e-2),
+    "it300": dict(iterations=300),
+    "pool": dict(down="pool"),
+    "nearest": dict(up="nearest"),
+    "zeros": dict(pad="zeros"),
+    "jitter": dict(reg_noise_std=1 / 30),
+    "margin1": dict(disparity_margin=1.0),
+    "margin2": dict(disparity_margin=2.0),
+    "l1only": dict(lambda_z=1.0),
+    "rgb10": dict(gammas=(0.9, 0.1)),
+    "autostop": dict(auto_stop=True, patience=50, plateau_decays=1, iterations=600, lr_milestones=()),
+    "constant": dict(lr_milestones=()),
 }
 
 

@@ -281,6 +281,7 @@ def _run(net, noise, loss_fn, config: FitConfig, iterations: int, heldout_error=
         net, noise = net.to(memory_format=torch.channels_last), noise.contiguous(memory_format=torch.channels_last)
     jitter = torch.Generator(device=noise.device).manual_seed(config.seed + 1) if config.reg_noise_std else None
     terms_log = None  # (iterations, n_terms) kept on the device: no host read per iteration
+    lrs = []
     evals = {"eval_iteration": [], "heldout": [], "lr_decay_iteration": []}
     averaged = best_output = None
     best_iteration = 0
@@ -298,6 +299,7 @@ def _run(net, noise, loss_fn, config: FitConfig, iterations: int, heldout_error=
         total, terms = loss_fn(output)
         optimizer.zero_grad(set_to_none=True)
         total.backward()
+        lrs.append(optimizer.param_groups[0]["lr"])  # a Python float: no device sync
         optimizer.step()
         scheduler.step()
         if terms_log is None:
@@ -330,6 +332,7 @@ def _run(net, noise, loss_fn, config: FitConfig, iterations: int, heldout_error=
             callback(it + 1, current)
     bar.close()
     history = {name: column.cpu().numpy()[: it + 1] for name, column in zip(names, terms_log.T)}
+    history["lr"] = np.asarray(lrs)
     history.update({key: np.asarray(values) for key, values in evals.items()})
     if best_output is None:
         best_output, best_iteration = current, it + 1

@@ -1,0 +1,95 @@
+"""The recipe levers of the quality study: UNet down/up-sampling and padding, the cosine schedule,
+ensembles of seeds and the disparity margin. Each is checked against an independent reference."""
+import math
+
+import numpy as np
+import pytest
+import torch
+import torch.nn.functional as F
+
+from ddp_lite import DisparityTransform, FitConfig, UNet, complete_depth
+from ddp_lite.nets import _conv
+
+TINY = dict(channels=(8, 16, 32), lr=1e-2, progress=False)
+
+
+def plane_with_hole(height=24, width=32):
+    gt = np.broadcast_to(2.0 + 0.05 * np.arange(width, dtype=np.float32), (height, width)).astype(np.float32).copy()
+    depth = gt.copy()
+    depth[8:16, 10:20] = np.nan
+    return gt, depth
+
+
+@pytest.mark.parametrize("down", ["stride", "pool"])
+@pytest.mark.parametrize("up", ["bilinear", "nearest"])
+@pytest.mark.parametrize("pad", ["reflect", "zeros"])
+def test_unet_options_keep_any_size(down, up, pad):
+    net = UNet(16, 4, (8, 8, 8), down=down, up=up, pad=pad)
+    out = net(torch.rand(1, 16, 19, 27))
+    assert out.shape == (1, 4, 19, 27) and 0 <= out.min() and out.max() <= 1
+
+
+def test_pool_down_sampling_is_a_max_pool_then_a_conv():
+    net = UNet(4, 1, (4, 6), down="pool")
+    block = net.downs[0]
+    x = torch.rand(1, 4, 8, 8)
+    # the first layer of the block is a 2×2 max-pool: compare with the plain functional form
+    assert torch.equal(block[0](x), F.max_pool2d(x, 2))
+    assert block[1][1].stride == (1, 1)
+
+
+def test_zero_padded_conv_equals_an_explicitly_zero_padded_input():
+    torch.manual_seed(0)
+    block = _conv(3, 5, pad="zeros")
+    x = torch.rand(1, 3, 7, 9)
+    conv = block[1]
+    expected = F.conv2d(F.pad(x, (1, 1, 1, 1)), conv.weight)
+    assert torch.allclose(conv(block[0](x)), expected, atol=1e-6)
+
+
+def test_reflect_padding_default_is_unchanged():
+    block = _conv(3, 5)
+    assert isinstance(block[0], torch.nn.ReflectionPad2d) and block[1].padding == (0, 0)
+
+
+def test_bad_unet_option_names_the_argument():
+    with pytest.raises(ValueError, match="up"):
+        UNet(16, 4, (8, 8), up="cubic")
+    with pytest.raises(ValueError, match="config.schedule"):
+        FitConfig(schedule="linear").validate()
+    with pytest.raises(ValueError, match="config.ensemble"):
+        FitConfig(ensemble=0).validate()
+
+
+def test_cosine_schedule_follows_the_closed_form():
+    _, depth = plane_with_hole()
+    config = FitConfig(**TINY, iterations=20, schedule="cosine")
+    result = complete_depth(None, depth, variant="d", config=config)
+    expected = [0.5 * 1e-2 * (1 + math.cos(math.pi * t / 20)) for t in range(20)]  # lr at step t
+    assert np.allclose(result.history["lr"], expected, rtol=1e-6)
+    step = complete_depth(None, depth, variant="d", config=config.replace(schedule="step", lr_milestones=(10,),
+                                                                            lr_gamma=0.1))
+    assert np.allclose(step.history["lr"], [1e-2] * 10 + [1e-3] * 10)
+    assert np.isfinite(result.disparity).all() and not np.allclose(result.disparity, step.disparity)
+
+
+def test_ensemble_is_the_mean_disparity_of_its_seeds():
+    gt, depth = plane_with_hole()
+    config = FitConfig(**TINY, iterations=15)
+    transform = DisparityTransform.from_depth(depth)
+    members = [complete_depth(None, depth, variant="d", config=config.replace(seed=s), transform=transform)
+               for s in (3, 4, 5)]
+    ensemble = complete_depth(None, depth, variant="d", config=config.replace(seed=3, ensemble=3), transform=transform)
+    expected = np.mean([m.disparity for m in members], axis=0)
+    assert np.allclose(ensemble.disparity, expected, atol=1e-6)
+    assert np.allclose(ensemble.depth, transform.to_depth(expected), rtol=1e-5)
+    assert ensemble.iterations == 45
+    assert not np.allclose(members[0].disparity, members[1].disparity)  # the seeds really differ
+
+
+def test_disparity_margin_sets_the_default_transform_range():
+    _, depth = plane_with_hole()
+    valid = depth[np.isfinite(depth)]
+    lo, hi = np.percentile(valid, [0.5, 99.5])
+    result = complete_depth(None, depth, variant="d", config=FitConfig(**TINY, iterations=2, disparity_margin=1.5))
+    assert result.transform.d_min == pytest.approx(lo / 1.5) and result.transform.d_max == pytest.approx(hi * 1.5)
