@@ -66,6 +66,16 @@ RECIPES = {
     "rgb10": dict(gammas=(0.9, 0.1)),
     "autostop": dict(auto_stop=True, patience=50, plateau_decays=1, iterations=600, lr_milestones=()),
     "constant": dict(lr_milestones=()),
+    "smooth0.1": dict(smoothness=0.1),
+    "smooth1": dict(smoothness=1.0),
+    "smooth10": dict(smoothness=10.0),
+    "smooth3": dict(smoothness=3.0),
+    "smooth0.3": dict(smoothness=0.3),
+    "smooth1-edge0": dict(smoothness=1.0, smoothness_edge=0.0),
+    "smooth1-edge30": dict(smoothness=1.0, smoothness_edge=30.0),
+    "smooth1-it300": dict(smoothness=1.0, iterations=300),
+    "smooth1-lr3e-3": dict(smoothness=1.0, lr=3e-3),
+    "smooth1-ens3": dict(smoothness=1.0, ensemble=3),
 }
 
 

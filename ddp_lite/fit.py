@@ -28,7 +28,7 @@ from tqdm.auto import tqdm
 
 from .camera import Camera
 from .disparity import DisparityTransform
-from .losses import LossWeights, disparity_loss, rgb_loss, warp_loss
+from .losses import LossWeights, disparity_loss, rgb_loss, smoothness_loss, smoothness_weights, warp_loss
 from .nets import build_net, make_noise
 from .profiles import get_profile
 from .warp import Warper
@@ -66,6 +66,8 @@ class FitConfig:
     reg_noise_std: float = 0.0  # DIP input jitter: n + σ·N(0, 1) every iteration
     average_outputs: float = 0.0  # DIP output averaging: EMA weight (0.99 in DIP), 0 = off
     ensemble: int = 1  # fits with seeds seed, seed+1, ...; their disparities are averaged
+    smoothness: float = 0.0  # weight of an edge-aware second-order smoothness of disparity in the holes (0: the paper)
+    smoothness_edge: float = 10.0  # how strongly colour edges relax it: exp(-edge · |∇grey|)
     disparity_margin: float = 1.25  # transform=None: d_min / margin … d_max × margin around the valid depth
     auto_stop: bool = False
     holdout_fraction: float = 0.05  # share of valid pixels held out when auto_stop is on
@@ -110,6 +112,7 @@ class FitConfig:
                   ("holdout_fraction", 0.0 < self.holdout_fraction < 0.5),
                   ("average_outputs", 0.0 <= self.average_outputs < 1.0),
                   ("reg_noise_std", self.reg_noise_std >= 0.0),
+                  ("smoothness", self.smoothness >= 0.0), ("smoothness_edge", self.smoothness_edge >= 0.0),
                   ("iterations", self.iterations is None or self.iterations >= 1),
                   ("ensemble", int(self.ensemble) == self.ensemble and self.ensemble >= 1),
                   ("disparity_margin", self.disparity_margin >= 1.0),
@@ -461,6 +464,12 @@ def _complete_depth(rgb, depth, camera, neighbors, variant, config, gt_depth, tr
     def to_metres(disparity):  # differentiable twin of transform.to_depth
         return 1.0 / (disparity * (near - far) + far) - constant
 
+    smooth_weights = None
+    if config.smoothness > 0:
+        guide = rgb_t if rgb_t is not None else torch.zeros(1, 3, H, W, device=device)
+        # the unconstrained pixels: holes, and the held-out pixels, which must behave like holes
+        smooth_weights = smoothness_weights(guide, _to_tensor(~(valid & ~heldout), device).bool(), config.smoothness_edge)
+
     def loss_fn(output):
         disparity = output[:, :1]  # (1, 1, H, W)
         terms = {"disp": disparity_loss(disparity, target, fit_mask, config.lambda_z)}
@@ -473,6 +482,9 @@ def _complete_depth(rgb, depth, camera, neighbors, variant, config, gt_depth, tr
             pairs = [warper(image, ref_depth) for warper, image in zip(warpers, nbr_images)]
             terms["warp"] = warp_loss(rgb_t, [p[0] for p in pairs], [p[1] for p in pairs], config.lambda_w)
             total = total + w_warp * terms["warp"]
+        if smooth_weights is not None:
+            terms["smooth"] = smoothness_loss(disparity, smooth_weights)
+            total = total + config.smoothness * terms["smooth"]
         return total, terms
 
     heldout_error = None

@@ -22,7 +22,8 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-__all__ = ["ssim", "masked_l1", "disparity_loss", "rgb_loss", "warp_loss", "LossWeights"]
+__all__ = ["ssim", "masked_l1", "disparity_loss", "rgb_loss", "warp_loss", "smoothness_weights", "smoothness_loss",
+           "LossWeights"]
 
 C1_FACTOR, C2_FACTOR = 0.01, 0.03  # k1, k2 of Wang et al. 2004
 
@@ -127,6 +128,39 @@ def warp_loss(reference: torch.Tensor, warped: list, valid: list, lambda_w: floa
         raise ValueError("warp_loss needs at least one warped neighbour")
     losses = [_l1_ssim(w, reference, v, 1.0 - lambda_w) for w, v in zip(warped, valid)]
     return torch.stack(losses).mean()
+
+
+def smoothness_weights(image, region, edge: float = 10.0) -> torch.Tensor:
+    """Per-pixel weights (1, 2, H, W) of :func:`smoothness_loss`: ``exp(-edge · |∇I|)`` of the grey
+    image (B, 3, H, W) along x (channel 0) and y (channel 1), zero outside ``region`` (1, 1, H, W)
+    bool and on the one-pixel border where a second difference does not exist. Constant during a
+    fit, so it is computed once."""
+    grey = image.mean(dim=1, keepdim=True)  # (B, 1, H, W)
+    gx = torch.zeros_like(grey)
+    gy = torch.zeros_like(grey)
+    # central differences: the colour change across the pixel whose curvature is penalised
+    gx[..., 1:-1] = (grey[..., 2:] - grey[..., :-2]).abs() / 2
+    gy[..., 1:-1, :] = (grey[..., 2:, :] - grey[..., :-2, :]).abs() / 2
+    weights = torch.cat([torch.exp(-edge * gx), torch.exp(-edge * gy)], dim=1) * region.to(grey.dtype)
+    weights[:, 0, :, [0, -1]] = 0.0
+    weights[:, 1, [0, -1], :] = 0.0
+    return weights
+
+
+def smoothness_loss(disparity: torch.Tensor, weights: torch.Tensor) -> torch.Tensor:
+    """Edge-aware second-order smoothness of ``disparity`` (B, 1, H, W): the weighted mean of
+    |∂²z/∂x²| and |∂²z/∂y²| with ``weights`` (1, 2, H, W) from :func:`smoothness_weights`.
+
+    Second differences vanish on any plane (disparity is affine in the pixel coordinates on a
+    plane), so the term costs nothing there; it only stops the output from bending where no
+    data constrains it, and less so across colour edges, where depth edges usually are.
+    """
+    dxx = torch.zeros_like(disparity)
+    dyy = torch.zeros_like(disparity)
+    dxx[..., 1:-1] = disparity[..., 2:] - 2 * disparity[..., 1:-1] + disparity[..., :-2]
+    dyy[..., 1:-1, :] = disparity[..., 2:, :] - 2 * disparity[..., 1:-1, :] + disparity[..., :-2, :]
+    curvature = torch.cat([dxx, dyy], dim=1).abs()  # (B, 2, H, W)
+    return (curvature * weights).sum() / weights.sum().clamp(min=1e-12) / disparity.shape[0]
 
 
 class LossWeights:

@@ -93,3 +93,46 @@ def test_disparity_margin_sets_the_default_transform_range():
     lo, hi = np.percentile(valid, [0.5, 99.5])
     result = complete_depth(None, depth, variant="d", config=FitConfig(**TINY, iterations=2, disparity_margin=1.5))
     assert result.transform.d_min == pytest.approx(lo / 1.5) and result.transform.d_max == pytest.approx(hi * 1.5)
+
+
+def test_smoothness_is_zero_on_a_plane_and_hand_computed_on_a_parabola():
+    from ddp_lite.losses import smoothness_loss, smoothness_weights
+    H, W = 12, 16
+    v, u = torch.meshgrid(torch.arange(H, dtype=torch.float64), torch.arange(W, dtype=torch.float64), indexing="ij")
+    plane = (0.2 + 0.01 * u + 0.02 * v)[None, None]  # disparity affine in (u, v): a plane
+    flat_image = torch.zeros(1, 3, H, W, dtype=torch.float64)
+    everywhere = torch.ones(1, 1, H, W, dtype=torch.bool)
+    weights = smoothness_weights(flat_image, everywhere)
+    assert smoothness_loss(plane, weights).item() == pytest.approx(0.0, abs=1e-12)
+    a = 0.003
+    parabola = (a * u ** 2)[None, None]  # ∂²/∂u² = 2a exactly for second differences, ∂²/∂v² = 0
+    n_x, n_y = H * (W - 2), (H - 2) * W  # pixels where each second difference exists
+    expected = 2 * a * n_x / (n_x + n_y)
+    assert smoothness_loss(parabola, weights).item() == pytest.approx(expected, rel=1e-9)
+
+
+def test_smoothness_weights_relax_at_colour_edges_and_vanish_outside_the_region():
+    from ddp_lite.losses import smoothness_weights
+    image = torch.zeros(1, 3, 6, 8)
+    image[..., 4:] = 1.0  # a vertical colour edge between columns 3 and 4
+    region = torch.ones(1, 1, 6, 8, dtype=torch.bool)
+    region[..., 0, :] = False
+    w = smoothness_weights(image, region, edge=10.0)
+    # along x at columns 3 and 4 the central difference of grey is 1/2: weight exp(-5)
+    assert torch.allclose(w[0, 0, 1:, 3], torch.full((5,), math.exp(-5.0)))
+    assert torch.allclose(w[0, 0, 1:, 2], torch.ones(5))
+    assert torch.all(w[0, :, 0] == 0)  # outside the region
+    assert torch.all(w[0, 0, :, [0, -1]] == 0) and torch.all(w[0, 1, [0, -1], :] == 0)  # no second difference
+
+
+def test_smoothness_fills_a_hole_in_a_plane_better_than_without():
+    gt, depth = plane_with_hole()
+    base = FitConfig(**TINY, iterations=60)
+    transform = DisparityTransform.from_depth(depth)
+    holes = ~np.isfinite(depth)
+
+    def hole_error(config):
+        result = complete_depth(None, depth, variant="d", config=config, transform=transform)
+        return np.sqrt(np.mean((transform.to_disparity(result.depth) - transform.to_disparity(gt))[holes] ** 2))
+
+    assert hole_error(base.replace(smoothness=1.0)) < 0.5 * hole_error(base)
