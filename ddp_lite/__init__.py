@@ -17,7 +17,8 @@ from .nets import SkipNet, UNet, build_net, make_noise
 from .profiles import PROFILES, Profile, get_profile
 from . import baselines, datasets, fusion, metrics
 from .holes import edge_band_holes, kinect_noise, random_holes, sgm_depth, sgm_disparity
-from .scenes import Scene, View, list_scenes, make_scene, select_neighbors
+from .scenes import Scene, View, list_scenes, make_scene, register_scene, select_neighbors
+from . import organic  # registers the curved, photo-textured scenes in SCENES
 from .warp import Warper, warp_to_reference
 
 __version__ = "0.1.0"

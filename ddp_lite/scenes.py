@@ -57,7 +57,7 @@ from .atomic import atomic_path
 from .camera import Camera, look_at
 
 __all__ = ["View", "Scene", "Texture", "Plane", "Box", "Sphere", "Cylinder", "render", "make_scene",
-           "list_scenes", "select_neighbors", "LABELS", "SCENES"]
+           "list_scenes", "register_scene", "select_neighbors", "LABELS", "SCENES"]
 
 LABELS = {0: "sky", 1: "textureless", 2: "planks", 3: "textured"}
 
@@ -578,6 +578,22 @@ SCENES = {
     "room": (_room, "indoor, Kinect-like (use kinect_noise): tiled floor, plain walls, furniture, 1.5–6 m"),
     "street": (_street, "KITTI-like rectified stereo rig: road, cars, poles, facades, sky at 150 m"),
 }
+
+
+def register_scene(name: str, builder, description: str) -> None:
+    """Add a named scene to ``SCENES``: ``builder(rng)`` → (primitives, rig dict with eye, target,
+    fov, baseline, sky), ``description`` one line for :func:`list_scenes`."""
+    if not isinstance(name, str) or not name.isidentifier() or name != name.lower():
+        raise ValueError(f"name must be a short lower-case identifier, got {name!r}")
+    if not callable(builder):
+        raise TypeError(f"builder must be callable(rng) -> (primitives, rig), got {type(builder).__name__}")
+    if not isinstance(description, str) or not description.strip():
+        raise ValueError(f"description must be a non-empty one-line string, got {description!r}")
+    old = SCENES.get(name)
+    same = old is not None and (old[0].__module__, old[0].__qualname__) == (builder.__module__, builder.__qualname__)
+    if old is not None and not same:  # re-importing (reloading) the defining module is fine
+        raise ValueError(f"a scene named {name!r} is already registered by {old[0].__module__}")
+    SCENES[name] = (builder, description)
 
 
 class _SceneList(dict):
