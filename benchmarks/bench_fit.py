@@ -2,6 +2,7 @@
 
     python benchmarks/bench_fit.py            # all variants at 48×64 and 96×128, UNet 32–512
     python benchmarks/bench_fit.py --narrow   # also the ci profile's narrow net
+    python benchmarks/bench_fit.py --set bf16=True --set pad='zeros'   # FitConfig overrides
 
 Prints a table; asserts nothing. Each configuration runs in a fresh subprocess so that its
 peak resident memory (ru_maxrss) is its own. "bound" is the iteration's floating-point work
@@ -11,7 +12,9 @@ rate measured in the same run with the same thread count; "ratio" = time / bound
 from __future__ import annotations
 
 import argparse
+import ast
 import json
+import platform
 import resource
 import subprocess
 import sys
@@ -19,6 +22,42 @@ import time
 
 import numpy as np
 import torch
+
+
+CPU_FLAGS = ("avx512f", "avx512_bf16", "amx_bf16", "avx512_vnni")
+
+
+def cpu_summary() -> str:
+    """The CPU model and whether it has the flags that decide bf16 / int8 speed (Linux /proc/cpuinfo)."""
+    model, flags = platform.processor() or "unknown CPU", set()
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                key, _, value = line.partition(":")
+                if key.strip() == "model name":
+                    model = value.strip()
+                elif key.strip() == "flags":
+                    flags = set(value.split())
+                    break
+    except OSError:
+        pass
+    marks = ", ".join(f"{flag} {'yes' if flag in flags else 'no'}" for flag in CPU_FLAGS)
+    return f"CPU: {model}; {marks}"
+
+
+def parse_overrides(items) -> dict:
+    """``["bf16=True", "pad='zeros'"]`` → ``{"bf16": True, "pad": "zeros"}`` (values as Python literals,
+    else as strings)."""
+    overrides = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip():
+            raise SystemExit(f"--set expects KEY=VALUE, got {item!r}")
+        try:
+            overrides[key.strip()] = ast.literal_eval(value)
+        except (ValueError, SyntaxError):
+            overrides[key.strip()] = value
+    return overrides
 
 
 def matmul_rate(n: int = 2048, repeats: int = 5) -> float:
@@ -44,12 +83,12 @@ def case(height: int, width: int, seed: int = 0):
     return rgb, depth, ref, nbrs
 
 
-def run_one(variant: str, height: int, width: int, channels, iterations: int) -> dict:
+def run_one(variant: str, height: int, width: int, channels, iterations: int, overrides=None) -> dict:
     from torch.utils.flop_counter import FlopCounterMode
     from ddp_lite import FitConfig, complete_depth
     rgb, depth, ref, nbrs = case(height, width)
     kwargs = dict(camera=ref, neighbors=nbrs) if variant == "rgbd+warp" else {}
-    config = FitConfig(channels=tuple(channels), lr=1e-2, progress=False, eval_every=10 ** 9)
+    config = FitConfig(channels=tuple(channels), lr=1e-2, progress=False, eval_every=10 ** 9, **(overrides or {}))
     with FlopCounterMode(display=False) as counter:
         complete_depth(rgb, depth, variant=variant, config=config.replace(iterations=1), **kwargs)
     flops = counter.get_total_flops()
@@ -68,19 +107,26 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--iterations", type=int, default=20)
     parser.add_argument("--narrow", action="store_true", help="also the ci profile's 16–128 net")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                        help="FitConfig override, repeatable: bf16=True, pad='zeros', channels_last=True")
     parser.add_argument("--one", nargs=4, metavar=("VARIANT", "H", "W", "CHANNELS"), help=argparse.SUPPRESS)
     args = parser.parse_args()
+    overrides = parse_overrides(args.set)
     if args.one:
         variant, height, width, channels = args.one
-        print(json.dumps(run_one(variant, int(height), int(width), [int(c) for c in channels.split("-")], args.iterations)))
+        print(json.dumps(run_one(variant, int(height), int(width), [int(c) for c in channels.split("-")], args.iterations,
+                                 overrides)))
         return
     widths = ["32-64-128-256-512"] + (["16-32-64-128"] if args.narrow else [])
-    print(f"torch {torch.__version__}, {torch.get_num_threads()} threads, {args.iterations} timed iterations")
+    print(cpu_summary())
+    print(f"torch {torch.__version__}, {torch.get_num_threads()} threads, {args.iterations} timed iterations"
+          + (f", overrides {overrides}" if overrides else ""))
     print(f"{'variant':<10} {'size':>7} {'net':>18} {'s/it':>7} {'GFLOP':>6} {'bound s':>8} {'ratio':>6} {'peak MB':>8}")
     for channels in widths:
         for height, width in ((48, 64), (96, 128)):
             for variant in ("d", "rgbd", "rgbd+warp"):
-                out = subprocess.run([sys.executable, __file__, "--iterations", str(args.iterations), "--one",
+                sets = [arg for item in args.set for arg in ("--set", item)]
+                out = subprocess.run([sys.executable, __file__, "--iterations", str(args.iterations), *sets, "--one",
                                       variant, str(height), str(width), channels],
                                      capture_output=True, text=True, check=True)
                 r = json.loads(out.stdout.strip().splitlines()[-1])

@@ -28,7 +28,7 @@ from tqdm.auto import tqdm
 
 from .camera import Camera
 from .disparity import DisparityTransform
-from .losses import LossWeights, disparity_loss, rgb_loss, smoothness_loss, smoothness_weights, warp_loss
+from .losses import ConstantTarget, LossWeights, disparity_loss, rgb_loss, smoothness_loss, smoothness_weights, warp_loss
 from .nets import build_net, make_noise
 from .profiles import get_profile
 from .warp import Warper
@@ -460,6 +460,9 @@ def _complete_depth(rgb, depth, camera, neighbors, variant, config, gt_depth, tr
     warpers = [Warper(camera, cam, device=device) for _, cam in neighbors] if w_warp > 0 else []
     nbr_images = [_to_tensor(img, device) for img, _ in neighbors] if w_warp > 0 else []
     near, far, constant = transform.near, transform.far, transform.constant
+    # the targets' share of the loss work, once per fit: holes → 0, mask weights, SSIM moments
+    disp_target = ConstantTarget(target, fit_mask)
+    rgb_target = ConstantTarget(rgb_t) if rgb_t is not None else None
 
     def to_metres(disparity):  # differentiable twin of transform.to_depth
         return 1.0 / (disparity * (near - far) + far) - constant
@@ -472,15 +475,15 @@ def _complete_depth(rgb, depth, camera, neighbors, variant, config, gt_depth, tr
 
     def loss_fn(output):
         disparity = output[:, :1]  # (1, 1, H, W)
-        terms = {"disp": disparity_loss(disparity, target, fit_mask, config.lambda_z)}
+        terms = {"disp": disparity_loss(disparity, disp_target, lambda_z=config.lambda_z)}
         total = w_disp * terms["disp"]
         if w_rgb > 0:
-            terms["rgb"] = rgb_loss(output[:, 1:4], rgb_t, config.lambda_i)
+            terms["rgb"] = rgb_loss(output[:, 1:4], rgb_target, config.lambda_i)
             total = total + w_rgb * terms["rgb"]
         if w_warp > 0:
             ref_depth = to_metres(disparity)
             pairs = [warper(image, ref_depth) for warper, image in zip(warpers, nbr_images)]
-            terms["warp"] = warp_loss(rgb_t, [p[0] for p in pairs], [p[1] for p in pairs], config.lambda_w)
+            terms["warp"] = warp_loss(rgb_target, [p[0] for p in pairs], [p[1] for p in pairs], config.lambda_w)
             total = total + w_warp * terms["warp"]
         if smooth_weights is not None:
             terms["smooth"] = smoothness_loss(disparity, smooth_weights)

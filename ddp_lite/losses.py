@@ -13,6 +13,11 @@ hole's values. So before SSIM both images get the *same* value wherever a pixel 
 (the target's value for the output, a constant for a target's holes): those pixels then agree
 exactly, contribute no error, and pass no gradient. The ground truth inside a hole never
 reaches the loss.
+
+A fit compares its output with the same targets every iteration. :class:`ConstantTarget` does
+the target's share of the work once (holes set to 0, the mask as float weights and its count,
+the target's blurred SSIM moments μ_y and E[y²]); every loss and :func:`ssim` take one where they
+take a target, and give the same numbers as with the plain tensor.
 """
 from __future__ import annotations
 
@@ -23,7 +28,7 @@ import torch
 import torch.nn.functional as F
 
 __all__ = ["ssim", "masked_l1", "disparity_loss", "rgb_loss", "warp_loss", "smoothness_weights", "smoothness_loss",
-           "LossWeights"]
+           "LossWeights", "ConstantTarget"]
 
 C1_FACTOR, C2_FACTOR = 0.01, 0.03  # k1, k2 of Wang et al. 2004
 
@@ -42,11 +47,40 @@ def _blur(x: torch.Tensor, kernel: torch.Tensor) -> torch.Tensor:
     return F.conv2d(x, kernel.reshape(1, 1, k, 1).expand(C, 1, k, 1), groups=C)
 
 
+class ConstantTarget:
+    """A loss target (B, C, H, W) that stays the same over many calls, prepared once.
+
+    With ``mask`` (B, 1, H, W) bool, True = the pixel counts: ``image`` is the target with its
+    other pixels set to 0 (so the ground truth inside a hole never reaches SSIM's window),
+    ``weights`` the mask as floats and ``count`` the L1 normaliser (counted pixels × C, ≥ 1).
+    ``moments`` are the target's blurred mean and mean square for :func:`ssim`, so a call blurs
+    only the output's channels (x, x², x·y): 3 of 5.
+
+    Example:
+        >>> y = torch.rand(1, 1, 16, 16); x = torch.rand(1, 1, 16, 16)
+        >>> bool(torch.allclose(ssim(x, ConstantTarget(y)), ssim(x, y)))
+        True
+    """
+
+    def __init__(self, image: torch.Tensor, mask: torch.Tensor | None = None, window_size: int = 11,
+                 sigma: float = 1.5):
+        self.mask = mask
+        self.image = torch.where(mask, image, torch.zeros_like(image)) if mask is not None else image
+        self.weights = mask.to(image.dtype) if mask is not None else None
+        self.count = (self.weights.sum() * image.shape[1]).clamp(min=1.0) if mask is not None else None
+        self.window = (window_size, float(sigma))
+        self.moments = None
+        if min(image.shape[-2:]) >= window_size:
+            kernel = _gaussian_1d(window_size, float(sigma), image.dtype, str(image.device))
+            self.moments = _blur(torch.cat([self.image, self.image * self.image], dim=1), kernel).chunk(2, dim=1)
+
+
 def ssim(x, y, data_range: float = 1.0, window_size: int = 11, sigma: float = 1.5, reduction: str = "mean"):
     """Structural similarity of two images with an 11×11 Gaussian window (σ = 1.5).
 
     Args:
         x, y: (B, C, H, W) tensors, or NumPy (H, W) / (H, W, C) arrays; H, W ≥ ``window_size``.
+            ``y`` may be a :class:`ConstantTarget` (its image; its moments are not blurred again).
         reduction: ``"mean"`` → a scalar (tensor in, tensor out; float for NumPy), the mean over
             the windows that fit inside the image — the number scikit-image's
             ``structural_similarity(gaussian_weights=True, sigma=1.5,
@@ -58,6 +92,8 @@ def ssim(x, y, data_range: float = 1.0, window_size: int = 11, sigma: float = 1.
         1.0
     """
     as_numpy = not isinstance(x, torch.Tensor)
+    target = y if isinstance(y, ConstantTarget) and y.window == (window_size, float(sigma)) else None
+    y = y.image if isinstance(y, ConstantTarget) else y
     if as_numpy:
         x_np, y_np = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
         if x_np.shape != y_np.shape or x_np.ndim not in (2, 3):
@@ -71,9 +107,11 @@ def ssim(x, y, data_range: float = 1.0, window_size: int = 11, sigma: float = 1.
         raise ValueError(f"images must be at least {window_size}×{window_size}, got {tuple(x.shape[-2:])}")
     kernel = _gaussian_1d(window_size, float(sigma), x.dtype, str(x.device))
     c1, c2 = (C1_FACTOR * data_range) ** 2, (C2_FACTOR * data_range) ** 2
-    # one batched blur for the five moments instead of five calls
-    moments = _blur(torch.cat([x, y, x * x, y * y, x * y], dim=1), kernel)
-    mu_x, mu_y, xx, yy, xy = moments.chunk(5, dim=1)
+    if target is not None and target.moments is not None:  # y's moments are blurred already
+        mu_y, yy = target.moments
+        mu_x, xx, xy = _blur(torch.cat([x, x * x, x * y], dim=1), kernel).chunk(3, dim=1)
+    else:  # one batched blur for the five moments instead of five calls
+        mu_x, mu_y, xx, yy, xy = _blur(torch.cat([x, y, x * x, y * y, x * y], dim=1), kernel).chunk(5, dim=1)
     var_x, var_y, cov = xx - mu_x ** 2, yy - mu_y ** 2, xy - mu_x * mu_y
     ssim_map = ((2 * mu_x * mu_y + c1) * (2 * cov + c2)) / ((mu_x ** 2 + mu_y ** 2 + c1) * (var_x + var_y + c2))
     if reduction == "none":
@@ -93,39 +131,59 @@ def masked_l1(x: torch.Tensor, y: torch.Tensor, mask: torch.Tensor | None = None
     return (error * weights).sum() / (weights.sum() * x.shape[1]).clamp(min=1.0)
 
 
-def _l1_ssim(x, y, mask, l1_weight: float) -> torch.Tensor:
-    """``l1_weight · L1 + (1 - l1_weight) · (1 - SSIM)``, with pixels outside ``mask`` made to agree."""
+def _l1_ssim(x, y: ConstantTarget, mask, l1_weight: float) -> torch.Tensor:
+    """``l1_weight · L1 + (1 - l1_weight) · (1 - SSIM)``, with pixels outside ``mask`` (default: the
+    target's own) made to agree."""
+    mask = y.mask if mask is None else mask
     if mask is not None:
-        x = torch.where(mask, x, y)
-    return l1_weight * masked_l1(x, y, mask) + (1.0 - l1_weight) * (1.0 - ssim(x, y))
+        x = torch.where(mask, x, y.image)
+    if mask is not None and mask is y.mask:  # the target's mask: weights and count are ready
+        l1 = ((x - y.image).abs() * y.weights).sum() / y.count
+    else:
+        l1 = masked_l1(x, y.image, mask)
+    return l1_weight * l1 + (1.0 - l1_weight) * (1.0 - ssim(x, y))
 
 
-def disparity_loss(output: torch.Tensor, target: torch.Tensor, mask: torch.Tensor, lambda_z: float = 0.8):
+def _prepared(target, mask) -> ConstantTarget:
+    """``target`` as a :class:`ConstantTarget` (with ``mask``); a prepared one must come without a mask."""
+    if isinstance(target, ConstantTarget):
+        if mask is not None and mask is not target.mask:
+            raise ValueError("pass the mask to ConstantTarget(target, mask), not with a prepared target")
+        return target
+    return ConstantTarget(target, mask)
+
+
+def disparity_loss(output: torch.Tensor, target, mask: torch.Tensor | None = None, lambda_z: float = 0.8):
     """L_disp: output (B, 1, H, W) vs target disparity, on pixels where ``mask`` (B, 1, H, W) is True.
 
     The target's non-counting pixels may hold anything finite (NaN is refused: it would poison
-    SSIM); they never reach the loss or its gradient.
+    SSIM); they never reach the loss or its gradient. ``target`` may be a
+    ``ConstantTarget(target, mask)`` made once per fit (then no ``mask`` here): same value.
     """
-    target = torch.where(mask, target, torch.zeros_like(target))
-    return _l1_ssim(output, target, mask, lambda_z)
+    if mask is None and not isinstance(target, ConstantTarget):
+        raise ValueError("disparity_loss needs a mask (or a ConstantTarget made with one)")
+    return _l1_ssim(output, _prepared(target, mask), None, lambda_z)
 
 
-def rgb_loss(output: torch.Tensor, target: torch.Tensor, lambda_i: float = 0.5, mask=None):
-    """L_RGB: output colour (B, 3, H, W) vs the input image, on every pixel (or on ``mask``)."""
-    if mask is not None:
-        target = torch.where(mask, target, torch.zeros_like(target))
-    return _l1_ssim(output, target, mask, lambda_i)
+def rgb_loss(output: torch.Tensor, target, lambda_i: float = 0.5, mask=None):
+    """L_RGB: output colour (B, 3, H, W) vs the input image (a tensor or a :class:`ConstantTarget`),
+    on every pixel (or on ``mask``)."""
+    return _l1_ssim(output, _prepared(target, mask), None, lambda_i)
 
 
 def warp_loss(reference: torch.Tensor, warped: list, valid: list, lambda_w: float = 0.5):
     """L_warp: mean over neighbours of ``λw (1 - SSIM) + (1 - λw) L1`` between the reference image
     (B, 3, H, W) and each warped neighbour (B, 3, H, W), on that neighbour's valid pixels (B, 1, H, W).
+    ``reference`` may be a :class:`ConstantTarget` without a mask.
 
     Note the paper weights SSIM by λw here (L1 by λ in the other two losses); with λw = 0.5 the
     two readings agree.
     """
     if len(warped) == 0:
         raise ValueError("warp_loss needs at least one warped neighbour")
+    reference = _prepared(reference, None)
+    if reference.mask is not None:
+        raise ValueError("warp_loss: the reference must not carry a mask (each neighbour has its own)")
     losses = [_l1_ssim(w, reference, v, 1.0 - lambda_w) for w, v in zip(warped, valid)]
     return torch.stack(losses).mean()
 

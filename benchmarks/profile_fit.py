@@ -1,0 +1,53 @@
+"""Where a fit's time goes: torch.profiler (CPU) over N iterations, top ops by self CPU time.
+
+    python benchmarks/profile_fit.py                         # rgbd+warp, 96×128 UNet 32–512 and 48×64 16–128
+    python benchmarks/profile_fit.py --set bf16=True --rows 20
+
+The case is bench_fit's (a slanted plane, textured image, 20 % holes, two neighbours); a 5-iteration
+fit warms up first. The table includes the fit's set-up (net build, warpers), which is small.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+
+import torch
+from torch.profiler import ProfilerActivity, profile
+
+sys.path.insert(0, os.path.dirname(__file__))
+from bench_fit import case, cpu_summary, parse_overrides  # noqa: E402
+
+SIZES = {"96x128": ((96, 128), (32, 64, 128, 256, 512)), "48x64": ((48, 64), (16, 32, 64, 128))}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--iterations", type=int, default=30)
+    parser.add_argument("--variant", default="rgbd+warp")
+    parser.add_argument("--rows", type=int, default=15)
+    parser.add_argument("--threads", type=int, default=1)
+    parser.add_argument("--only", choices=sorted(SIZES), help="one size only")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="FitConfig override")
+    args = parser.parse_args()
+    torch.set_num_threads(args.threads)
+    from ddp_lite import FitConfig, complete_depth
+    print(cpu_summary())
+    print(f"torch {torch.__version__}, {torch.get_num_threads()} thread(s), overrides {parse_overrides(args.set)}")
+    for name, ((height, width), channels) in SIZES.items():
+        if args.only and name != args.only:
+            continue
+        rgb, depth, ref, nbrs = case(height, width)
+        kwargs = dict(camera=ref, neighbors=nbrs) if args.variant == "rgbd+warp" else {}
+        config = FitConfig(channels=channels, lr=1e-2, progress=False, eval_every=10 ** 9, **parse_overrides(args.set))
+        complete_depth(rgb, depth, variant=args.variant, config=config.replace(iterations=5), **kwargs)
+        with profile(activities=[ProfilerActivity.CPU]) as prof:
+            result = complete_depth(rgb, depth, variant=args.variant, config=config.replace(iterations=args.iterations),
+                                    **kwargs)
+        print(f"\n== {args.variant} {height}x{width} UNet {'-'.join(map(str, channels))}: {args.iterations} iterations, "
+              f"{result.seconds / args.iterations:.3f} s/it under the profiler")
+        print(prof.key_averages().table(sort_by="self_cpu_time_total", row_limit=args.rows, max_name_column_width=40))
+
+
+if __name__ == "__main__":
+    main()
