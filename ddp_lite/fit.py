@@ -90,7 +90,8 @@ class FitConfig:
         values = dict(net=net, channels=profile.channels if net == "unet" else profile.skip_channels,
                       lr=profile.lr, iterations=iterations, lr_milestones=profile.milestones(iterations),
                       lr_gamma=profile.lr_gamma, auto_stop=profile.auto_stop, patience=profile.patience,
-                      plateau_decays=profile.plateau_decays, eval_every=profile.eval_every)
+                      plateau_decays=profile.plateau_decays, eval_every=profile.eval_every,
+                      smoothness=profile.smoothness, smoothness_edge=profile.smoothness_edge)
         values.update(overrides)
         return cls(**values)
 

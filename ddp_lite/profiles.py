@@ -42,6 +42,8 @@ class Profile:
     n_views: int  # views per synthetic multi-view scene
     seeds: tuple[int, ...]  # seeds for "mean and spread" tables
     image_iterations: int  # Deep Image Prior on a natural image
+    smoothness: float = 0.0  # FitConfig.smoothness: curvature penalty in the holes (0 = the paper's losses only)
+    smoothness_edge: float = 10.0  # FitConfig.smoothness_edge
 
     def milestones(self, iterations: int) -> tuple[int, ...]:
         """The learning-rate decay iterations for a run of ``iterations``."""
