@@ -44,6 +44,7 @@ class Profile:
     image_iterations: int  # Deep Image Prior on a natural image
     smoothness: float = 0.0  # FitConfig.smoothness: curvature penalty in the holes (0 = the paper's losses only)
     smoothness_edge: float = 10.0  # FitConfig.smoothness_edge
+    bf16: bool | None = False  # FitConfig.bf16 (None: bfloat16 where the hardware computes it natively)
 
     def milestones(self, iterations: int) -> tuple[int, ...]:
         """The learning-rate decay iterations for a run of ``iterations``."""

@@ -136,3 +136,17 @@ def test_smoothness_fills_a_hole_in_a_plane_better_than_without():
         return np.sqrt(np.mean((transform.to_disparity(result.depth) - transform.to_disparity(gt))[holes] ** 2))
 
     assert hole_error(base.replace(smoothness=1.0)) < 0.5 * hole_error(base)
+
+
+def test_bf16_none_follows_the_cpu_flags():
+    from ddp_lite.fit import _cpu_has_native_bf16, use_bf16
+    cpu = torch.device("cpu")
+    assert use_bf16(True, cpu) is True and use_bf16(False, cpu) is False
+    try:
+        with open("/proc/cpuinfo") as handle:
+            text = handle.read()
+    except OSError:
+        text = ""  # not Linux: no flags to read, so never bf16 by default
+    native = "avx512_bf16" in text or "amx_bf16" in text
+    assert use_bf16(None, cpu) == native == _cpu_has_native_bf16()
+    assert use_bf16(None, torch.device("meta")) is False
