@@ -165,8 +165,8 @@ def fetch(dataset, dest=None, only=None, trust_first_download: bool = False, ret
             try:
                 _unpack(folder, entry, digest, say)
             except FetchError:
-                if known is None:  # taken on trust and unusable: not kept under its final name, not recorded
-                    _set_aside(path, manual)
+                if known is None and not manual:  # a download taken on trust and unusable: not kept
+                    path.unlink(missing_ok=True)
                 raise
         if known is None:  # trust on first use, recorded only once the file proved usable
             _record(folder, entry, digest, "trust-first-download")
@@ -174,10 +174,3 @@ def fetch(dataset, dest=None, only=None, trust_first_download: bool = False, ret
         paths.append(path)
     return paths
 
-
-def _set_aside(path: Path, manual: bool) -> None:
-    """A bad file: the user's own (manual) is renamed ``<file>.rejected``, a download is deleted."""
-    if manual:
-        os.replace(path, path.with_name(path.name + ".rejected"))
-    else:
-        path.unlink(missing_ok=True)

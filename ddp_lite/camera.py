@@ -14,6 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
+from .checks import check_real
+
 __all__ = ["Camera", "relative_pose", "pixel_grid", "backproject", "project", "look_at", "view_overlap"]
 
 MIN_FOCAL_RATIO, MAX_FOCAL_RATIO = 1e-3, 1e4  # focal length / larger image side
@@ -79,8 +81,7 @@ class Camera:
     @classmethod
     def from_fov(cls, width: int, height: int, fov_x_deg: float, cam_from_world=None) -> "Camera":
         """A camera with square pixels, principal point at the image centre, horizontal FOV in degrees."""
-        if not 0.0 < fov_x_deg < 180.0:
-            raise ValueError(f"fov_x_deg must be in (0, 180), got {fov_x_deg}")
+        check_real(fov_x_deg, "fov_x_deg", 0.0, 180.0, low_open=True, high_open=True)
         focal = 0.5 * width / np.tan(np.radians(fov_x_deg) / 2.0)
         K = np.array([[focal, 0.0, (width - 1) / 2.0], [0.0, focal, (height - 1) / 2.0], [0.0, 0.0, 1.0]])
         return cls(K, np.eye(4) if cam_from_world is None else cam_from_world, width, height)
