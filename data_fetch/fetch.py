@@ -42,6 +42,8 @@ class UnpinnedFileError(FetchError):
 def data_dir(dest=None) -> Path:
     """The data root: ``dest`` if given, else ``$DDP_DATA``, else ``user_data_dir('ddp-lite')``."""
     if dest is not None:
+        if not str(dest).strip():
+            raise ValueError("dest must name a folder, got an empty string")
         return Path(dest).expanduser()
     if os.environ.get(ENV_VAR):
         return Path(os.environ[ENV_VAR]).expanduser()

@@ -14,6 +14,7 @@ archive is a ``FetchError`` and leaves the target as it was.
 """
 from __future__ import annotations
 
+import collections
 import os
 import re
 import shutil
@@ -111,6 +112,9 @@ def safe_extract(archive, target, max_ratio: float = MAX_RATIO) -> Path:
         total = sum(member.size for member in members)
         names = [member.name for member in members]
     with handle:
+        duplicates = sorted(n for n, k in collections.Counter(names).items() if k > 1 and not n.endswith("/"))
+        if duplicates:  # the second copy would silently replace the first
+            raise UnsafeArchiveError(f"{archive.name}: member(s) {duplicates[:3]} appear more than once")
         for name in names:
             if not _inside(target, name):
                 raise UnsafeArchiveError(f"{archive.name}: member {name!r} resolves outside {target}")

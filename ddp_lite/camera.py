@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from .checks import check_real
+from .checks import check_int, check_real
 
 __all__ = ["Camera", "relative_pose", "pixel_grid", "backproject", "project", "look_at", "view_overlap"]
 
@@ -103,6 +103,7 @@ class Camera:
 
     def resized(self, width: int, height: int) -> "Camera":
         """The same camera for an image resampled to ``width × height`` (pixel centres kept)."""
+        check_int(width, "width", minimum=1), check_int(height, "height", minimum=1)
         sx, sy = width / self.width, height / self.height
         K = self.K.copy()
         K[0, 0] *= sx

@@ -275,6 +275,8 @@ def parse_middlebury_calib(text: str) -> MiddleburyCalib:
     for line in text.splitlines():
         if "=" in line:
             key, value = line.split("=", 1)
+            if key.strip() in entries:
+                raise ValueError(f"text: {key.strip()} appears twice in calib.txt")
             entries[key.strip()] = value.strip()
     missing = [k for k in ("cam0", "cam1", "doffs", "baseline", "width", "height", "ndisp") if k not in entries]
     if missing:

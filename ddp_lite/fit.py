@@ -507,12 +507,14 @@ def complete_depth(rgb, depth, camera: Camera | None = None, neighbors=(), varia
         (32, 32)
     """
     config = FitConfig.for_profile(variant=variant) if config is None and variant in VARIANTS else config
+    if callback is not None and not callable(callback):
+        raise TypeError(f"callback must be a function callback(iteration, outputs), got {type(callback).__name__}")
     if not isinstance(config, FitConfig) or config.ensemble == 1:
         return _complete_depth(rgb, depth, camera, neighbors, variant, config, gt_depth, transform, callback, init)
     # An ensemble: independent fits from other seeds (other weights, noise and held-out pixels),
     # averaged in disparity. One fit's hole error moves ±10 % and more with the seed; the average
     # keeps what the fits agree on. The inputs are checked once, before the first fit.
-    config, *_ = _check_fit_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth, transform)
+    config, _, _, neighbors, _, _ = _check_fit_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth, transform)
     if transform is None:
         transform = DisparityTransform.from_depth(np.asarray(depth, np.float32), margin=config.disparity_margin)
     members = [_complete_depth(rgb, depth, camera, neighbors, variant, config.replace(seed=config.seed + k, ensemble=1),

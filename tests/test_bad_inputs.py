@@ -185,8 +185,8 @@ FIT_BAD = {
     "transform str": (dict(transform="auto"), "transform"),
     "init str": (dict(init="last"), "init"),
     "3000×4000 at ci": (dict(rgb=None, variant="d", depth=lambda: np.full((3000, 4000), 2.0, np.float32),
-                             config=FitConfig.for_profile("ci", variant="d", progress=False)), "max_memory_gb"),
-    "max_memory_gb too small": (dict(config=tiny(max_memory_gb=0.01)), "max_memory_gb"),
+                             config=lambda: FitConfig.for_profile("ci", variant="d", progress=False)), "max_memory_gb"),
+    "max_memory_gb too small": (dict(config=lambda: tiny(max_memory_gb=0.01)), "max_memory_gb"),
 }
 for _id, (_kw, _name) in FIT_BAD.items():
     case(f"complete_depth {_id}", BAD, _name)(_fit(**_kw))
@@ -216,7 +216,7 @@ for _id, _kw, _name in (("mask uint8", dict(mask=lambda: np.ones((H, W), np.uint
                         ("mask 3 known", dict(mask=lambda: np.arange(H * W).reshape(H, W) < 3), "mask"),
                         ("image (H, W)", dict(image=lambda: np.zeros((H, W), np.float32)), "image"),
                         ("clean size", dict(clean=lambda: rgb(H + 1, W)), "clean"),
-                        ("config lr nan", dict(config=tiny(lr=float("nan"))), "lr")):
+                        ("config lr nan", dict(config=lambda: tiny(lr=float("nan"))), "lr")):
     case(f"fit_image {_id}", BAD, _name)(_dip(**_kw))
 
 case("merge shapes", BAD, "input_depth")(lambda tmp: (lambda: merge(depth(), depth(H + 1, W))))
@@ -536,6 +536,20 @@ case("fetch cli --dest a file", Refused, "dest")(_fetch_cli_dest_file)
 case("fetch cli unknown name", Refused, "name")(lambda tmp: (lambda: run_cli(fetch_main, ["fetch", "nope"])))
 case("safe_extract a text file", FetchError, "x.txt")(
     lambda tmp: ((tmp / "x.txt").write_text("x"), lambda: safe_extract(tmp / "x.txt", tmp / "out"))[1])
+
+
+# --------------------------------------------------------------------------- found while hardening (not in the issue)
+
+case("complete_depth callback=5", TypeError, "callback")(_fit(callback=5))
+case("Camera.resized(0, 0)", BAD, "width")(lambda tmp: (lambda: camera().resized(0, 0)))
+case("DisparityTransform.from_depth margin 0", BAD, "margin")(
+    lambda tmp: (lambda: DisparityTransform.from_depth(depth(), margin=0.0)))
+case("calib a key twice", ValueError, "baseline")(
+    lambda tmp: (lambda: ds.parse_middlebury_calib("\n".join(f"{k}={v}" for k, v in CALIB.items()) + "\nbaseline=5")))
+case("fetch dest ''", ValueError, "dest")(lambda tmp: (lambda: fetch(_toy(), dest="", trust_first_download=True)))
+case("safe_extract duplicate members", FetchError, "more than once")(
+    lambda tmp: ((tmp / "dup.zip").write_bytes(_zip([("a", b"1"), ("a", b"22")])),
+                 lambda: safe_extract(tmp / "dup.zip", tmp / "out"))[1])
 
 
 # --------------------------------------------------------------------------- the test
