@@ -14,12 +14,13 @@ import datetime
 import fnmatch
 import json
 import os
-import tempfile
+import re
 from pathlib import Path
 
 import platformdirs
 import pooch
 
+from .atomic import write_bytes_atomic
 from .download import ChecksumError, FetchError, ResumableDownloader
 from .registry import Dataset, RemoteFile, get_dataset
 from .unpack import safe_extract
@@ -41,6 +42,8 @@ class UnpinnedFileError(FetchError):
 def data_dir(dest=None) -> Path:
     """The data root: ``dest`` if given, else ``$DDP_DATA``, else ``user_data_dir('ddp-lite')``."""
     if dest is not None:
+        if not str(dest).strip():
+            raise ValueError("dest must name a folder, got an empty string")
         return Path(dest).expanduser()
     if os.environ.get(ENV_VAR):
         return Path(os.environ[ENV_VAR]).expanduser()
@@ -52,31 +55,25 @@ def _read_records(folder: Path) -> dict:
     if not path.exists():
         return {}
     try:
-        records = json.loads(path.read_text())
-    except json.JSONDecodeError as error:
+        records = json.loads(path.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as error:
         raise FetchError(f"{path} is not valid JSON ({error}); fix or delete it") from None
-    return records if isinstance(records, dict) else {}
-
-
-def _write_atomic(path: Path, text: str) -> None:
-    """Text to ``path`` atomically (like ``ddp_lite.atomic``, which data_fetch does not import: it would pull in torch)."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w") as handle:
-            handle.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.remove(tmp)
-        raise
+    if not isinstance(records, dict):
+        raise FetchError(f"{path} must hold a JSON object {{file name: record}}, got {type(records).__name__}; "
+                         f"fix or delete it")
+    for name, record in records.items():
+        digest = record.get("sha256") if isinstance(record, dict) else None
+        if not isinstance(digest, str) or not re.fullmatch(r"(sha256:)?[0-9a-f]{64}", digest):
+            raise FetchError(f"{path}: the entry for {name!r} must be a mapping with a 64-hex-digit 'sha256', "
+                             f"got {record!r}; fix or delete it")
+    return records
 
 
 def _record(folder: Path, entry: RemoteFile, sha256: str, how: str) -> None:
     records = _read_records(folder)
     records[entry.name] = {"sha256": sha256, "url": entry.url, "how": how,
                            "recorded": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")}
-    _write_atomic(folder / REGISTRY_FILE, json.dumps(records, indent=2, sort_keys=True) + "\n")
+    write_bytes_atomic(folder / REGISTRY_FILE, (json.dumps(records, indent=2, sort_keys=True) + "\n").encode())
 
 
 def _known_hash(folder: Path, entry: RemoteFile, trust: bool) -> str | None:
@@ -96,7 +93,7 @@ def _unpack(folder: Path, entry: RemoteFile, sha256: str, say) -> None:
         return
     say(f"unpacking {entry.name} into {folder}")
     safe_extract(folder / entry.name, folder)
-    _write_atomic(marker, sha256 + "\n")
+    write_bytes_atomic(marker, (sha256 + "\n").encode())
 
 
 def _select(dataset: Dataset, only) -> list[RemoteFile]:
@@ -144,7 +141,11 @@ def fetch(dataset, dest=None, only=None, trust_first_download: bool = False, ret
         dataset = get_dataset(dataset)
     if not isinstance(dataset, Dataset):
         raise TypeError(f"dataset must be a name or a Dataset, got {type(dataset).__name__}")
-    folder = data_dir(dest) / dataset.name
+    root = data_dir(dest)
+    for where in (root, root / dataset.name):
+        if where.exists() and not where.is_dir():
+            raise FetchError(f"dest: {where} is a file; the data root and its dataset folders must be folders")
+    folder = root / dataset.name
     entries = _select(dataset, only)
     manual = dataset.manual is not None or any(f.url is None for f in entries)
     if manual:
@@ -161,11 +162,17 @@ def fetch(dataset, dest=None, only=None, trust_first_download: bool = False, ret
         else:
             _download(folder, entry, known, retries, progressbar, backoff)
         path = folder / entry.name
-        if known is None:
-            known = pooch.file_hash(str(path))
-            _record(folder, entry, known, "trust-first-download")
-            say(f"recorded SHA-256 {known} for {entry.name} in {folder / REGISTRY_FILE} (trusted on first use)")
+        digest = known or pooch.file_hash(str(path))
         if entry.unpack:
-            _unpack(folder, entry, known, say)
+            try:
+                _unpack(folder, entry, digest, say)
+            except FetchError:
+                if known is None and not manual:  # a download taken on trust and unusable: not kept
+                    path.unlink(missing_ok=True)
+                raise
+        if known is None:  # trust on first use, recorded only once the file proved usable
+            _record(folder, entry, digest, "trust-first-download")
+            say(f"recorded SHA-256 {digest} for {entry.name} in {folder / REGISTRY_FILE} (trusted on first use)")
         paths.append(path)
     return paths
+

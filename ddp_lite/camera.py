@@ -8,12 +8,17 @@ camera points; the relative pose of a neighbour seen from a reference camera is
 """
 from __future__ import annotations
 
+import numbers
 from dataclasses import dataclass
 
 import numpy as np
 import torch
 
-__all__ = ["Camera", "relative_pose", "pixel_grid", "backproject", "project", "look_at"]
+from .checks import check_int, check_real
+
+__all__ = ["Camera", "relative_pose", "pixel_grid", "backproject", "project", "look_at", "view_overlap"]
+
+MIN_FOCAL_RATIO, MAX_FOCAL_RATIO = 1e-3, 1e4  # focal length / larger image side
 
 
 def _as_matrix(value, shape: tuple[int, int], name: str) -> np.ndarray:
@@ -54,8 +59,18 @@ class Camera:
             raise ValueError("cam_from_world's upper-left 3×3 block must be a rotation matrix")
         for name in ("width", "height"):
             size = getattr(self, name)
-            if int(size) != size or size <= 0:
+            if isinstance(size, bool) or not isinstance(size, numbers.Real):
+                raise TypeError(f"{name} must be a positive integer, got {type(size).__name__} {size!r}")
+            if not np.isfinite(size) or int(size) != size or size <= 0:
                 raise ValueError(f"{name} must be a positive integer, got {size!r}")
+        # a pinhole's field of view lies strictly between 0° and 180°; far outside these bounds
+        # (≈ 0.006° … 179.9°) a focal length is a unit mistake (mm for px, a scale applied twice)
+        for axis, focal in (("fx", K[0, 0]), ("fy", K[1, 1])):
+            ratio = focal / max(self.width, self.height)
+            if not MIN_FOCAL_RATIO <= ratio <= MAX_FOCAL_RATIO:
+                raise ValueError(f"K: focal length {axis}={focal:.6g} px is implausible for a {self.width}×{self.height} "
+                                 f"image (expected {MIN_FOCAL_RATIO:g}–{MAX_FOCAL_RATIO:g} × the larger side); "
+                                 f"is it in pixels?")
         K.setflags(write=False)
         pose.setflags(write=False)
         object.__setattr__(self, "K", K)
@@ -66,8 +81,7 @@ class Camera:
     @classmethod
     def from_fov(cls, width: int, height: int, fov_x_deg: float, cam_from_world=None) -> "Camera":
         """A camera with square pixels, principal point at the image centre, horizontal FOV in degrees."""
-        if not 0.0 < fov_x_deg < 180.0:
-            raise ValueError(f"fov_x_deg must be in (0, 180), got {fov_x_deg}")
+        check_real(fov_x_deg, "fov_x_deg", 0.0, 180.0, low_open=True, high_open=True)
         focal = 0.5 * width / np.tan(np.radians(fov_x_deg) / 2.0)
         K = np.array([[focal, 0.0, (width - 1) / 2.0], [0.0, focal, (height - 1) / 2.0], [0.0, 0.0, 1.0]])
         return cls(K, np.eye(4) if cam_from_world is None else cam_from_world, width, height)
@@ -89,6 +103,7 @@ class Camera:
 
     def resized(self, width: int, height: int) -> "Camera":
         """The same camera for an image resampled to ``width × height`` (pixel centres kept)."""
+        check_int(width, "width", minimum=1), check_int(height, "height", minimum=1)
         sx, sy = width / self.width, height / self.height
         K = self.K.copy()
         K[0, 0] *= sx
@@ -106,6 +121,22 @@ class Camera:
 def relative_pose(ref: Camera, nbr: Camera) -> np.ndarray:
     """``nbr_from_ref`` (4×4): maps points in the reference camera frame to the neighbour's frame."""
     return nbr.cam_from_world @ np.linalg.inv(ref.cam_from_world)
+
+
+def view_overlap(ref: "Camera", depth, nbr: "Camera", max_points: int = 4096) -> float:
+    """The share of ``ref``'s valid depth pixels (``depth`` (H, W) metres, NaN = hole) that land in
+    front of ``nbr`` and inside its image: 0 means the neighbour sees none of the reference."""
+    v, u = np.nonzero(np.isfinite(depth))
+    step = max(1, len(v) // max_points)
+    v, u = v[::step], u[::step]
+    points = np.linalg.inv(ref.K) @ np.stack([u, v, np.ones_like(u)]).astype(np.float64) * depth[v, u]
+    pose = relative_pose(ref, nbr)
+    points = pose[:3, :3] @ points + pose[:3, 3:]
+    front = points[2] > 1e-9
+    uvw = nbr.K @ points[:, front]
+    x, y = uvw[0] / uvw[2], uvw[1] / uvw[2]
+    inside = (x >= -0.5) & (x <= nbr.width - 0.5) & (y >= -0.5) & (y <= nbr.height - 0.5)
+    return float(inside.sum()) / max(len(v), 1)
 
 
 def look_at(eye, target, up=(0.0, -1.0, 0.0)) -> np.ndarray:

@@ -2,18 +2,20 @@
 
     ddp-lite demo [--out ddp_demo.png] [--scene house] [--holes edge|sgm|random] [--iterations 300]
     ddp-lite scenes
-    ddp-lite complete --rgb image.png --depth depth.png --depth-scale 0.001 --out filled.npy
+    ddp-lite complete --rgb image.png --depth depth.png --depth-scale 0.001 --out filled.npy|.png|.pfm|.exr
 """
 from __future__ import annotations
 
 import argparse
+import io
 import os
 import sys
+import tempfile
 import time
 
 import numpy as np
 
-from .atomic import atomic_path
+from .atomic import write_bytes_atomic
 
 
 def _demo(args) -> int:
@@ -71,38 +73,146 @@ def _scenes(args) -> int:
     return 0
 
 
-def _read_depth(path: str, scale: float) -> np.ndarray:
-    if path.endswith(".npy"):
-        depth = np.load(path).astype(np.float32)
-    elif path.endswith(".pfm"):
+def _number(kind, minimum: float, name: str):
+    """An argparse type: a finite ``kind`` (int or float) ≥ ``minimum``, else an error naming the flag."""
+    def parse(text: str):
+        try:
+            value = kind(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{name} must be {'an integer' if kind is int else 'a number'}, "
+                                             f"got {text!r}") from None
+        if not np.isfinite(value) or value < minimum or (kind is float and value <= 0):
+            raise argparse.ArgumentTypeError(f"{name} must be a finite number {'≥' if kind is int else '>'} "
+                                             f"{minimum:g}, got {text!r}")
+        return value
+    return parse
+
+
+def _exr_available() -> bool:
+    import cv2
+    if os.environ.get("OPENCV_IO_ENABLE_OPENEXR", "").lower() not in ("1", "true", "on", "yes"):
+        return False  # OpenCV's EXR codec is off by default (and probing it prints a warning)
+    try:
+        return bool(cv2.imencode(".exr", np.zeros((1, 1), np.float32))[0])
+    except cv2.error:
+        return False
+
+
+def _writers() -> dict:
+    """Output writers by suffix: filled depth (H, W) float32 metres → bytes."""
+    import cv2
+
+    from .datasets import pfm_bytes
+
+    def npy(depth):
+        buffer = io.BytesIO()
+        np.save(buffer, depth)
+        return buffer.getvalue()
+
+    def png(depth):  # 16-bit millimetres, 0 = no value (the usual depth-PNG convention)
+        return cv2.imencode(".png", np.round(np.nan_to_num(depth, nan=0.0) * 1000.0).astype(np.uint16))[1].tobytes()
+
+    def exr(depth):
+        return cv2.imencode(".exr", depth.astype(np.float32))[1].tobytes()
+    return {".npy": npy, ".png": png, ".pfm": pfm_bytes, ".exr": exr}
+
+
+PNG_MAX_METRES = 65.535  # uint16 millimetres
+
+
+def _check_out(args, writers: dict) -> None:
+    """Refuse a bad --out before any work: unknown suffix, a folder, an input, a read-only file, an
+    unwritable folder."""
+    out = os.path.abspath(args.out)
+    suffix = os.path.splitext(out)[1].lower()
+    if os.path.isdir(out):
+        raise ValueError(f"--out {args.out!r} is a folder; give a file name such as filled.npy")
+    if suffix not in writers:
+        raise ValueError(f"--out must end in {', '.join(sorted(writers))} (the format follows the suffix), got {args.out!r}")
+    if suffix == ".exr" and not _exr_available():
+        raise ValueError("--out: this OpenCV cannot write .exr (set OPENCV_IO_ENABLE_OPENEXR=1, or use .npy/.pfm)")
+    for flag, path in (("--depth", args.depth), ("--rgb", args.rgb)):
+        if os.path.abspath(path) == out or (os.path.exists(out) and os.path.exists(path) and os.path.samefile(path, out)):
+            raise ValueError(f"--out is the same file as {flag} ({path!r}); refusing to overwrite an input")
+    if os.path.exists(out) and not os.stat(out).st_mode & 0o222 and not args.force:
+        raise ValueError(f"--out {args.out!r} exists and is read-only; pass --force to replace it")
+    folder = os.path.dirname(out)
+    while not os.path.exists(folder):
+        folder = os.path.dirname(folder)
+    if not os.path.isdir(folder):
+        raise ValueError(f"--out {args.out!r}: {folder} is a file, not a folder")
+    try:  # the one sure test (permissions, read-only mounts, quotas): create a file there
+        fd, probe = tempfile.mkstemp(dir=folder, prefix=".ddp-lite-probe-")
+    except OSError as error:
+        raise ValueError(f"--out {args.out!r}: cannot write in {folder} ({error.strerror})") from None
+    os.close(fd)
+    os.remove(probe)
+
+
+def _read_depth(path: str, scale: float | None) -> np.ndarray:
+    """--depth as float32 metres, NaN where the file has no value (0, ≤ 0, inf, NaN)."""
+    if not os.path.isfile(path):
+        raise ValueError(f"--depth: no such file {path!r}")
+    suffix = os.path.splitext(path)[1].lower()
+    if suffix == ".npy":
+        try:
+            raw = np.load(path, allow_pickle=False)
+        except (ValueError, OSError) as error:
+            raise ValueError(f"--depth: cannot read {path!r} as a .npy array ({error})") from None
+    elif suffix == ".pfm":
         from .datasets import read_pfm
-        depth = read_pfm(path).astype(np.float32)
+        raw = read_pfm(path)
     else:
         import cv2
-        depth = cv2.imread(path, cv2.IMREAD_UNCHANGED)
-        if depth is None:
+        raw = cv2.imread(path, cv2.IMREAD_UNCHANGED)
+        if raw is None:
             raise ValueError(f"--depth: cannot read {path!r} as an image")
-        depth = depth.astype(np.float32)
-    depth = depth * scale
-    depth[~np.isfinite(depth) | (depth <= 0)] = np.nan  # the file's own hole marker (0, inf) → NaN
-    return depth
+    if raw.ndim != 2 or raw.dtype == bool or not (np.issubdtype(raw.dtype, np.integer) or np.issubdtype(raw.dtype, np.floating)):
+        raise ValueError(f"--depth: {path!r} must hold one channel of numbers (H, W), got {raw.dtype} {raw.shape}")
+    if scale is None:
+        if np.issubdtype(raw.dtype, np.integer):
+            raise ValueError(f"--depth: {path!r} stores integers ({raw.dtype}); give --depth-scale, the metres per "
+                             f"stored unit (0.001 for millimetres, as in most 16-bit depth PNGs)")
+        scale = 1.0
+    stored = raw.astype(np.float64)
+    depth = stored * scale
+    valid = np.isfinite(depth) & (depth > 0)
+    if (np.isfinite(stored) & (stored > 0)).any() and not valid.any():
+        raise ValueError(f"--depth-scale {scale!r} turns every depth into 0")
+    if valid.any():
+        low, high = depth[valid].min(), depth[valid].max()
+        if low < DEPTH_RANGE_M[0] or high > DEPTH_RANGE_M[1]:
+            raise ValueError(f"--depth-scale {scale!r}: depths would range {low:.3g}–{high:.3g} m, outside "
+                             f"{DEPTH_RANGE_M[0]:g}–{DEPTH_RANGE_M[1]:g} m; is it metres per stored unit?")
+    return np.where(valid, depth, np.nan).astype(np.float32)
+
+
+DEPTH_RANGE_M = (1e-3, 1e4)  # plausible metres; outside it the scale is almost surely wrong
 
 
 def _complete(args) -> int:
     import cv2
 
     from .fit import FitConfig, complete_depth
+    writers = _writers()
+    _check_out(args, writers)
+    config = FitConfig.for_profile(args.profile, variant=args.variant, device=args.device,
+                                   max_memory_gb=args.max_memory_gb,
+                                   **({"iterations": args.iterations} if args.iterations else {}))
+    config.validate()  # --device, before the inputs are read
+    if not os.path.isfile(args.rgb):
+        raise ValueError(f"--rgb: no such file {args.rgb!r}")
     bgr = cv2.imread(args.rgb, cv2.IMREAD_COLOR)
     if bgr is None:
-        raise SystemExit(f"--rgb: cannot read {args.rgb!r} as an image")
+        raise ValueError(f"--rgb: cannot read {args.rgb!r} as an image")
     rgb = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB).astype(np.float32) / 255.0
     depth = _read_depth(args.depth, args.depth_scale)
-    config = FitConfig.for_profile(args.profile, variant=args.variant, device=args.device,
-                                   **({"iterations": args.iterations} if args.iterations else {}))
+    if os.path.splitext(args.out)[1].lower() == ".png" and np.nanmax(depth, initial=0) * config.disparity_margin > PNG_MAX_METRES:
+        raise ValueError(f"--out: a 16-bit millimetre PNG holds at most {PNG_MAX_METRES} m, and this depth reaches "
+                         f"{np.nanmax(depth):.1f} m; use .npy, .pfm or .exr")
     result = complete_depth(rgb, depth, variant=args.variant, config=config)
     filled = result.merged(depth) if args.keep_input else result.depth
-    with atomic_path(args.out) as tmp, open(tmp, "wb") as handle:
-        np.save(handle, filled)
+    write_bytes_atomic(args.out, writers[os.path.splitext(args.out)[1].lower()](filled), overwrite_readonly=args.force)
     print(f"filled {np.isnan(depth).mean():.1%} holes in {result.seconds:.1f} s → {args.out}")
     return 0
 
@@ -115,7 +225,7 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--scene", default="house")
     demo.add_argument("--holes", choices=("edge", "sgm", "random"), default="edge",
                       help="a band across a depth edge plus blobs (default), real SGM holes, or blobs")
-    demo.add_argument("--iterations", type=int, default=300)
+    demo.add_argument("--iterations", type=_number(int, 1, "--iterations"), default=300)
     demo.add_argument("--size", type=int, nargs=2, default=(96, 128), metavar=("H", "W"))
     demo.add_argument("--seed", type=int, default=0)
     demo.add_argument("--device", default=None)
@@ -125,12 +235,17 @@ def build_parser() -> argparse.ArgumentParser:
     complete = sub.add_parser("complete", help="fill the holes of your own RGB-D image (no neighbours)")
     complete.add_argument("--rgb", required=True)
     complete.add_argument("--depth", required=True, help=".npy (metres), .pfm, or 16-bit PNG (see --depth-scale)")
-    complete.add_argument("--depth-scale", type=float, default=1.0, help="metres per stored unit (0.001 for mm PNG)")
+    complete.add_argument("--depth-scale", type=_number(float, 0.0, "--depth-scale"), default=None,
+                          help="metres per stored unit: required for integer files (0.001 for a mm PNG); 1 for float files")
     complete.add_argument("--variant", choices=("d", "rgbd"), default="rgbd")
     complete.add_argument("--profile", default=None, help="ci, class or paper (default: $DDP_PROFILE or class)")
-    complete.add_argument("--iterations", type=int, default=None)
+    complete.add_argument("--iterations", type=_number(int, 1, "--iterations"), default=None)
     complete.add_argument("--keep-input", action="store_true", help="keep valid input depth (SGM+DDP style)")
-    complete.add_argument("--out", required=True, help=".npy path for the filled depth (metres)")
+    complete.add_argument("--out", required=True,
+                          help="filled depth: .npy or .pfm (metres), .png (16-bit millimetres), .exr (if OpenCV has it)")
+    complete.add_argument("--force", action="store_true", help="replace --out even if it is read-only")
+    complete.add_argument("--max-memory-gb", type=_number(float, 0.0, "--max-memory-gb"), default=None,
+                          help="refuse fits estimated to need more (default: 75%% of RAM); raise it to override")
     complete.add_argument("--device", default=None)
     complete.set_defaults(run=_complete)
     return parser
@@ -140,7 +255,7 @@ def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
     try:
         return args.run(args)
-    except (ValueError, TypeError) as error:
+    except (ValueError, TypeError, FloatingPointError, OSError) as error:
         print(f"ddp-lite {args.command}: {error}", file=sys.stderr)
         return 2
 

@@ -23,7 +23,6 @@ tests and notebooks can run the real-data path offline.
 """
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -54,6 +53,22 @@ def _existing(path, name: str) -> Path:
     if not path.exists():
         raise FileNotFoundError(f"{name}: {path} does not exist")
     return path
+
+
+def _read_text(path, name: str) -> str:
+    """A small text file (calibration) → str; a clear error naming it if it is not UTF-8 text."""
+    path = _existing(path, name)
+    try:
+        return path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as error:
+        raise ValueError(f"{name}: {path} is not a UTF-8 text file (byte {error.start}); is it the right file?") from None
+
+
+def _require_valid(depth: np.ndarray, what: str, path) -> np.ndarray:
+    """Refuse a ground-truth map with no valid pixel: it is a wrong file, not a scene."""
+    if not np.isfinite(depth).any():
+        raise ValueError(f"{what}: {path} has no valid disparity (every pixel is the 'unknown' marker)")
+    return depth
 
 
 def _read_rgb(path, name: str = "path") -> np.ndarray:
@@ -134,23 +149,34 @@ def _depth_range(depths) -> dict:
 # PFM
 # ------------------------------------------------------------------------------------------------
 
-_PFM_HEADER = re.compile(rb"(PF|Pf)\s(\d+)\s+(\d+)\s([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s")
+def _pfm_header(data: bytes, path) -> tuple[int, int, int, float, int]:
+    """(channels, width, height, scale, data offset) of a PFM: three header lines (``\n`` or
+    ``\r\n`` line ends; ``#`` comment lines skipped), or the same tokens on fewer lines."""
+    tokens, offset = [], 0
+    while len(tokens) < 4:
+        end = data.find(b"\n", offset, offset + 256)
+        if end < 0:
+            raise ValueError(f"path: {path} is not a PFM file (expected 'PF' or 'Pf', width, height, scale)")
+        line, offset = data[offset:end].strip(), end + 1
+        if not line.startswith(b"#"):
+            tokens += line.split()
+    kind, width, height, scale = tokens[:4] if len(tokens) == 4 else (None,) * 4
+    if kind not in (b"PF", b"Pf") or not (width.isdigit() and height.isdigit()):
+        raise ValueError(f"path: {path} is not a PFM file (expected 'PF' or 'Pf', width, height, scale)")
+    try:
+        scale = float(scale)
+    except ValueError:
+        raise ValueError(f"path: {path} has a PFM scale that is not a number: {scale!r}") from None
+    if int(width) == 0 or int(height) == 0 or scale == 0.0 or not np.isfinite(scale):
+        raise ValueError(f"path: {path} has an empty size or a zero or non-finite scale in its PFM header")
+    return 3 if kind == b"PF" else 1, int(width), int(height), scale, offset
 
 
 def read_pfm(path) -> np.ndarray:
     """A PFM file → float32 (H, W) or (H, W, 3), top row first, native byte order (either file endianness)."""
     data = _existing(path, "path").read_bytes()
-    match = _PFM_HEADER.match(data)
-    if match is None:
-        raise ValueError(f"path: {path} is not a PFM file (expected 'PF' or 'Pf', width, height, scale)")
-    channels = 3 if match.group(1) == b"PF" else 1
-    width, height, scale = int(match.group(2)), int(match.group(3)), float(match.group(4))
-    if width == 0 or height == 0 or scale == 0.0:
-        raise ValueError(f"path: {path} has an empty size or a zero scale in its PFM header")
+    channels, width, height, scale, offset = _pfm_header(data, path)
     count = width * height * channels
-    offset = match.end()
-    if len(data) - offset == 4 * count + 1 and data[offset:offset + 1] == b"\n":  # "\r\n" line ends
-        offset += 1
     if len(data) - offset < 4 * count:
         raise ValueError(f"path: {path} is truncated: {len(data) - offset} data bytes, expected {4 * count}")
     array = np.frombuffer(data, dtype="<f4" if scale < 0 else ">f4", count=count, offset=offset)
@@ -167,10 +193,14 @@ def write_pfm(path, array) -> None:
         values = values[:, :, 0]
     if not (values.ndim == 2 or (values.ndim == 3 and values.shape[2] == 3)) or min(values.shape[:2]) == 0:
         raise ValueError(f"array must be (H, W), (H, W, 1) or (H, W, 3), got shape {np.shape(array)}")
+    write_bytes_atomic(path, pfm_bytes(values))
+
+
+def pfm_bytes(values) -> bytes:
+    """(H, W) or (H, W, 3) real values → the bytes of a little-endian float32 PFM file."""
     height, width = values.shape[:2]
     header = f"{'PF' if values.ndim == 3 else 'Pf'}\n{width} {height}\n-1.0\n".encode("ascii")
-    body = np.ascontiguousarray(np.flipud(values).astype("<f4")).tobytes()  # a copy: the caller's array is untouched
-    write_bytes_atomic(path, header + body)
+    return header + np.ascontiguousarray(np.flipud(values).astype("<f4")).tobytes()  # a copy: the input is untouched
 
 
 # ------------------------------------------------------------------------------------------------
@@ -245,6 +275,8 @@ def parse_middlebury_calib(text: str) -> MiddleburyCalib:
     for line in text.splitlines():
         if "=" in line:
             key, value = line.split("=", 1)
+            if key.strip() in entries:
+                raise ValueError(f"text: {key.strip()} appears twice in calib.txt")
             entries[key.strip()] = value.strip()
     missing = [k for k in ("cam0", "cam1", "doffs", "baseline", "width", "height", "ndisp") if k not in entries]
     if missing:
@@ -253,8 +285,14 @@ def parse_middlebury_calib(text: str) -> MiddleburyCalib:
         numbers = {k: float(v) for k, v in entries.items() if k not in ("cam0", "cam1")}
     except ValueError as error:
         raise ValueError(f"text: a calib.txt value is not a number ({error})") from None
+    for key in ("doffs", "baseline", "width", "height", "ndisp"):
+        if not np.isfinite(numbers[key]):
+            raise ValueError(f"text: {key} must be a finite number, got {entries[key]!r}")
     if numbers["baseline"] <= 0:
         raise ValueError(f"text: baseline must be positive (mm), got {numbers['baseline']}")
+    for key in ("width", "height", "ndisp"):
+        if numbers[key] != int(numbers[key]) or numbers[key] <= 0:
+            raise ValueError(f"text: {key} must be a positive integer, got {entries[key]!r}")
     K0, K1 = _matrix(entries["cam0"], "cam0"), _matrix(entries["cam1"], "cam1")
     extra = {k: v for k, v in numbers.items() if k not in ("doffs", "baseline", "width", "height", "ndisp")}
     return MiddleburyCalib(K0, K1, numbers["doffs"], numbers["baseline"] / 1000.0, int(numbers["width"]),
@@ -263,7 +301,11 @@ def parse_middlebury_calib(text: str) -> MiddleburyCalib:
 
 def read_middlebury_calib(path) -> MiddleburyCalib:
     """Read a Middlebury ``calib.txt`` file (see ``parse_middlebury_calib``)."""
-    return parse_middlebury_calib(_existing(path, "path").read_text())
+    text = _read_text(path, "path")
+    try:
+        return parse_middlebury_calib(text)
+    except ValueError as error:
+        raise ValueError(f"{error} (in {path})") from None
 
 
 def _stereo_scene(name, rgb0, rgb1, depth0, depth1, calib: MiddleburyCalib, size) -> Scene:
@@ -290,7 +332,7 @@ def load_middlebury(folder, size=None, name: str | None = None) -> Scene:
     disparity = read_pfm(folder / "disp0.pfm")
     if disparity.ndim != 2:
         raise ValueError(f"folder: {folder / 'disp0.pfm'} must be a 1-channel PFM")
-    depth0 = calib.depth(disparity)
+    depth0 = _require_valid(calib.depth(disparity), "folder", folder / "disp0.pfm")
     depth1 = calib.depth(read_pfm(folder / "disp1.pfm")) if (folder / "disp1.pfm").exists() \
         else np.full_like(depth0, np.nan)
     return _stereo_scene(name or folder.name, _read_rgb(folder / "im0.png", "folder"),
@@ -304,7 +346,12 @@ def load_middlebury2006(folder, focal: float = 3740.0, baseline: float = 0.160, 
     Z = focal·baseline / (d + dmin). The defaults (3740 px, 160 mm) are the values the dataset page
     gives for the full-size images; the principal point is assumed at the image centre."""
     folder = _existing(folder, "folder")
-    dmin = float((_existing(folder / "dmin.txt", "folder")).read_text().split()[0])
+    try:
+        dmin = float(_read_text(folder / "dmin.txt", "folder").split()[0])
+    except (IndexError, ValueError) as error:
+        raise ValueError(f"folder: {folder / 'dmin.txt'} must hold one number ({error})") from None
+    if not np.isfinite(dmin):
+        raise ValueError(f"folder: {folder / 'dmin.txt'} must hold a finite number, got {dmin}")
     rgb0, rgb1 = _read_rgb(folder / "view1.png", "folder"), _read_rgb(folder / "view5.png", "folder")
     H, W = rgb0.shape[:2]
     K0 = np.array([[focal, 0.0, (W - 1) / 2.0], [0.0, focal, (H - 1) / 2.0], [0.0, 0.0, 1.0]])
@@ -319,7 +366,9 @@ def load_middlebury2006(folder, focal: float = 3740.0, baseline: float = 0.160, 
         if raw is None or raw.ndim != 2:
             raise ValueError(f"folder: {folder / file} must be a 1-channel disparity PNG")
         return calib.depth(np.where(raw > 0, raw.astype(np.float64), np.nan))
-    return _stereo_scene(name or folder.name, rgb0, rgb1, depth_of("disp1.png"), depth_of("disp5.png"), calib, size)
+    depth1 = _require_valid(depth_of("disp1.png"), "folder", folder / "disp1.png") if (folder / "disp1.png").exists() \
+        else depth_of("disp1.png")
+    return _stereo_scene(name or folder.name, rgb0, rgb1, depth1, depth_of("disp5.png"), calib, size)
 
 
 def make_middlebury_fixture(folder, size=(48, 64), seed: int = 0, scene: str = "desk",
@@ -372,7 +421,7 @@ def read_kitti_disparity(path) -> np.ndarray:
 def read_kitti_calib(path) -> tuple[np.ndarray, float]:
     """A KITTI ``calib_cam_to_cam/<id>.txt`` → (K (3×3) of the rectified left colour camera, baseline m)."""
     values = {}
-    for line in _existing(path, "path").read_text().splitlines():
+    for line in _read_text(path, "path").splitlines():
         if ":" in line:
             key, rest = line.split(":", 1)
             values[key.strip()] = rest.split()
@@ -381,7 +430,14 @@ def read_kitti_calib(path) -> tuple[np.ndarray, float]:
         P3 = np.array(values["P_rect_03"], dtype=np.float64).reshape(3, 4)
     except (KeyError, ValueError):
         raise ValueError(f"path: {path} needs P_rect_02 and P_rect_03 (12 numbers each)") from None
-    return P2[:, :3].copy(), float((P2[0, 3] - P3[0, 3]) / P2[0, 0])
+    focal = P2[0, 0]
+    if not (np.all(np.isfinite(P2)) and np.all(np.isfinite(P3)) and focal > 0):
+        raise ValueError(f"path: {path}: P_rect_02 must be finite with a positive focal length, got f={focal}")
+    baseline = float((P2[0, 3] - P3[0, 3]) / focal)
+    if not baseline > 0:
+        raise ValueError(f"path: {path}: P_rect_02 and P_rect_03 give baseline {baseline} m; the right camera "
+                         f"must sit to the right of the left one (are they the same or swapped?)")
+    return P2[:, :3].copy(), baseline
 
 
 def load_kitti(root, index: int = 0, split: str = "training", disparity: str = "disp_occ_0", size=None) -> Scene:
@@ -398,7 +454,8 @@ def load_kitti(root, index: int = 0, split: str = "training", disparity: str = "
     K, baseline = read_kitti_calib(base / "calib_cam_to_cam" / f"{stem}.txt")
     H, W = rgb0.shape[:2]
     gt = base / disparity / f"{stem}_10.png"
-    disp = read_kitti_disparity(gt) if split == "training" else np.full((H, W), np.nan, np.float32)
+    disp = _require_valid(read_kitti_disparity(gt), "root", gt) if split == "training" \
+        else np.full((H, W), np.nan, np.float32)
     calib = MiddleburyCalib(K, K, 0.0, baseline, W, H, 256)
     return _stereo_scene(f"kitti{stem}", rgb0, rgb1, calib.depth(disp), np.full((H, W), np.nan, np.float32),
                          calib, size)
@@ -419,7 +476,7 @@ def _nearest_rotation(R: np.ndarray, path) -> np.ndarray:
 def read_mvsnet_cam(path, width: int, height: int) -> tuple[Camera, dict]:
     """An MVSNet ``<id>_cam.txt`` → (``Camera`` for a ``width × height`` image, {depth_min, depth_interval
     [, depth_num, depth_max]} metres/scene units). 'extrinsic' is world→camera (cam_from_world)."""
-    text = _existing(path, "path").read_text()
+    text = _read_text(path, "path")
     try:
         extrinsic = text.split("extrinsic", 1)[1].split("intrinsic", 1)[0].split()
         after = text.split("intrinsic", 1)[1].split()

@@ -17,6 +17,8 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
+from .checks import check_real
+
 __all__ = ["DisparityTransform", "TNT_DEPTH_RANGES"]
 
 # The supplement's per-scene table (Tanks and Temples): (d_min, d_max, constant), metres.
@@ -58,6 +60,7 @@ class DisparityTransform:
     def from_depth(cls, depth, constant: float = 0.0, margin: float = 1.25) -> "DisparityTransform":
         """A range that holds the valid (finite) depths of ``depth`` (H, W) with a ``margin`` factor
         on both sides, so a hole may be a little nearer or farther than anything observed."""
+        check_real(margin, "margin", 1.0)
         valid = np.asarray(depth, dtype=np.float64)
         valid = valid[np.isfinite(valid)]
         if valid.size == 0:

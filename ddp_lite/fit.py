@@ -20,17 +20,21 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import os
 import time
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 import torch
 from tqdm.auto import tqdm
 
-from .camera import Camera
+from .camera import Camera, view_overlap
+from .checks import check_bool, check_choice, check_int, check_int_tuple, check_real
 from .disparity import DisparityTransform
 from .losses import ConstantTarget, LossWeights, disparity_loss, rgb_loss, smoothness_loss, smoothness_weights, warp_loss
-from .nets import build_net, make_noise
+from .nets import (DOWNSAMPLINGS, NETS, PADDINGS, SKIP_CHANNELS, UNET_CHANNELS, UPSAMPLINGS, build_net,
+                   count_parameters, make_noise)
 from .profiles import get_profile
 from .warp import Warper
 
@@ -81,6 +85,7 @@ class FitConfig:
     channels_last: bool = False  # memory format of the network's activations
     progress: bool = True
     callback_every: int = 0
+    max_memory_gb: float | None = None  # refuse a fit whose estimated peak exceeds this; None → 75 % of RAM
 
     @classmethod
     def for_profile(cls, profile=None, variant: str = "rgbd+warp", **overrides) -> "FitConfig":
@@ -107,26 +112,42 @@ class FitConfig:
         return 6000 if variant == "d" else 16000
 
     def validate(self) -> None:
-        """Raise ``ValueError`` naming the first bad field."""
-        checks = [("lr", self.lr > 0), ("lr_gamma", self.lr_gamma > 0), ("eval_every", self.eval_every >= 1),
-                  ("patience", self.patience >= 1), ("noise_channels", self.noise_channels >= 1),
-                  ("plateau_decays", self.plateau_decays >= 0),
-                  ("holdout_fraction", 0.0 < self.holdout_fraction < 0.5),
-                  ("average_outputs", 0.0 <= self.average_outputs < 1.0),
-                  ("reg_noise_std", self.reg_noise_std >= 0.0),
-                  ("smoothness", self.smoothness >= 0.0), ("smoothness_edge", self.smoothness_edge >= 0.0),
-                  ("iterations", self.iterations is None or self.iterations >= 1),
-                  ("ensemble", int(self.ensemble) == self.ensemble and self.ensemble >= 1),
-                  ("disparity_margin", self.disparity_margin >= 1.0),
-                  ("schedule", self.schedule in ("step", "cosine")),
-                  ("down", self.down in ("stride", "pool")), ("up", self.up in ("bilinear", "nearest")),
-                  ("pad", self.pad in ("reflect", "zeros"))]
-        checks += [(name, 0.0 <= getattr(self, name) <= 1.0) for name in ("lambda_z", "lambda_i", "lambda_w")]
-        for name, ok in checks:
-            if not ok:
-                raise ValueError(f"config.{name} is out of range: {getattr(self, name)!r}")
-        if self.gammas is not None and (len(self.gammas) != 2 or min(self.gammas) < 0 or sum(self.gammas) > 1):
-            raise ValueError(f"config.gammas must be (γ1, γ2) with γ1, γ2 ≥ 0 and γ1 + γ2 ≤ 1, got {self.gammas}")
+        """Raise ``TypeError``/``ValueError`` naming the first bad field: every number must be finite and
+        of its type (no bool for an int, no 2.7 for an iteration count), every choice one of its values."""
+        check_choice(self.net, "config.net", NETS)
+        if self.channels is not None:
+            check_int_tuple(self.channels, "config.channels", minimum=1, min_length=2 if self.net == "unet" else 1)
+        for name, choices in (("down", DOWNSAMPLINGS), ("up", UPSAMPLINGS), ("pad", PADDINGS),
+                              ("schedule", ("step", "cosine"))):
+            check_choice(getattr(self, name), f"config.{name}", choices)
+        for name, minimum in (("noise_channels", 1), ("ensemble", 1), ("patience", 1), ("plateau_decays", 0),
+                              ("eval_every", 1), ("seed", 0), ("callback_every", 0)):
+            check_int(getattr(self, name), f"config.{name}", minimum=minimum)
+        if self.iterations is not None:
+            check_int(self.iterations, "config.iterations", minimum=1)
+        check_int_tuple(self.lr_milestones, "config.lr_milestones", minimum=1)
+        for name, low, high, low_open, high_open in (
+                ("lr", 0.0, None, True, False), ("lr_gamma", 0.0, None, True, False),
+                ("lambda_z", 0.0, 1.0, False, False), ("lambda_i", 0.0, 1.0, False, False),
+                ("lambda_w", 0.0, 1.0, False, False), ("reg_noise_std", 0.0, None, False, False),
+                ("average_outputs", 0.0, 1.0, False, True), ("smoothness", 0.0, None, False, False),
+                ("smoothness_edge", 0.0, None, False, False), ("disparity_margin", 1.0, None, False, False),
+                ("holdout_fraction", 0.0, 0.5, True, True)):
+            check_real(getattr(self, name), f"config.{name}", low, high, low_open, high_open)
+        for name in ("auto_stop", "channels_last", "progress"):
+            check_bool(getattr(self, name), f"config.{name}")
+        if self.bf16 is not None:  # None: decided by the hardware (use_bf16)
+            check_bool(self.bf16, "config.bf16")
+        if self.gammas is not None:
+            if isinstance(self.gammas, (str, bytes)) or not isinstance(self.gammas, (tuple, list)) or len(self.gammas) != 2:
+                raise TypeError(f"config.gammas must be a pair (γ1, γ2), got {self.gammas!r}")
+            g1, g2 = (check_real(g, f"config.gammas[{i}]", 0.0, 1.0) for i, g in enumerate(self.gammas))
+            if g1 + g2 > 1.0:
+                raise ValueError(f"config.gammas must have γ1 + γ2 ≤ 1, got {self.gammas}")
+        if self.max_memory_gb is not None:
+            check_real(self.max_memory_gb, "config.max_memory_gb", 0.0, None, low_open=True)
+        if self.device is not None:
+            _device(self)  # a name torch knows and a device this machine has
 
 
 @dataclass
@@ -195,7 +216,22 @@ def _cpu_has_native_bf16() -> bool:
 
 def _device(config: FitConfig) -> torch.device:
     if config.device is not None:
-        return torch.device(config.device)
+        if not isinstance(config.device, (str, torch.device)):
+            raise TypeError(f"config.device must be None or a name like 'cpu', 'cuda', 'cuda:0', 'mps', "
+                            f"got {type(config.device).__name__}")
+        try:
+            device = torch.device(config.device)
+        except RuntimeError:
+            raise ValueError(f"config.device must be None, 'cpu', 'cuda[:N]' or 'mps', got {config.device!r}") from None
+        mps = getattr(torch.backends, "mps", None)
+        available = {"cpu": True, "cuda": torch.cuda.is_available(),
+                     "mps": mps is not None and mps.is_available()}
+        if not available.get(device.type, False):
+            raise ValueError(f"config.device={config.device!r}: this machine has no usable {device.type} device; "
+                             f"use 'cpu' or None (picks cuda/mps when present)")
+        if device.type == "cuda" and device.index is not None and device.index >= torch.cuda.device_count():
+            raise ValueError(f"config.device={config.device!r}: only {torch.cuda.device_count()} CUDA device(s)")
+        return device
     if torch.cuda.is_available():
         return torch.device("cuda")
     if getattr(torch.backends, "mps", None) is not None and torch.backends.mps.is_available():
@@ -243,13 +279,32 @@ def _check_depth(depth, name: str = "depth", allow_holes: bool = True) -> np.nda
 
 
 def _check_neighbors(neighbors) -> list[tuple[np.ndarray, Camera]]:
+    if isinstance(neighbors, (np.ndarray, torch.Tensor, str)) or hasattr(neighbors, "camera"):
+        raise TypeError(f"neighbors must be a list of (rgb, Camera) pairs or Views, got one "
+                        f"{type(neighbors).__name__}; wrap a single view in a list")
     checked = []
     for i, item in enumerate(neighbors):
-        rgb, camera = (item.rgb, item.camera) if hasattr(item, "camera") else item
+        if hasattr(item, "camera"):
+            rgb, camera = item.rgb, item.camera
+        elif isinstance(item, (tuple, list)) and len(item) == 2:
+            rgb, camera = item
+        else:
+            raise TypeError(f"neighbors[{i}] must be an (rgb, Camera) pair or a View, got {type(item).__name__}")
         if not isinstance(camera, Camera):
             raise TypeError(f"neighbors[{i}] must be an (rgb, Camera) pair or a View, got camera {type(camera).__name__}")
         checked.append((_check_image(rgb, f"neighbors[{i}] rgb", (camera.height, camera.width)), camera))
     return checked
+
+
+def _check_overlap(camera: Camera, depth: np.ndarray, neighbors) -> None:
+    """Warn about each neighbour that sees none of the reference's valid depth; refuse if none does."""
+    overlaps = [view_overlap(camera, depth, cam) for _, cam in neighbors]
+    blind = [i for i, share in enumerate(overlaps) if share == 0.0]
+    if len(blind) == len(neighbors):
+        raise ValueError(f"neighbors: none of the {len(neighbors)} neighbour camera(s) sees any valid reference "
+                         f"pixel (check their poses: cam_from_world, metres), so the warp term would be 0")
+    for i in blind:
+        warnings.warn(f"neighbors[{i}] sees none of the reference's valid pixels; its warp term is 0", stacklevel=4)
 
 
 def _to_tensor(array: np.ndarray, device) -> torch.Tensor:
@@ -384,6 +439,68 @@ def _build(config: FitConfig, out_channels: int, height: int, width: int, device
     return net.to(device), noise.to(device)
 
 
+# Peak memory of one fit, calibrated against ru_maxrss of fresh processes (CPU, float32, eager PyTorch;
+# benchmarks/calibrate_memory.py): a fixed part (interpreter + torch), 4 bytes × FLOATS_PER_UNIT per
+# pixel and per "unit" of net width (Σ_k c_k / 4^k over the scales, + the noise channels), and
+# BYTES_PER_PARAMETER for weights, gradients, Adam's moments and the kept state.
+MEMORY_BASE_GB = 0.30  # GiB, as every "GB" here
+FLOATS_PER_UNIT = 22.0
+BYTES_PER_PARAMETER = 22.0
+FLOATS_PER_NEIGHBOR_PIXEL = 150.0  # the warp term per neighbour (grid, samples, SSIM maps); not calibrated
+DEFAULT_MEMORY_FRACTION = 0.75
+
+
+def estimate_peak_memory_gb(config: FitConfig, out_channels: int, height: int, width: int,
+                            n_neighbors: int = 0) -> float:
+    """An estimate (GB) of the peak memory of one fit of ``config`` on a ``height × width`` image."""
+    channels = config.channels or (UNET_CHANNELS if config.net == "unet" else SKIP_CHANNELS)
+    levels = len(channels) - 1 if config.net == "unet" else len(channels)
+    factor = 2 ** levels
+    pixels = (-(-height // factor) * factor) * (-(-width // factor) * factor)
+    first = 0 if config.net == "unet" else 1  # SkipNet's widest level already runs at half size
+    units = config.noise_channels + sum(c / 4 ** (k + first) for k, c in enumerate(channels))
+    with torch.device("meta"):
+        parameters = count_parameters(build_net(config.net, config.noise_channels, out_channels, config.channels))
+    activations = 4.0 * pixels * (FLOATS_PER_UNIT * units + FLOATS_PER_NEIGHBOR_PIXEL * n_neighbors)
+    return MEMORY_BASE_GB + (activations + BYTES_PER_PARAMETER * parameters) / 2 ** 30
+
+
+def _memory_limit_gb(config: FitConfig, device: torch.device) -> tuple[float | None, str]:
+    """(limit in GB, where it comes from); (None, ...) when the machine's size is unknown."""
+    if config.max_memory_gb is not None:
+        return float(config.max_memory_gb), "config.max_memory_gb"
+    if device.type == "cuda":
+        total, what = torch.cuda.get_device_properties(device).total_memory, "GPU memory"
+    else:
+        try:
+            total, what = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"), "RAM"
+        except (AttributeError, ValueError, OSError):
+            return None, "unknown"
+    return DEFAULT_MEMORY_FRACTION * total / 2 ** 30, f"{DEFAULT_MEMORY_FRACTION:.0%} of this machine's {what}"
+
+
+def _check_memory(config: FitConfig, out_channels: int, height: int, width: int, n_neighbors: int, device) -> None:
+    """Refuse, before the net is built, a fit whose estimated peak exceeds the limit."""
+    limit, source = _memory_limit_gb(config, device)
+    if limit is None:
+        return
+    estimate = estimate_peak_memory_gb(config, out_channels, height, width, n_neighbors)
+    if estimate > limit:
+        raise ValueError(
+            f"depth: a {width}×{height} fit with this config needs about {estimate:.1f} GB at its peak, more than "
+            f"the limit of {limit:.1f} GB ({source}). Downscale the inputs (e.g. the CLI's --max-size, or "
+            f"datasets.resize_scene), use smaller config.channels, or a GPU; or raise the limit with "
+            f"config.max_memory_gb (CLI: --max-memory-gb) if you know it fits.")
+
+
+def _check_finite_output(name: str, array) -> None:
+    """A fit must never return NaN or inf: raise instead (the optimisation diverged)."""
+    if array is not None and not np.all(np.isfinite(array)):
+        bad = int(np.size(array) - np.isfinite(array).sum())
+        raise FloatingPointError(f"the fit's {name} has {bad} non-finite value(s) of {np.size(array)}: the "
+                                 f"optimisation diverged. Lower config.lr, or check the inputs and init.")
+
+
 def _holdout_mask(valid: np.ndarray, fraction: float, seed: int) -> np.ndarray:
     """A random share of the valid pixels (H, W) bool, seeded."""
     rng = np.random.default_rng(seed + 12345)
@@ -417,12 +534,14 @@ def complete_depth(rgb, depth, camera: Camera | None = None, neighbors=(), varia
         (32, 32)
     """
     config = FitConfig.for_profile(variant=variant) if config is None and variant in VARIANTS else config
+    if callback is not None and not callable(callback):
+        raise TypeError(f"callback must be a function callback(iteration, outputs), got {type(callback).__name__}")
     if not isinstance(config, FitConfig) or config.ensemble == 1:
         return _complete_depth(rgb, depth, camera, neighbors, variant, config, gt_depth, transform, callback, init)
     # An ensemble: independent fits from other seeds (other weights, noise and held-out pixels),
     # averaged in disparity. One fit's hole error moves ±10 % and more with the seed; the average
     # keeps what the fits agree on. The inputs are checked once, before the first fit.
-    config, *_ = _check_fit_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth, transform)
+    config, _, _, neighbors, _, _ = _check_fit_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth, transform)
     if transform is None:
         transform = DisparityTransform.from_depth(np.asarray(depth, np.float32), margin=config.disparity_margin)
     members = [_complete_depth(rgb, depth, camera, neighbors, variant, config.replace(seed=config.seed + k, ensemble=1),
@@ -454,6 +573,8 @@ def _check_fit_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth, 
         raise ValueError(f"camera is {camera.width}×{camera.height} but depth is {W}×{H}")
     if variant == "rgbd+warp" and (camera is None or not neighbors):
         raise ValueError("variant 'rgbd+warp' needs camera and at least one neighbor; use 'rgbd' without them")
+    if variant == "rgbd+warp":
+        _check_overlap(camera, depth, neighbors)
     if gt_depth is not None:
         gt_depth = np.asarray(gt_depth, dtype=np.float32)
         if gt_depth.shape != (H, W):
@@ -545,6 +666,7 @@ def _complete_depth(rgb, depth, camera, neighbors, variant, config, gt_depth, tr
 
     if init is not None and not isinstance(init, DepthResult):
         raise TypeError(f"init must be a DepthResult, got {type(init).__name__}")
+    _check_memory(config, 1 if variant == "d" else 4, H, W, len(warpers), device)
     net, noise = _build(config, 1 if variant == "d" else 4, H, W, device, init.state if init is not None else None,
                         noise)
     start = time.perf_counter()
@@ -554,6 +676,8 @@ def _complete_depth(rgb, depth, camera, neighbors, variant, config, gt_depth, tr
     seconds = time.perf_counter() - start
     disparity = output[0, 0].cpu().numpy().astype(np.float32)
     out_rgb = output[0, 1:4].permute(1, 2, 0).cpu().numpy().astype(np.float32) if output.shape[1] >= 4 else None
+    _check_finite_output("disparity", disparity)
+    _check_finite_output("rgb", out_rgb)
     return DepthResult(depth=transform.to_depth(disparity).astype(np.float32), disparity=disparity, rgb=out_rgb,
                        history=history, transform=transform, iterations=ran, best_iteration=best, seconds=seconds,
                        state=state)
@@ -723,9 +847,12 @@ def fit_image(image, mask=None, config: FitConfig | None = None, clean=None, cal
         def user_callback(iteration, output):
             callback(iteration, output[0].permute(1, 2, 0).cpu().numpy())
 
+    _check_memory(config, 3, H, W, 0, device)
     net, noise = _build(config, 3, H, W, device)
     start = time.perf_counter()
     output, history, ran, best = _run(net, noise, loss_fn, config, config.resolved_iterations("rgbd"),
                                       heldout_error, evaluate, user_callback, description="DIP")
-    return ImageResult(image=output[0].permute(1, 2, 0).cpu().numpy().astype(np.float32), history=history,
+    restored = output[0].permute(1, 2, 0).cpu().numpy().astype(np.float32)
+    _check_finite_output("image", restored)
+    return ImageResult(image=restored, history=history,
                        iterations=ran, best_iteration=best, seconds=time.perf_counter() - start)

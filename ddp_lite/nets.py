@@ -27,6 +27,7 @@ def make_noise(channels: int, height: int, width: int, seed: int = 0, scale: flo
 PADDINGS = ("reflect", "zeros")
 DOWNSAMPLINGS = ("stride", "pool")
 UPSAMPLINGS = ("bilinear", "nearest")
+NETS = ("unet", "skip")
 
 
 def _conv(c_in: int, c_out: int, kernel: int = 3, stride: int = 1, pad: str = "reflect") -> nn.Sequential:

@@ -24,10 +24,13 @@ def sha(data: bytes) -> str:
 
 class Server:
     """Serves ``files`` {path: bytes}; logs (path, Range header); ``drop`` {path: n} cuts the next
-    response to that path after n bytes (Content-Length still announces the full size)."""
+    response to that path after n bytes (Content-Length still announces the full size). Like a real
+    server it sends an ETag (the content's hash) and honours If-Range (a stale validator → the whole
+    file, 200); ``validators=False`` sends none, ``if_range=False`` ignores If-Range."""
 
     def __init__(self):
         self.files, self.log, self.drop = {}, [], {}
+        self.validators, self.if_range = True, True
         owner = self
 
         class Handler(BaseHTTPRequestHandler):
@@ -41,8 +44,10 @@ class Server:
                     self.send_error(404)
                     return
                 start, status = 0, 200
+                etag = f'"{sha(data)[:16]}"'
                 match = re.fullmatch(r"bytes=(\d+)-", self.headers.get("Range") or "")
-                if match:
+                stale = owner.if_range and self.headers.get("If-Range") not in (None, etag)
+                if match and not stale:
                     start, status = int(match.group(1)), 206
                     if start >= len(data):
                         self.send_response(416)
@@ -50,6 +55,8 @@ class Server:
                         self.end_headers()
                         return
                 self.send_response(status)
+                if owner.validators:
+                    self.send_header("ETag", etag)
                 self.send_header("Content-Length", str(len(data) - start))
                 if status == 206:
                     self.send_header("Content-Range", f"bytes {start}-{len(data) - 1}/{len(data)}")
@@ -266,3 +273,84 @@ def test_data_dir(monkeypatch, tmp_path):
     assert data_dir() == tmp_path and data_dir(tmp_path / "x") == tmp_path / "x"
     monkeypatch.delenv("DDP_DATA")
     assert data_dir().name == "ddp-lite"
+
+
+# --------------------------------------------------------------------------- issue 14: resume and archives
+
+def listing(folder):
+    return sorted(str(p.relative_to(folder)) for p in folder.rglob("*")) if folder.exists() else []
+
+
+def test_resume_after_the_server_file_changed_restarts_instead_of_splicing(server, tmp_path):
+    old, new = PAYLOAD, bytes(reversed(PAYLOAD))
+    dataset = toy(server, data=old, sha256=None)
+    server.drop["/a.bin"] = 3000
+    with pytest.raises(FetchError, match="resumes"):
+        run(dataset, tmp_path, retries=0, trust_first_download=True)
+    server.files["/a.bin"] = new  # the file changes on the server between the two fetches
+    [path] = run(dataset, tmp_path, trust_first_download=True)
+    assert server.log[-1] == ("/a.bin", "bytes=3000-")  # a resume was asked, with If-Range ...
+    assert path.read_bytes() == new  # ... and the server's answer (the whole new file) replaced the old bytes
+    records = json.loads((tmp_path / "toy" / "registry.json").read_text())
+    assert records["a.bin"]["sha256"] == sha(new)
+    assert listing(tmp_path / "toy") == ["a.bin", "registry.json"]
+
+
+def test_resume_without_validators_or_if_range_never_splices(server, tmp_path):
+    old, new = PAYLOAD, bytes(reversed(PAYLOAD))
+    for validators, if_range in ((False, True), (True, False)):
+        server.validators, server.if_range = validators, if_range
+        server.files["/a.bin"] = old
+        dataset = toy(server, data=old, sha256=None)
+        server.drop["/a.bin"] = 3000
+        with pytest.raises(FetchError):
+            run(dataset, tmp_path / str(validators), retries=0, trust_first_download=True)
+        server.files["/a.bin"] = new
+        [path] = run(dataset, tmp_path / str(validators), trust_first_download=True)
+        assert path.read_bytes() == new, (validators, if_range)
+
+
+def bad_crc_zip() -> bytes:
+    data = bytearray(zip_bytes([("S/calib.txt", b"ndisp=1\n" * 50, 0)]))
+    at = bytes(data).index(b"ndisp=1\n" * 50)  # stored, not deflated: the bytes are in the archive as is
+    data[at + 5] ^= 0xFF
+    return bytes(data)
+
+
+def test_corrupt_zip_is_a_fetch_error_leaves_nothing_and_is_not_trusted(server, tmp_path, capsys):
+    dataset = toy(server, "S.zip", bad_crc_zip(), sha256=None, unpack=True)
+    with pytest.raises(FetchError, match="corrupt"):
+        run(dataset, tmp_path, trust_first_download=True)
+    assert listing(tmp_path / "toy") == []  # no half-extracted member, no archive kept, no recorded hash
+    assert listing(tmp_path) == ["toy"]  # no staging folder left beside it
+
+
+def test_zip_bomb_and_truncated_tars_are_refused(tmp_path):
+    bomb = tmp_path / "bomb.zip"
+    with zipfile.ZipFile(bomb, "w", zipfile.ZIP_DEFLATED) as zf:
+        zf.writestr("zeros.bin", b"\0" * (8 << 20))
+    with pytest.raises(UnsafeArchiveError, match="expand"):
+        safe_extract(bomb, tmp_path / "out")
+    full = tar_bytes([("a.txt", bytes(range(256)) * 400, "file")])
+    for name, data in (("t.tar.gz", full[: len(full) // 2]), ("t.tar", tar_bytes([("a.txt", b"x" * 5000, "file")]))):
+        if name == "t.tar":
+            import gzip
+            data = gzip.decompress(data)[:3000]
+        (tmp_path / name).write_bytes(data)
+        with pytest.raises(FetchError, match="corrupt or truncated"):
+            safe_extract(tmp_path / name, tmp_path / "out")
+    assert listing(tmp_path / "out") == []
+
+
+def test_dest_naming_a_file_and_bad_registry_entries_are_clear(server, tmp_path):
+    dataset = toy(server)
+    (tmp_path / "file").write_text("x")
+    with pytest.raises(FetchError, match="dest"):
+        run(dataset, tmp_path / "file")
+    folder = tmp_path / "root" / "toy"
+    folder.mkdir(parents=True)
+    for text in ('{"a.bin": "abc"}', '["a.bin"]', '{"a.bin": {"sha256": 5}}'):
+        (folder / "registry.json").write_text(text)
+        with pytest.raises(FetchError, match="registry.json"):
+            run(toy(server, sha256=None), tmp_path / "root", trust_first_download=True)
+        assert (folder / "registry.json").read_text() == text  # not overwritten
