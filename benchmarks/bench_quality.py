@@ -50,6 +50,7 @@ QUICK = ("desk/sgm-dense", "house/blobs", "fixture/sgm-dense")
 # name → FitConfig overrides on top of the profile's config
 RECIPES = {
     "default": {},
+    "paper-losses": dict(smoothness=0.0, bf16=False),  # the profile before the curvature term (issue 12)
     "ens3": dict(ensemble=3),
     "ema": dict(average_outputs=0.9),
     "cosine": dict(schedule="cosine"),
