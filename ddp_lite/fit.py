@@ -488,8 +488,8 @@ def _check_memory(config: FitConfig, out_channels: int, height: int, width: int,
     if estimate > limit:
         raise ValueError(
             f"depth: a {width}×{height} fit with this config needs about {estimate:.1f} GB at its peak, more than "
-            f"the limit of {limit:.1f} GB ({source}). Downscale the inputs (e.g. the CLI's --max-size, or "
-            f"datasets.resize_scene), use smaller config.channels, or a GPU; or raise the limit with "
+            f"the limit of {limit:.1f} GB ({source}). Downscale the inputs (e.g. cv2.resize, or "
+            f"datasets.resize_scene for a Scene), use smaller config.channels, or a GPU; or raise the limit with "
             f"config.max_memory_gb (CLI: --max-memory-gb) if you know it fits.")
 
 
