@@ -541,9 +541,9 @@ def complete_depth(rgb, depth, camera: Camera | None = None, neighbors=(), varia
     # An ensemble: independent fits from other seeds (other weights, noise and held-out pixels),
     # averaged in disparity. One fit's hole error moves ±10 % and more with the seed; the average
     # keeps what the fits agree on. The inputs are checked once, before the first fit.
-    config, _, _, neighbors, _, _ = _check_fit_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth, transform)
-    if transform is None:
-        transform = DisparityTransform.from_depth(np.asarray(depth, np.float32), margin=config.disparity_margin)
+    # one transform for every member (the checks derive it from the input depth when None)
+    config, _, _, neighbors, _, transform = _check_fit_inputs(rgb, depth, camera, neighbors, variant, config,
+                                                              gt_depth, transform)
     members = [_complete_depth(rgb, depth, camera, neighbors, variant, config.replace(seed=config.seed + k, ensemble=1),
                                gt_depth, transform, callback, init) for k in range(int(config.ensemble))]
     disparity = np.mean([m.disparity for m in members], axis=0).astype(np.float32)  # (H, W)
