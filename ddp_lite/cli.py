@@ -3,6 +3,8 @@
     ddp-lite demo [--out ddp_demo.png] [--scene house] [--holes edge|sgm|random] [--iterations 300]
     ddp-lite scenes
     ddp-lite complete --rgb image.png --depth depth.png --depth-scale 0.001 --out filled.npy|.png|.pfm|.exr
+    ddp-lite sequence PATH --format tum|colmap|scene --out DIR [--views ...] [--workers N | --scheduler tcp://...]
+                      [--profile ci|class|paper] [--dry-run]
 """
 from __future__ import annotations
 
@@ -217,6 +219,85 @@ def _complete(args) -> int:
     return 0
 
 
+def _intrinsics(text: str):
+    """--intrinsics: a TUM camera name, or "fx,fy,cx,cy" in pixels (pixel (0, 0) = centre of the top-left pixel)."""
+    from .formats import TUM_INTRINSICS
+    if text in TUM_INTRINSICS:
+        return text
+    try:
+        fx, fy, cx, cy = (float(v) for v in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--intrinsics must be one of {', '.join(TUM_INTRINSICS)} or fx,fy,cx,cy "
+                                         f"(pixels), got {text!r}") from None
+    return np.array([[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]])
+
+
+def _sequence_options(args) -> dict:
+    """The reader's options from the flags that apply to ``--format``; refuse the ones that do not."""
+    given = {"intrinsics": args.intrinsics, "every": args.every, "max_frames": args.max_frames,
+             "depth_scale": args.depth_scale, "undistort": args.undistort or None}
+    allowed = {"tum": ("intrinsics", "every", "max_frames"), "colmap": ("depth_scale", "undistort"), "scene": ()}
+    for name, value in given.items():
+        if value is not None and name not in allowed[args.format]:
+            raise ValueError(f"--{name.replace('_', '-')} does not apply to --format {args.format}")
+    options = {k: v for k, v in given.items() if v is not None}
+    if args.size:
+        options["size"] = tuple(args.size)
+    return options
+
+
+def _view_indices(scene, tokens):
+    """--views: indices or view names → indices."""
+    if not tokens:
+        return None
+    names = {view.name: i for i, view in enumerate(scene.views)}
+    indices = []
+    for token in tokens:
+        if token in names:
+            indices.append(names[token])
+        elif token.lstrip("-").isdigit():
+            indices.append(int(token))
+        else:
+            raise ValueError(f"--views: {token!r} is neither a view index nor a view name (first names: "
+                             f"{', '.join(list(names)[:5])})")
+    return indices
+
+
+def _sequence(args) -> int:
+    from .fit import FitConfig
+    from .formats import load_sequence
+    from .profiles import get_profile
+    from .runner import open_client
+    from .sequence import VARIANT, estimate_sequence, format_estimate, run_sequence
+
+    profile = get_profile(args.profile)  # a bad --profile fails here, before the data is read
+    options = _sequence_options(args)
+    scene = load_sequence(args.path, args.format, **options)
+    indices = _view_indices(scene, args.views)
+    config = FitConfig.for_profile(profile, variant=VARIANT, seed=args.seed, device=args.device, progress=False,
+                                   **({"iterations": args.iterations} if args.iterations else {}))
+    config.validate()
+    print(f"{scene}; profile '{profile.name}'")
+    if args.dry_run:
+        n_views = len(scene) if indices is None else len(indices)
+        command = (f"ddp-lite sequence {args.path} --format {args.format} --out {args.out} --profile {profile.name} "
+                   f"--scheduler tcp://SCHEDULER:8786" + "".join(f" --{k.replace('_', '-')} {v}" for k, v in
+                                                                  options.items() if k in ("every", "max_frames")))
+        print(format_estimate(estimate_sequence(n_views, scene.size, profile, gpu_tflops=args.gpu_tflops), command))
+        return 0
+    source = {"path": os.path.abspath(args.path), "format": args.format,
+              "options": {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in options.items()},
+              "profile": profile.name}
+    with open_client(args.workers, args.scheduler) as client:
+        summary = run_sequence(scene, args.out, config, indices, client=client, threads=args.threads,
+                               retries=args.retries, source=source)
+    if summary["failed"]:
+        print(f"{len(summary['failed'])} view(s) failed; see {summary['manifest']}. Re-run to retry them.",
+              file=sys.stderr)
+        return 1
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="ddp-lite", description="Depth completion with a Deep Depth Prior.")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -248,6 +329,33 @@ def build_parser() -> argparse.ArgumentParser:
                           help="refuse fits estimated to need more (default: 75%% of RAM); raise it to override")
     complete.add_argument("--device", default=None)
     complete.set_defaults(run=_complete)
+    seq = sub.add_parser("sequence", help="complete every view of a sequence (TUM, COLMAP, saved scene) and fuse them")
+    seq.add_argument("path", help="a TUM RGB-D folder, a COLMAP workspace, or a Scene.save .npz (or its folder)")
+    seq.add_argument("--format", required=True, choices=("tum", "colmap", "scene"))
+    seq.add_argument("--out", required=True, help="output folder: depth/, preview/, fused.ply, manifest.json")
+    seq.add_argument("--views", nargs="+", default=None, help="view indices or names (default: all)")
+    seq.add_argument("--workers", type=_number(int, 0, "--workers"), default=0,
+                     help="start a Dask LocalCluster of N one-thread worker processes (default 0: in this process)")
+    seq.add_argument("--scheduler", default=None, help="join a running Dask cluster, e.g. tcp://host:8786")
+    seq.add_argument("--profile", default=None, help="ci, class or paper: the fit's schedule (default: $DDP_PROFILE "
+                                                     "or class); images keep their size unless --size")
+    seq.add_argument("--dry-run", action="store_true", help="print jobs, compute and memory estimates; fit nothing")
+    seq.add_argument("--size", type=int, nargs=2, metavar=("H", "W"), default=None, help="resample every view")
+    seq.add_argument("--iterations", type=_number(int, 1, "--iterations"), default=None)
+    seq.add_argument("--seed", type=_number(int, 0, "--seed"), default=0)
+    seq.add_argument("--threads", type=_number(int, 1, "--threads"), default=1, help="torch threads per fit (default 1)")
+    seq.add_argument("--retries", type=_number(int, 0, "--retries"), default=2, help="Dask retries of a failed fit")
+    seq.add_argument("--device", default=None)
+    seq.add_argument("--intrinsics", type=_intrinsics, default=None,
+                     help="TUM: fr1, fr2, fr3, ros, or fx,fy,cx,cy (default: from the folder name)")
+    seq.add_argument("--every", type=_number(int, 1, "--every"), default=None, help="TUM: keep every N-th frame")
+    seq.add_argument("--max-frames", type=_number(int, 1, "--max-frames"), default=None, help="TUM: at most N frames")
+    seq.add_argument("--depth-scale", type=_number(float, 0.0, "--depth-scale"), default=None,
+                     help="COLMAP: metres per stored depth unit (0.001 for millimetre PNGs; float files default 1)")
+    seq.add_argument("--undistort", action="store_true", help="COLMAP: undistort OPENCV/RADIAL cameras with OpenCV")
+    seq.add_argument("--gpu-tflops", type=_number(float, 0.0, "--gpu-tflops"), default=5.0,
+                     help="--dry-run: the sustained GPU rate to assume (default 5 TFLOP/s)")
+    seq.set_defaults(run=_sequence)
     return parser
 
 

@@ -254,12 +254,21 @@ def _interpolate_pose(stamps: np.ndarray, poses: np.ndarray, t: float, max_diffe
 
 
 def _tum_intrinsics(folder: Path, intrinsics):
-    """(K 3×3, distortion (5,)) from a name ('fr1', 'fr2', 'fr3', 'ros'), a 3×3 K, or None (the folder's name)."""
+    """(K 3×3, distortion (5,)) from a name ('fr1', 'fr2', 'fr3', 'ros'), a 3×3 K, or None: the folder's
+    ``intrinsics.txt`` (the kit's addition for your own captures: one line ``fx fy cx cy``, pixels,
+    pixel (0, 0) = centre of the top-left pixel), else the TUM camera its name says (``freiburg1`` …)."""
+    if intrinsics is None and (folder / "intrinsics.txt").is_file():
+        lines = _text_lines(folder / "intrinsics.txt")
+        if len(lines) != 1 or len(lines[0][1].split()) != 4:
+            raise _fail(folder / "intrinsics.txt", lines[0][0] if lines else None, "expected one line 'fx fy cx cy'")
+        fx, fy, cx, cy = _floats(lines[0][1].split(), folder / "intrinsics.txt", lines[0][0], "fx fy cx cy")
+        intrinsics = np.array([[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]])
     if intrinsics is None:
         found = re.search(r"freiburg([123])", folder.name)
         if not found:
-            raise ValueError(f"intrinsics: cannot tell fr1/fr2/fr3 from the folder name {folder.name!r}; pass "
-                             f"intrinsics='fr1', 'fr2', 'fr3', 'ros' or your camera's 3×3 K (pixels)")
+            raise ValueError(f"intrinsics: {folder} has no intrinsics.txt and its name does not say fr1/fr2/fr3; "
+                             f"pass intrinsics='fr1', 'fr2', 'fr3', 'ros' or your camera's 3×3 K (pixels), or write "
+                             f"'fx fy cx cy' into {folder / 'intrinsics.txt'}")
         intrinsics = f"fr{found.group(1)}"
     if isinstance(intrinsics, str):
         if intrinsics not in TUM_INTRINSICS:
@@ -278,7 +287,8 @@ def read_tum(folder, intrinsics=None, every: int = 1, max_frames: int | None = N
 
     Args:
         folder: the sequence folder (e.g. ``rgbd_dataset_freiburg1_desk``).
-        intrinsics: 'fr1', 'fr2', 'fr3', 'ros', or a 3×3 K in pixels; None → from the folder name.
+        intrinsics: 'fr1', 'fr2', 'fr3', 'ros', or a 3×3 K in pixels; None → the folder's
+            ``intrinsics.txt`` ('fx fy cx cy', the kit's addition) or the camera its name says.
         every: keep every ``every``-th associated frame (30 Hz video has tiny baselines); ``max_frames``
             then caps the count.
         max_difference: seconds allowed between a colour frame and its depth frame and pose.
@@ -334,8 +344,8 @@ def write_tum(scene: Scene, folder, depths=None, start: float = 1_000_000_000.0,
 
     View k is stamped ``start + k / fps`` s; its depth frame ``depth_delay`` s later (TUM's two
     streams are not in step, so the reader's association is exercised); ground truth at the colour
-    stamps. ``depths``: per-view (H, W) metres (NaN = no reading) to store instead of the views'
-    own. Depth is quantised to 1/5000 m; all views must share one K (pass it to ``read_tum``).
+    stamps; the shared K in ``intrinsics.txt``. ``depths``: per-view (H, W) metres (NaN = no reading)
+    to store instead of the views' own. Depth is quantised to 1/5000 m; all views must share one K.
     """
     if not isinstance(scene, Scene) or not scene.views:
         raise TypeError("scene must be a non-empty ddp_lite.Scene")
@@ -358,7 +368,11 @@ def write_tum(scene: Scene, folder, depths=None, start: float = 1_000_000_000.0,
         rgb_lines.append(f"{stamp:.6f} {rgb_name}")
         depth_lines.append(f"{depth_stamp:.6f} {depth_name}")
         gt_lines.append(f"{stamp:.6f} " + " ".join(repr(float(v)) for v in (*pose[:3, 3], *q)))
-    for file, lines in (("rgb.txt", rgb_lines), ("depth.txt", depth_lines), ("groundtruth.txt", gt_lines)):
+    fx, fy, cx, cy = K0[0, 0], K0[1, 1], K0[0, 2], K0[1, 2]
+    intrinsics = ["# fx fy cx cy (pixels; pixel (0, 0) = centre of the top-left pixel): ddp-lite's addition to TUM",
+                  " ".join(repr(float(v)) for v in (fx, fy, cx, cy))]
+    for file, lines in (("rgb.txt", rgb_lines), ("depth.txt", depth_lines), ("groundtruth.txt", gt_lines),
+                        ("intrinsics.txt", intrinsics)):
         write_bytes_atomic(folder / file, ("\n".join(lines) + "\n").encode("ascii"))
     return folder
 
