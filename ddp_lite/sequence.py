@@ -96,7 +96,7 @@ def plan_jobs(scene: Scene, config: FitConfig, views=None, threads: int = 1) -> 
         >>> from ddp_lite.scenes import make_scene
         >>> jobs = plan_jobs(make_scene("desk", size=(24, 32), n_views=3), FitConfig(iterations=1))
         >>> [(j.name, j.neighbor_names) for j in jobs][0]
-        ('desk0', ['desk1', 'desk2'])
+        ('desk0', ['desk2', 'desk1'])
     """
     if not isinstance(scene, Scene):
         raise TypeError(f"scene must be a ddp_lite.Scene, got {type(scene).__name__}")
