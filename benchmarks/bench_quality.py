@@ -77,6 +77,10 @@ RECIPES = {
     "smooth1-it300": dict(smoothness=1.0, iterations=300),
     "smooth1-lr3e-3": dict(smoothness=1.0, lr=3e-3),
     "smooth1-ens3": dict(smoothness=1.0, ensemble=3),
+    "holdout-blobs": dict(holdout="blobs"),
+    "half": dict(channels=(16, 32, 64, 128, 256)),
+    "half-ens2": dict(channels=(16, 32, 64, 128, 256), ensemble=2),
+    "quarter": dict(channels=(8, 16, 32, 64, 128)),
 }
 
 

@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import torch
+from scipy import ndimage
 from tqdm.auto import tqdm
 
 from .camera import Camera, view_overlap
@@ -42,6 +43,7 @@ __all__ = ["FitConfig", "DepthResult", "ImageResult", "complete_depth", "complet
            "merge", "PlateauStopper", "VARIANTS"]
 
 VARIANTS = ("d", "rgbd", "rgbd+warp")
+HOLDOUTS = ("pixels", "blobs")
 MIN_VALID_PIXELS = 16
 
 
@@ -76,6 +78,7 @@ class FitConfig:
     disparity_margin: float = 1.25  # transform=None: d_min / margin … d_max × margin around the valid depth
     auto_stop: bool = False
     holdout_fraction: float = 0.05  # share of valid pixels held out when auto_stop is on
+    holdout: str = "pixels"  # their shape: "pixels" (scattered) or "blobs" (hole-like patches)
     patience: int = 200  # iterations without held-out improvement that make a plateau
     plateau_decays: int = 0  # auto-stop: cut lr by lr_gamma at the first this-many plateaus, stop at the next
     eval_every: int = 10
@@ -118,7 +121,7 @@ class FitConfig:
         if self.channels is not None:
             check_int_tuple(self.channels, "config.channels", minimum=1, min_length=2 if self.net == "unet" else 1)
         for name, choices in (("down", DOWNSAMPLINGS), ("up", UPSAMPLINGS), ("pad", PADDINGS),
-                              ("schedule", ("step", "cosine"))):
+                              ("schedule", ("step", "cosine")), ("holdout", HOLDOUTS)):
             check_choice(getattr(self, name), f"config.{name}", choices)
         for name, minimum in (("noise_channels", 1), ("ensemble", 1), ("patience", 1), ("plateau_decays", 0),
                               ("eval_every", 1), ("seed", 0), ("callback_every", 0)):
@@ -501,10 +504,16 @@ def _check_finite_output(name: str, array) -> None:
                                  f"optimisation diverged. Lower config.lr, or check the inputs and init.")
 
 
-def _holdout_mask(valid: np.ndarray, fraction: float, seed: int) -> np.ndarray:
-    """A random share of the valid pixels (H, W) bool, seeded."""
+def _holdout_mask(valid: np.ndarray, fraction: float, seed: int, shape: str = "pixels") -> np.ndarray:
+    """A random share ``fraction`` of the valid pixels (H, W) bool, seeded: scattered single pixels, or
+    ``"blobs"`` (smooth random blobs, blur scale min(H, W)/24 px, like the holes a fit must fill: a
+    single held-out pixel is predicted from its neighbours by any smooth fit, a blob is not)."""
     rng = np.random.default_rng(seed + 12345)
-    return valid & (rng.random(valid.shape) < fraction)
+    if shape == "pixels":
+        return valid & (rng.random(valid.shape) < fraction)
+    H, W = valid.shape
+    field = ndimage.gaussian_filter(rng.standard_normal((H, W)), max(1.0, min(H, W) / 24.0), mode="wrap")
+    return valid & (field <= np.quantile(field[valid], fraction))
 
 
 def complete_depth(rgb, depth, camera: Camera | None = None, neighbors=(), variant: str = "rgbd+warp",
@@ -596,7 +605,8 @@ def _complete_depth(rgb, depth, camera, neighbors, variant, config, gt_depth, tr
     iterations = config.resolved_iterations(variant)
     w_disp, w_rgb, w_warp = LossWeights.for_variant(variant, config.gammas)
     valid = np.isfinite(depth)
-    heldout = _holdout_mask(valid, config.holdout_fraction, config.seed) if config.auto_stop else np.zeros_like(valid)
+    heldout = (_holdout_mask(valid, config.holdout_fraction, config.seed, config.holdout) if config.auto_stop
+               else np.zeros_like(valid))
     if (valid & ~heldout).sum() < MIN_VALID_PIXELS:
         heldout = np.zeros_like(valid)
     target = _to_tensor(np.nan_to_num(transform.to_disparity(depth), nan=0.0), device)  # (1, 1, H, W)

@@ -150,3 +150,32 @@ def test_bf16_none_follows_the_cpu_flags():
     native = "avx512_bf16" in text or "amx_bf16" in text
     assert use_bf16(None, cpu) == native == _cpu_has_native_bf16()
     assert use_bf16(None, torch.device("meta")) is False
+
+
+@pytest.mark.parametrize("shape", ["pixels", "blobs"])
+def test_holdout_takes_its_share_of_valid_pixels_only(shape):
+    from ddp_lite.fit import _holdout_mask
+    valid = np.ones((48, 64), bool)
+    valid[:, :20] = False  # a hole: never held out
+    held = _holdout_mask(valid, 0.05, seed=3, shape=shape)
+    assert not held[~valid].any()
+    assert abs(held.sum() / valid.sum() - 0.05) < 0.02
+    np.testing.assert_array_equal(held, _holdout_mask(valid, 0.05, seed=3, shape=shape))  # seeded
+
+
+def test_holdout_blobs_are_patches_not_scattered_pixels():
+    from scipy import ndimage
+    from ddp_lite.fit import _holdout_mask
+    valid = np.ones((96, 128), bool)
+    pixels, blobs = (_holdout_mask(valid, 0.05, seed=0, shape=s) for s in ("pixels", "blobs"))
+    # 4-connected components: ~600 scattered pixels are mostly alone; blobs are a handful of patches
+    assert ndimage.label(pixels)[1] > 400
+    assert ndimage.label(blobs)[1] < 30
+    # a blob pixel's 4 neighbours are mostly held out too (interior), a scattered pixel's almost never
+    inner = ndimage.binary_erosion(blobs)
+    assert inner.sum() > 0.4 * blobs.sum()
+
+
+def test_bad_holdout_names_the_argument():
+    with pytest.raises(ValueError, match="config.holdout"):
+        FitConfig(holdout="rings").validate()
