@@ -3,6 +3,9 @@
     ddp-lite demo [--out ddp_demo.png] [--scene house] [--holes edge|sgm|random] [--iterations 300]
     ddp-lite scenes
     ddp-lite complete --rgb image.png --depth depth.png --depth-scale 0.001 --out filled.npy|.png|.pfm|.exr
+    ddp-lite student [--source notebooks] [--out build/student]
+    ddp-lite solutions [--profile class] [--out build/solutions] [--only 01 05]
+    ddp-lite grade SUBMISSIONS_DIR [--csv grades.csv] [--timeout 600]
 """
 from __future__ import annotations
 
@@ -217,6 +220,30 @@ def _complete(args) -> int:
     return 0
 
 
+def _student(args) -> int:
+    from .classroom import build_student
+    for path in build_student(args.source, args.out):
+        print(f"wrote {path}")
+    return 0
+
+
+def _solutions(args) -> int:
+    from .classroom import build_solutions
+    written = build_solutions(args.source, args.out, profile=args.profile, timeout=args.timeout, names=args.only)
+    print(f"{len(written)} executed notebooks in {os.path.abspath(args.out)} ({args.profile})")
+    return 0
+
+
+def _grade(args) -> int:
+    from .classroom import format_grades, grade, write_csv
+    scores = grade(args.submissions, args.source, timeout=args.timeout, profile=args.profile)
+    print()
+    print(format_grades(scores))
+    write_csv(scores, args.csv)
+    print(f"per-exercise scores written to {os.path.abspath(args.csv)}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="ddp-lite", description="Depth completion with a Deep Depth Prior.")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -248,6 +275,26 @@ def build_parser() -> argparse.ArgumentParser:
                           help="refuse fits estimated to need more (default: 75%% of RAM); raise it to override")
     complete.add_argument("--device", default=None)
     complete.set_defaults(run=_complete)
+
+    student = sub.add_parser("student", help="write the student copies of the notebooks (solutions and outputs removed)")
+    student.add_argument("--source", default="notebooks", help="the instructor notebooks (default: notebooks)")
+    student.add_argument("--out", default="build/student")
+    student.set_defaults(run=_student)
+    solutions = sub.add_parser("solutions", help="execute the instructor notebooks and keep their outputs")
+    solutions.add_argument("--source", default="notebooks")
+    solutions.add_argument("--out", default="build/solutions")
+    solutions.add_argument("--profile", choices=("ci", "class", "paper"), default="class")
+    solutions.add_argument("--only", nargs="+", default=None, metavar="NN", help="only these notebooks (01 05 ...)")
+    solutions.add_argument("--timeout", type=_number(int, 1, "--timeout"), default=3600, help="seconds per cell")
+    solutions.set_defaults(run=_solutions)
+    grade = sub.add_parser("grade", help="run submitted notebooks at ci and score their exercise checks")
+    grade.add_argument("submissions", help="a folder with one sub-folder per student holding their .ipynb files")
+    grade.add_argument("--source", default="notebooks", help="the instructor notebooks the checks come from")
+    grade.add_argument("--csv", default="grades.csv", help="per-exercise scores (default: grades.csv)")
+    grade.add_argument("--profile", choices=("ci", "class", "paper"), default="ci")
+    grade.add_argument("--timeout", type=_number(int, 1, "--timeout"), default=600,
+                       help="seconds one cell may run before it is interrupted and scored 0 (default: 600)")
+    grade.set_defaults(run=_grade)
     return parser
 
 
