@@ -146,9 +146,10 @@ def execute(nb, profile: str = "ci", timeout: int = 600, workdir=None, allow_err
 
 
 def grade_notebook(submission, source, student: str = "", timeout: int = 600, profile: str = "ci",
-                   workdir=None, name: str | None = None) -> list[Score]:
+                   workdir=None, name: str | None = None, executed=None) -> list[Score]:
     """Score one submitted notebook against its source notebook (both NotebookNodes or paths;
     ``name``, the notebook's file stem such as "01_deep_image_prior", defaults to the source's).
+    ``executed``: where to write the executed notebook with its outputs (feedback), if given.
 
     The test cells are taken from the source (matched by ``grade_id``), so an edited or deleted check
     cannot pass; a missing solution cell just fails its check. ``submission=None`` scores a notebook
@@ -171,6 +172,8 @@ def grade_notebook(submission, source, student: str = "", timeout: int = 600, pr
         if grade_id in locked:  # nbgrader's OverwriteCells, from the source instead of a database
             nb.cells[index] = copy.deepcopy(locked[grade_id])
     execute(nb, profile=profile, timeout=timeout, workdir=workdir)
+    if executed is not None:
+        _write(nb, executed)
 
     from nbgrader.utils import determine_grade
     graded = {_nbgrader_meta(c)["grade_id"]: c for c in nb.cells if _nbgrader_meta(c).get("grade")}
@@ -195,11 +198,13 @@ def grade_notebook(submission, source, student: str = "", timeout: int = 600, pr
     return scores
 
 
-def grade(submissions_dir, source_dir="notebooks", timeout: int = 600, profile: str = "ci", log=print) -> list[Score]:
+def grade(submissions_dir, source_dir="notebooks", timeout: int = 600, profile: str = "ci", log=print,
+          executed_dir=None) -> list[Score]:
     """Grade every student folder in ``submissions_dir`` (``<dir>/<student>/**/NN_name.ipynb``).
 
     A notebook is matched to its source by file name; a notebook that is missing scores 0, one that
     crashes or times out scores 0 for what did not run, and neither stops the others.
+    ``executed_dir``: write each executed notebook to ``<executed_dir>/<student>/`` (feedback).
     """
     submissions_dir = Path(submissions_dir)
     if not submissions_dir.is_dir():
@@ -215,8 +220,10 @@ def grade(submissions_dir, source_dir="notebooks", timeout: int = 600, profile: 
             source = _read(source_path)
             path = handed_in.get(source_path.name)
             try:
+                executed = Path(executed_dir) / student.name / source_path.name if executed_dir and path else None
                 result = grade_notebook(path, source, student.name, timeout, profile,
-                                        workdir=path.parent if path else None, name=source_path.stem)
+                                        workdir=path.parent if path else None, name=source_path.stem,
+                                        executed=executed)
             except Exception as error:  # an unreadable file: score it 0, go on with the others
                 log(f"{student.name}/{source_path.name}: could not be graded ({type(error).__name__}: {error})")
                 result = [replace(s, status="not run")

@@ -236,7 +236,8 @@ def _solutions(args) -> int:
 
 def _grade(args) -> int:
     from .classroom import format_grades, grade, write_csv
-    scores = grade(args.submissions, args.source, timeout=args.timeout, profile=args.profile)
+    scores = grade(args.submissions, args.source, timeout=args.timeout, profile=args.profile,
+                   executed_dir=args.executed)
     print()
     print(format_grades(scores))
     write_csv(scores, args.csv)
@@ -294,6 +295,8 @@ def build_parser() -> argparse.ArgumentParser:
     grade.add_argument("--profile", choices=("ci", "class", "paper"), default="ci")
     grade.add_argument("--timeout", type=_number(int, 1, "--timeout"), default=600,
                        help="seconds one cell may run before it is interrupted and scored 0 (default: 600)")
+    grade.add_argument("--executed", default=None, metavar="DIR",
+                       help="also write each executed notebook, with its outputs, to DIR/<student>/ (feedback)")
     grade.set_defaults(run=_grade)
     return parser
 
