@@ -114,13 +114,15 @@ def _environment(**values):
                 os.environ[name] = value
 
 
-def execute(nb, profile: str = "ci", timeout: int = 600, workdir=None, allow_errors: bool = True):
+def execute(nb, profile: str = "ci", timeout: int = 600, workdir=None, allow_errors: bool = True,
+            figures: bool = False):
     """Run ``nb`` (modified in place) top to bottom in a fresh kernel with ``DDP_PROFILE=profile``.
 
     Args:
         timeout: seconds one cell may take; a cell over it is interrupted and gets an error output.
         workdir: the kernel's working folder (default: the current one).
         allow_errors: go on after a failing cell (grading) or raise at the first one (solutions).
+        figures: keep the figures as outputs (Jupyter's inline backend) or draw none (Agg, faster).
 
     Returns the exception that stopped the run early (the kernel died, ...) or None. Cells after
     that point keep ``execution_count`` None.
@@ -135,7 +137,8 @@ def execute(nb, profile: str = "ci", timeout: int = 600, workdir=None, allow_err
             cell.outputs, cell.execution_count = [], None
     runner = Execute(timeout=timeout, allow_errors=allow_errors, interrupt_on_timeout=True)
     resources = {"metadata": {"path": str(workdir or os.getcwd())}}
-    with _environment(DDP_PROFILE=profile, MPLBACKEND="Agg"):
+    backend = "module://matplotlib_inline.backend_inline" if figures else "Agg"
+    with _environment(DDP_PROFILE=profile, MPLBACKEND=backend):
         try:
             runner.preprocess(nb, resources)
         except Exception as error:  # a dead kernel, or the first error when allow_errors is False
@@ -288,7 +291,7 @@ def build_solutions(source_dir="notebooks", out_dir="build/solutions", profile: 
             continue
         log(f"executing {path.name} at {profile} ...")
         nb = _read(path)
-        execute(nb, profile=profile, timeout=timeout, workdir=path.parent, allow_errors=False)
+        execute(nb, profile=profile, timeout=timeout, workdir=path.parent, allow_errors=False, figures=True)
         target = Path(out_dir) / path.name
         _write(nb, target)
         written.append(target)

@@ -195,3 +195,18 @@ def test_solutions_get_full_marks(tmp_path):
     scores = classroom.grade(tmp_path / "submissions", source_dir, log=print)
     auto = [s for s in scores if s.kind == "auto"]
     assert auto and all(s.points == s.max_points and s.status == "pass" for s in auto), auto
+
+
+def test_solution_copies_keep_their_figures_and_stop_at_a_failing_cell(tmp_path):
+    source = tmp_path / "source"
+    source.mkdir()
+    plot = nbformat.v4.new_code_cell("import matplotlib.pyplot as plt\nplt.plot([0, 1])\nprint('drawn')")
+    nbformat.write(nbformat.v4.new_notebook(cells=[plot]), source / "01_plot.ipynb")
+    [written] = classroom.build_solutions(source, tmp_path / "solutions", profile="ci", log=lambda *_: None)
+    outputs = nbformat.read(written, as_version=4).cells[0].outputs
+    assert any("image/png" in o.get("data", {}) for o in outputs)  # the teacher projects these
+    broken = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell("1 / 0")])
+    nbformat.write(broken, source / "02_broken.ipynb")
+    with pytest.raises(Exception, match="ZeroDivisionError"):
+        classroom.build_solutions(source, tmp_path / "solutions", profile="ci", names=["02"], log=lambda *_: None)
+    assert not (tmp_path / "solutions" / "02_broken.ipynb").exists()
