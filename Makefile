@@ -6,7 +6,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.ddp-lite-installed
 
-.PHONY: lab lab-command test install clean-venv
+.PHONY: lab lab-command test install clean-venv student solutions grade
 
 # `make lab` serves notebooks/ on $(IP):$(PORT) and prints the URL with its token.  --allow-root
 # only for root (Jupyter refuses root without it); --no-browser on Linux & co. without a display
@@ -45,6 +45,22 @@ lab-command:
 
 test: $(STAMP)
 	DDP_PROFILE=ci MPLBACKEND=Agg $(PY) -m pytest tests --nbval-lax --nbval-current-env notebooks -p no:cacheprovider
+
+# The classroom kit (README, "For instructors"). notebooks/ is the instructor version; `student`
+# strips solutions and outputs, `solutions` executes every notebook at $(SOLUTIONS_PROFILE) (class:
+# minutes per notebook), `grade` runs $(SUBMISSIONS)/<student>/*.ipynb at ci and writes $(GRADES).
+SOLUTIONS_PROFILE ?= class
+SUBMISSIONS ?= submissions
+GRADES ?= grades.csv
+
+student: $(STAMP)
+	$(VENV)/bin/ddp-lite student --source notebooks --out build/student
+
+solutions: $(STAMP)
+	$(VENV)/bin/ddp-lite solutions --source notebooks --out build/solutions --profile $(SOLUTIONS_PROFILE)
+
+grade: $(STAMP)
+	$(VENV)/bin/ddp-lite grade $(SUBMISSIONS) --source notebooks --csv $(GRADES)
 
 clean-venv:
 	rm -rf $(VENV)

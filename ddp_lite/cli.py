@@ -5,6 +5,9 @@
     ddp-lite complete --rgb image.png --depth depth.png --depth-scale 0.001 --out filled.npy|.png|.pfm|.exr
     ddp-lite sequence PATH --format tum|colmap|scene --out DIR [--views ...] [--workers N | --scheduler tcp://...]
                       [--profile ci|class|paper] [--dry-run]
+    ddp-lite student [--source notebooks] [--out build/student]
+    ddp-lite solutions [--profile class] [--out build/solutions] [--only 01 05]
+    ddp-lite grade SUBMISSIONS_DIR [--csv grades.csv] [--timeout 600]
 """
 from __future__ import annotations
 
@@ -298,6 +301,31 @@ def _sequence(args) -> int:
     return 0
 
 
+def _student(args) -> int:
+    from .classroom import build_student
+    for path in build_student(args.source, args.out):
+        print(f"wrote {path}")
+    return 0
+
+
+def _solutions(args) -> int:
+    from .classroom import build_solutions
+    written = build_solutions(args.source, args.out, profile=args.profile, timeout=args.timeout, names=args.only)
+    print(f"{len(written)} executed notebooks in {os.path.abspath(args.out)} ({args.profile})")
+    return 0
+
+
+def _grade(args) -> int:
+    from .classroom import format_grades, grade, write_csv
+    scores = grade(args.submissions, args.source, timeout=args.timeout, profile=args.profile,
+                   executed_dir=args.executed)
+    print()
+    print(format_grades(scores))
+    write_csv(scores, args.csv)
+    print(f"per-exercise scores written to {os.path.abspath(args.csv)}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="ddp-lite", description="Depth completion with a Deep Depth Prior.")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -356,6 +384,28 @@ def build_parser() -> argparse.ArgumentParser:
     seq.add_argument("--gpu-tflops", type=_number(float, 0.0, "--gpu-tflops"), default=5.0,
                      help="--dry-run: the sustained GPU rate to assume (default 5 TFLOP/s)")
     seq.set_defaults(run=_sequence)
+
+    student = sub.add_parser("student", help="write the student copies of the notebooks (solutions and outputs removed)")
+    student.add_argument("--source", default="notebooks", help="the instructor notebooks (default: notebooks)")
+    student.add_argument("--out", default="build/student")
+    student.set_defaults(run=_student)
+    solutions = sub.add_parser("solutions", help="execute the instructor notebooks and keep their outputs")
+    solutions.add_argument("--source", default="notebooks")
+    solutions.add_argument("--out", default="build/solutions")
+    solutions.add_argument("--profile", choices=("ci", "class", "paper"), default="class")
+    solutions.add_argument("--only", nargs="+", default=None, metavar="NN", help="only these notebooks (01 05 ...)")
+    solutions.add_argument("--timeout", type=_number(int, 1, "--timeout"), default=3600, help="seconds per cell")
+    solutions.set_defaults(run=_solutions)
+    grade = sub.add_parser("grade", help="run submitted notebooks at ci and score their exercise checks")
+    grade.add_argument("submissions", help="a folder with one sub-folder per student holding their .ipynb files")
+    grade.add_argument("--source", default="notebooks", help="the instructor notebooks the checks come from")
+    grade.add_argument("--csv", default="grades.csv", help="per-exercise scores (default: grades.csv)")
+    grade.add_argument("--profile", choices=("ci", "class", "paper"), default="ci")
+    grade.add_argument("--timeout", type=_number(int, 1, "--timeout"), default=600,
+                       help="seconds one cell may run before it is interrupted and scored 0 (default: 600)")
+    grade.add_argument("--executed", default=None, metavar="DIR",
+                       help="also write each executed notebook, with its outputs, to DIR/<student>/ (feedback)")
+    grade.set_defaults(run=_grade)
     return parser
 
 

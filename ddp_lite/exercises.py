@@ -3,11 +3,13 @@
 Each ``check_*`` takes the student's function, runs it on a few seeded cases, compares with a
 reference that does not come from the student's code (scikit-image, SciPy, a hand-computed
 value or the kit's tested implementation) and prints ``PASS`` or ``FAIL: <what is wrong>``.
-It returns True or False so an instructor's script can count passes.
+It returns True or False. In the notebooks each check sits in a read-only nbgrader test cell as
+``assert check_x(student_function)``: a FAIL prints what is wrong and the assert marks the cell
+failed, which is what nbgrader and ``ddp-lite grade`` (``ddp_lite.grading``) score.
 
     >>> from ddp_lite.exercises import check_psnr
     >>> check_psnr(lambda a, b: 10 * np.log10(1 / np.mean((a - b) ** 2)))
-    PASS psnr: matches scikit-image on 3 cases
+    PASS psnr: matches scikit-image on 4 cases
     True
 """
 from __future__ import annotations
@@ -60,20 +62,22 @@ def check_psnr(student_psnr) -> bool:
     from skimage.metrics import peak_signal_noise_ratio
     rng = np.random.default_rng(0)
     cases = []
-    for sigma in (0.01, 0.05, 0.2):
-        a = rng.random((16, 20, 3))
+    for shape, sigma in (((16, 20, 3), 0.01), ((16, 20, 3), 0.05), ((16, 20, 3), 0.2), ((12, 9), 0.1)):
+        a = rng.random(shape)  # colour, then a grey image
         b = np.clip(a + sigma * rng.standard_normal(a.shape), 0, 1)
         cases.append(((a, b), peak_signal_noise_ratio(a, b, data_range=1.0)))
     return _run("psnr", student_psnr, cases, "scikit-image", _close(1e-6))
 
 
 def check_masked_mse(student_mse) -> bool:
-    """``student_mse(output, target, mask)`` (H, W, C), (H, W, C), (H, W) bool: mean over masked pixels."""
+    """``student_mse(output, target, mask)`` (H, W, C), (H, W, C), (H, W) bool: mean over masked pixels
+    and channels."""
     rng = np.random.default_rng(1)
     cases = []
-    for _ in range(3):
+    masks = [rng.random((8, 9)) > 0.4, rng.random((8, 9)) > 0.8, np.ones((8, 9), bool), np.zeros((8, 9), bool)]
+    masks[3][2, 5] = True  # a single known pixel
+    for mask in masks:
         out, target = rng.random((8, 9, 3)), rng.random((8, 9, 3))
-        mask = rng.random((8, 9)) > 0.4
         by_hand = sum(((out[r, c] - target[r, c]) ** 2).sum() for r, c in zip(*np.nonzero(mask))) / (mask.sum() * 3)
         cases.append(((out, target, mask), by_hand))
     return _run("masked mse", student_mse, cases, "a per-pixel loop", _close(1e-9))
@@ -98,19 +102,33 @@ def check_hole_rmse(student_hole_rmse) -> bool:
     cases = [((pred, gt, inp), np.sqrt((0.5 ** 2 + 2.0 ** 2) / 2))]
     inp2 = np.array([[np.nan, np.nan], [3.0, 4.0]])
     cases.append(((pred, gt, inp2), np.sqrt((8.0 ** 2 + 0.5 ** 2) / 2)))
-    return _run("hole rmse", student_hole_rmse, cases, "hand-computed values", _close(1e-9))
+    inp3 = np.array([[np.nan, 2.0], [3.0, 4.0]])  # one hole: the RMSE is its absolute error
+    cases.append(((pred, gt, inp3), 8.0))
+    rng = np.random.default_rng(7)
+    gt4, pred4 = rng.random((9, 11)) + 1, rng.random((9, 11)) + 1
+    inp4 = np.where(rng.random((9, 11)) < 0.3, np.nan, gt4)
+    by_hand = np.sqrt(sum((pred4[r, c] - gt4[r, c]) ** 2 for r, c in zip(*np.nonzero(np.isnan(inp4))))
+                      / np.isnan(inp4).sum())
+    cases.append(((pred4, gt4, inp4), by_hand))
+    return _run("hole rmse", student_hole_rmse, cases, "hand-computed values and a per-pixel loop", _close(1e-9))
 
 
 def check_ssim(student_ssim) -> bool:
-    """``student_ssim(x, y)`` for grey images in [0, 1] vs scikit-image (Gaussian 11×11, σ = 1.5)."""
+    """``student_ssim(x, y)`` for grey images in [0, 1] vs scikit-image (Gaussian 11×11, σ = 1.5,
+    population covariance, data range 1, mean over the windows that fit inside the image)."""
     from skimage.metrics import structural_similarity
     rng = np.random.default_rng(2)
     cases = []
-    for sigma in (0.05, 0.3):
-        x = rng.random((32, 40))
-        y = np.clip(x + sigma * rng.standard_normal(x.shape), 0, 1)
+    # Low-contrast pairs come first: there the constants C1, C2 are as large as the variances, so a
+    # sample covariance (÷ (N-1)) or a uniform window moves SSIM by ~1e-3, ten times the tolerance.
+    for shape, contrast, noise in (((32, 40), 0.05, 0.3), ((32, 40), 0.1, 0.2), ((32, 40), 1.0, 0.3),
+                                   ((24, 50), 1.0, 0.05)):
+        x = 0.5 + contrast * (rng.random(shape) - 0.5)
+        y = np.clip(x + contrast * noise * rng.standard_normal(shape), 0, 1)
         cases.append(((x, y), structural_similarity(x, y, gaussian_weights=True, sigma=1.5,
                                                      use_sample_covariance=False, data_range=1.0)))
+    same = rng.random((20, 20))
+    cases.append(((same, same.copy()), 1.0))  # identical images: exactly 1
     return _run("ssim", student_ssim, cases, "scikit-image", _close(1e-4))
 
 
@@ -118,23 +136,29 @@ def check_masked_l1(student_l1) -> bool:
     """``student_l1(x, y, mask)`` (H, W) arrays: mean |x - y| over mask only."""
     rng = np.random.default_rng(3)
     cases = []
-    for _ in range(3):
-        x, y, mask = rng.random((6, 7)), rng.random((6, 7)), rng.random((6, 7)) > 0.5
-        cases.append(((x, y, mask), np.abs(x - y)[mask].mean()))
-    return _run("masked L1", student_l1, cases, "NumPy", _close(1e-9))
+    for threshold in (0.5, 0.5, 0.9, -1.0):  # the last mask is all True
+        x, y, mask = rng.random((6, 7)), rng.random((6, 7)), rng.random((6, 7)) > threshold
+        cases.append(((x, y, mask), sum(abs(x[r, c] - y[r, c]) for r, c in zip(*np.nonzero(mask))) / mask.sum()))
+    return _run("masked L1", student_l1, cases, "a per-pixel loop", _close(1e-9))
 
 
 def check_backproject(student_backproject) -> bool:
-    """``student_backproject(depth (H, W), K)`` → camera-frame points (H, W, 3), OpenCV convention."""
-    K = np.array([[50.0, 0, 15.5], [0, 50.0, 11.5], [0, 0, 1]])
-    depth = np.full((24, 32), 2.0)
-    depth[5, 7] = 4.0
-    expected = np.zeros((24, 32, 3))
-    v, u = np.mgrid[0:24, 0:32]
-    expected[..., 0] = (u - 15.5) / 50.0 * depth
-    expected[..., 1] = (v - 11.5) / 50.0 * depth
-    expected[..., 2] = depth
-    return _run("backproject", student_backproject, [((depth, K), expected)], "the pinhole model", _close(1e-9))
+    """``student_backproject(depth (H, W), K)`` → camera-frame points (H, W, 3), OpenCV convention:
+    u = column, v = row, pixel (0, 0) = centre of the top-left pixel."""
+    cases = []
+    # a square-pixel camera, then one with fx ≠ fy and cx, cy off-centre: a swapped u/v or fx/fy shows
+    for K, shape in ((np.array([[50.0, 0, 15.5], [0, 50.0, 11.5], [0, 0, 1]]), (24, 32)),
+                     (np.array([[40.0, 0, 9.0], [0, 65.0, 3.0], [0, 0, 1]]), (7, 20))):
+        depth = np.full(shape, 2.0)
+        depth[5, 7] = 4.0
+        depth[1, 3] = 0.5
+        expected = np.zeros((*shape, 3))
+        for v in range(shape[0]):
+            for u in range(shape[1]):
+                z = depth[v, u]
+                expected[v, u] = ((u - K[0, 2]) / K[0, 0] * z, (v - K[1, 2]) / K[1, 1] * z, z)
+        cases.append(((depth, K), expected))
+    return _run("backproject", student_backproject, cases, "the pinhole model, pixel by pixel", _close(1e-9))
 
 
 def check_warp(student_warp) -> bool:
@@ -164,8 +188,10 @@ def check_warp(student_warp) -> bool:
 
 
 def check_fscore(student_fscore) -> bool:
-    """``student_fscore(precision, recall)`` → the harmonic mean (0 when both are 0)."""
-    cases = [((0.5, 0.5), 0.5), ((1.0, 0.0), 0.0), ((0.0, 0.0), 0.0), ((0.3, 0.6), 2 * 0.18 / 0.9)]
+    """``student_fscore(precision, recall)`` → the harmonic mean (0 when both are 0); works for
+    fractions and for percentages alike."""
+    cases = [((0.5, 0.5), 0.5), ((1.0, 0.0), 0.0), ((0.0, 0.0), 0.0), ((0.3, 0.6), 2 * 0.18 / 0.9),
+             ((1.0, 1.0), 1.0), ((40.0, 50.6), 2 * 40.0 * 50.6 / 90.6)]  # the last: Table 2's UNet+RGBD+warp, %
     return _run("f-score", student_fscore, cases, "hand-computed values", _close(1e-9))
 
 
@@ -200,8 +226,24 @@ def check_nearest_fill(student_fill) -> bool:
 
 
 def check_d1(student_d1) -> bool:
-    """``student_d1(pred_disp, gt_disp)`` → percentage of bad pixels (error > 3 px and > 5 %)."""
-    gt = np.array([10.0, 10.0, 100.0, 100.0, np.nan])
-    pred = np.array([13.5, 12.9, 104.0, 106.0, 1.0])
-    # bad: 3.5 > 3 and > 0.5 ✓; 2.9 ✗; 4 > 3 but < 5 ✗; 6 > 3 and > 5 ✓ → 2 of 4 valid
-    return _run("D1", student_d1, [((pred, gt), 50.0)], "a hand-computed case", _close(1e-9))
+    """``student_d1(pred_disp, gt_disp)`` → percentage of bad pixels among those with a finite truth;
+    bad = error > 3 px **and** error > 5 % of the *true* disparity (KITTI 2015)."""
+    from .metrics import d1_error
+    nan = np.nan
+    cases = [
+        # bad: 3.5 > 3 and > 0.5 ✓; 2.9 ✗; 4 > 3 but < 5 ✗; 6 > 3 and > 5 ✓; NaN truth not counted → 2 of 4
+        ((np.array([13.5, 12.9, 104.0, 106.0, 1.0]), np.array([10.0, 10.0, 100.0, 100.0, nan])), 50.0),
+        # strict inequalities: an error of exactly 3 px, or exactly 5 % of the truth, is not bad → 1 of 4
+        ((np.array([23.0, 105.0, 64.0, 40.0]), np.array([20.0, 100.0, 60.0, 40.0])), 25.0),
+        # 5 % of the truth, not of the prediction: 5.1 px on a truth of 100 is bad (5 % of 105.1 is 5.26) → 2 of 3
+        ((np.array([105.1, 94.9, 50.0]), np.array([100.0, 100.0, 50.0])), 200 / 3),
+        # a map (H, W) with unknown truth and no bad pixel → 0 %
+        ((np.array([[10.0, 20.0], [30.0, 7.0]]), np.array([[10.5, nan], [31.0, 5.0]])), 0.0),
+    ]
+    rng = np.random.default_rng(6)
+    gt = rng.uniform(5.0, 80.0, (12, 16))
+    gt[rng.random(gt.shape) < 0.2] = nan
+    pred = gt + rng.normal(0.0, 4.0, gt.shape)
+    pred[np.isnan(pred)] = 1.0
+    cases.append(((pred, gt), 100 * d1_error(pred, gt)["d1_all"]))  # a random map vs the kit's tested metric
+    return _run("D1", student_d1, cases, "hand-computed cases and ddp_lite.metrics.d1_error", _close(1e-9))

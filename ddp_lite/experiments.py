@@ -19,7 +19,7 @@ from .fit import DepthResult, FitConfig, complete_depth
 from .profiles import Profile, get_profile
 
 __all__ = ["Case", "make_case", "sgm_depth_at_scale", "edge_band", "disparity_rmse", "run_variants", "error_table", "format_table",
-           "texture_leakage", "format_mean_spread", "cloud_scores"]
+           "texture_leakage", "format_mean_spread", "cloud_scores", "ablation", "TABLE2_CONFIGS"]
 
 
 @dataclass
@@ -212,6 +212,47 @@ def format_mean_spread(runs: list[dict[str, dict[str, float]]], digits: int = 2,
             text += f"{f'{values.mean():.{digits}f} ± {spread:.{digits}f}':>{cell}}"
         lines.append(text)
     return "\n".join(lines)
+
+
+TABLE2_CONFIGS = {  # Table 2's rows: (network, variant)
+    "UNet + D": ("unet", "d"),
+    "UNet + RGBD": ("unet", "rgbd"),
+    "UNet + RGBD + warp": ("unet", "rgbd+warp"),
+    "SkipNet + RGBD + warp": ("skip", "rgbd+warp"),
+}
+
+
+def ablation(cases, configs: dict | None = None, profile=None, holes: str = "edge", tau: float = 0.01, log=print,
+             **config_overrides):
+    """Notebook 05's ablation (Table 2): every config ``{row: (net, variant)}`` or ``{row: (net, variant,
+    {FitConfig field: value})}`` on every (scene, seed) case.
+
+    Returns ``(runs, examples)``: ``runs`` holds one ``{row: {"holes", "edge band", "P", "R", "F"}}``
+    per case (RMSE ×100 of normalised disparity; P/R/F % of the completed view's cloud at
+    ``tau`` × the median depth, "SGM+DDP" style, sky not scored); ``examples`` is
+    ``{scene: (case, {row: DepthResult})}`` for the first case of each scene, so that a figure draws
+    each fit against the holes and ground truth it was fitted on. ``config_overrides`` go to every
+    fit (e.g. ``gammas=(0.5, 0.5)``).
+    """
+    from .fusion import points_from_depth
+    configs = TABLE2_CONFIGS if configs is None else configs
+    runs, examples = [], {}
+    for scene, seed in cases:
+        case = make_case(scene, profile, holes=holes, seed=seed)
+        gt_points = points_from_depth(case.scored_gt, case.camera)
+        distance = tau * float(np.nanmedian(case.scored_gt))
+        run, results = {}, {}
+        for row, (net, variant, *extra) in configs.items():
+            options = {**config_overrides, **(extra[0] if extra else {})}
+            result = run_variants(case, (variant,), profile, net=net, seed=seed, progress=False, **options)[variant]
+            merged = np.where(case.scored, result.merged(case.depth), np.nan)  # "SGM+DDP", sky not scored
+            run[row] = {**error_table(case, {row: result})[row],
+                        **cloud_scores(points_from_depth(merged, case.camera), gt_points, distance)}
+            results[row] = result
+        examples.setdefault(scene, (case, results))
+        runs.append(run)
+        log(f"{scene} seed {seed}: " + ", ".join(f"{row} {v['holes']:.2f}" for row, v in run.items()))
+    return runs, examples
 
 
 def cloud_scores(points, gt_points, tau: float) -> dict[str, float]:

@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import torch
 from scipy import ndimage
-from tqdm.auto import tqdm
+from .progress import progress as tqdm
 
 from .camera import Camera, view_overlap
 from .checks import check_bool, check_choice, check_int, check_int_tuple, check_real

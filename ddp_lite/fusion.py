@@ -262,14 +262,17 @@ def _default_camera(points: np.ndarray) -> Camera:
     return Camera.from_fov(128, 96, 60.0, look_at(centre - np.array([0.0, 0.0, distance]), centre))
 
 
-def render_point_cloud(cloud, camera=None, ax=None, point_size: int = 1, background=(1.0, 1.0, 1.0)):
+def render_point_cloud(cloud, camera=None, ax=None, point_size: int = 1, background=(1.0, 1.0, 1.0),
+                       depth_range=None):
     """Render a point cloud through a pinhole camera with a z-buffer → (H, W, 3) float32 image in [0, 1].
 
     Each point is splatted as a ``point_size`` × ``point_size`` square; where splats overlap the
     nearest point wins. Colours come from the cloud, or from its depth (viridis, near = yellow)
-    if it has none. ``camera``: default a 128×96, 60° view along +z (the kit's scenes are
-    seen along +z), centred on the cloud and just far enough back to frame all of it.
-    With ``ax``, the image is also drawn there. No OpenGL: works headless.
+    if it has none: ``depth_range`` (near, far) in metres fixes that colour scale, so that several
+    renders compare (default: the cloud's own 1st-99th percentile). ``camera``: default a 128×96,
+    60° view along +z (the kit's scenes are seen along +z), centred on the cloud and just far
+    enough back to frame all of it. With ``ax``, the image is also drawn there, with a depth colour
+    bar when the colours are depths. No OpenGL: works headless.
     """
     import matplotlib
     import open3d as o3d
@@ -288,9 +291,15 @@ def render_point_cloud(cloud, camera=None, ax=None, point_size: int = 1, backgro
         raise TypeError(f"camera must be a ddp_lite.camera.Camera or None, got {type(camera).__name__}")
     H, W = camera.height, camera.width
     u, v, z = _project(points, camera)
-    if colours is None:
+    by_depth = colours is None
+    if by_depth:
         visible = np.isfinite(u)
-        lo, hi = (np.percentile(z[visible], q) for q in (1, 99)) if visible.any() else (0.0, 1.0)
+        if depth_range is not None:
+            lo, hi = (float(x) for x in depth_range)
+            if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
+                raise ValueError(f"depth_range must be (near, far) metres with near < far, got {depth_range!r}")
+        else:
+            lo, hi = (np.percentile(z[visible], q) for q in (1, 99)) if visible.any() else (0.0, 1.0)
         colours = matplotlib.colormaps["viridis_r"](np.clip((z - lo) / max(hi - lo, 1e-9), 0, 1))[:, :3]
     col, row = np.floor(u + 0.5), np.floor(v + 0.5)
     offsets = np.arange(point_size) - (point_size - 1) // 2
@@ -310,4 +319,7 @@ def render_point_cloud(cloud, camera=None, ax=None, point_size: int = 1, backgro
     if ax is not None:
         ax.imshow(image, interpolation="nearest")
         ax.axis("off")
+        if by_depth:
+            scale = matplotlib.cm.ScalarMappable(matplotlib.colors.Normalize(lo, hi), matplotlib.colormaps["viridis_r"])
+            ax.figure.colorbar(scale, ax=ax, fraction=0.046, pad=0.04, label="depth along the view (m)")
     return image

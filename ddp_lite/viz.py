@@ -13,7 +13,8 @@ import numpy as np
 
 from .atomic import atomic_path
 
-__all__ = ["show_depth", "show_image", "show_error", "compare", "plot_history", "save_figure", "HOLE_COLOUR"]
+__all__ = ["show_depth", "show_image", "show_error", "error_vmax", "outline", "compare", "plot_history", "save_figure",
+           "HOLE_COLOUR"]
 
 HOLE_COLOUR = "magenta"
 
@@ -53,6 +54,34 @@ def show_error(ax, estimate, truth, title: str = "", vmax=None, mask=None, label
     ax.set_title(title)
     ax.axis("off")
     return image
+
+
+def error_vmax(estimates, truth, mask=None, percentile: float = 99.0) -> float:
+    """One colour-scale top for several error maps: the ``percentile`` of |estimate - truth| over all
+    of ``estimates`` (a list or dict of (H, W) arrays), inside ``mask``. Maps drawn with their own
+    scales invite a wrong comparison (a darker map is not a better one)."""
+    maps = list(estimates.values()) if isinstance(estimates, dict) else list(estimates)
+    if not maps:
+        raise ValueError("estimates must hold at least one (H, W) array")
+    truth = np.asarray(truth, np.float64)
+    errors = []
+    for estimate in maps:
+        error = np.abs(np.asarray(estimate, np.float64) - truth)
+        errors.append(error[mask] if mask is not None else error.ravel())
+    errors = np.concatenate(errors)
+    errors = errors[np.isfinite(errors)]
+    return float(np.percentile(errors, percentile)) if errors.size else 1.0
+
+
+def outline(ax, region, colour: str = "white", label: str | None = None):
+    """Draw the border of a (H, W) bool ``region`` on ``ax`` (e.g. where nothing is scored); with
+    ``label``, add it to the axes' legend."""
+    region = np.asarray(region, dtype=float)
+    if region.any() and not region.all():
+        ax.contour(region, levels=[0.5], colors=[colour], linewidths=1.0)
+    if label:
+        ax.plot([], [], color=colour, lw=1.0, label=label)
+        ax.legend(loc="lower right", fontsize=7, framealpha=0.8)
 
 
 def compare(panels: dict, truth=None, ncols: int | None = None, size: float = 3.2):

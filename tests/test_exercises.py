@@ -1,50 +1,149 @@
-"""The exercise checks pass a correct solution and fail a wrong one (with a message)."""
+"""The exercise checks pass a right answer and fail every known wrong one (with a message).
+
+The wrong answers are the mistakes students make (and the ones issue 15 found passing): D1 with
+5 % of the prediction instead of the truth, ``>=`` instead of ``>``, SSIM with a sample covariance.
+"""
 import numpy as np
+import pytest
+from scipy import ndimage
+from skimage.metrics import structural_similarity
 
 from ddp_lite import exercises, ssim, warp_to_reference
 
 
-def correct_and_wrong():
-    return {
-        "check_psnr": (lambda a, b: 10 * np.log10(1 / np.mean((a - b) ** 2)), lambda a, b: np.mean((a - b) ** 2)),
-        "check_masked_mse": (lambda o, t, m: ((o - t) ** 2)[m].mean(), lambda o, t, m: ((o - t) ** 2).mean()),
-        "check_disparity_transform": (
-            lambda d, a, b, c: (1 / (np.clip(d, a, b) + c) - 1 / (b + c)) / (1 / (a + c) - 1 / (b + c)),
-            lambda d, a, b, c: 1 / np.clip(d, a, b)),
-        "check_hole_rmse": (lambda p, g, i: np.sqrt(np.mean((p - g)[np.isnan(i)] ** 2)),
-                            lambda p, g, i: np.sqrt(np.mean((p - g) ** 2))),
-        "check_ssim": (lambda x, y: ssim(x, y), lambda x, y: 1 - np.abs(x - y).mean()),
-        "check_masked_l1": (lambda x, y, m: np.abs(x - y)[m].mean(), lambda x, y, m: np.abs(x - y).mean()),
-        "check_backproject": (
-            lambda d, K: np.stack([*np.meshgrid(np.arange(d.shape[1]), np.arange(d.shape[0])), np.ones_like(d)],
-                                  axis=-1) @ np.linalg.inv(K).T * d[..., None],
-            lambda d, K: np.stack([d, d, d], axis=-1)),
-        "check_warp": (lambda *a: warp_to_reference(*a)[0], lambda img, d, r, n: img),
-        "check_fscore": (lambda p, r: 0.0 if p + r == 0 else 2 * p * r / (p + r), lambda p, r: (p + r) / 2),
-        "check_d1": (lambda p, g: 100 * np.mean(((np.abs(p - g) > 3) & (np.abs(p - g) > 0.05 * g))[np.isfinite(g)]),
-                     lambda p, g: 100 * np.mean((np.abs(p - g) > 3)[np.isfinite(g)])),
-    }
+def _d1(compare=np.greater, of_truth=True):
+    def d1(pred, gt):
+        err, valid = np.abs(pred - gt), np.isfinite(gt)
+        bad = compare(err, 3.0) & compare(err, 0.05 * (gt if of_truth else pred))
+        return 100 * np.mean(bad[valid])
+    return d1
 
 
-def test_every_check_passes_a_correct_solution_and_fails_a_wrong_one(capsys):
-    pairs = correct_and_wrong()
-    assert set(pairs) | {"check_nearest_fill"} == set(exercises.__all__)
-    for name, (right, wrong) in pairs.items():
-        check = getattr(exercises, name)
-        assert check(right) is True, name
-        assert check(wrong) is False, name
+def _ssim_skimage(**options):
+    settings = dict(gaussian_weights=True, sigma=1.5, use_sample_covariance=False, data_range=1.0)
+    return lambda x, y: structural_similarity(x, y, **{**settings, **options})
+
+
+def _nearest(depth):
+    _, (rows, cols) = ndimage.distance_transform_edt(np.isnan(depth), return_indices=True)
+    return depth[rows, cols]
+
+
+def _backproject(depth, K, swap=False):
+    v, u = np.mgrid[0:depth.shape[0], 0:depth.shape[1]].astype(np.float64)
+    if swap:
+        u, v = v, u
+    return np.stack([(u - K[0, 2]) / K[0, 0] * depth, (v - K[1, 2]) / K[1, 1] * depth, depth], axis=-1)
+
+
+def _disparity(d, a, b, c):
+    return (1 / (np.clip(d, a, b) + c) - 1 / (b + c)) / (1 / (a + c) - 1 / (b + c))
+
+
+# check name → (right answer, {mistake: wrong answer})
+CASES = {
+    "check_psnr": (lambda a, b: 10 * np.log10(1 / np.mean((a - b) ** 2)), {
+        "the MSE itself": lambda a, b: np.mean((a - b) ** 2),
+        "a 255 data range": lambda a, b: 10 * np.log10(255 ** 2 / np.mean((a - b) ** 2)),
+        "20 log10 of the MSE": lambda a, b: 20 * np.log10(1 / np.mean((a - b) ** 2)),
+    }),
+    "check_masked_mse": (lambda o, t, m: ((o - t) ** 2)[m].mean(), {
+        "mean over every pixel": lambda o, t, m: ((o - t) ** 2).mean(),
+        "divided by pixels, not pixels × channels": lambda o, t, m: ((o - t) ** 2)[m].sum() / m.sum(),
+    }),
+    "check_disparity_transform": (_disparity, {
+        "plain inverse depth": lambda d, a, b, c: 1 / np.clip(d, a, b),
+        "no clipping": lambda d, a, b, c: (1 / (d + c) - 1 / (b + c)) / (1 / (a + c) - 1 / (b + c)),
+        "no constant": lambda d, a, b, c: _disparity(d, a, b, 0.0),
+        "1 = farthest": lambda d, a, b, c: 1 - _disparity(d, a, b, c),
+    }),
+    "check_hole_rmse": (lambda p, g, i: np.sqrt(np.mean((p - g)[np.isnan(i)] ** 2)), {
+        "RMSE over every pixel": lambda p, g, i: np.sqrt(np.mean((p - g) ** 2)),
+        "MSE, no root": lambda p, g, i: np.mean((p - g)[np.isnan(i)] ** 2),
+        "RMSE over the valid pixels": lambda p, g, i: np.sqrt(np.mean((p - g)[np.isfinite(i)] ** 2)),
+    }),
+    "check_ssim": (_ssim_skimage(), {
+        "sample covariance": _ssim_skimage(use_sample_covariance=True),
+        "uniform 11×11 window": lambda x, y: structural_similarity(x, y, win_size=11, data_range=1.0),
+        "data range 2": _ssim_skimage(data_range=2.0),
+        "1 - mean |x - y|": lambda x, y: 1 - np.abs(x - y).mean(),
+    }),
+    "check_masked_l1": (lambda x, y, m: np.abs(x - y)[m].mean(), {
+        "mean over every pixel": lambda x, y, m: np.abs(x - y).mean(),
+        "sum, not mean": lambda x, y, m: np.abs(x - y)[m].sum(),
+        "squared error": lambda x, y, m: ((x - y) ** 2)[m].mean(),
+    }),
+    "check_backproject": (_backproject, {
+        "depth copied to x, y, z": lambda d, K: np.stack([d, d, d], axis=-1),
+        "u and v swapped": lambda d, K: _backproject(d, K, swap=True),
+        "fx used for both axes": lambda d, K: _backproject(d, np.array([[K[0, 0], 0, K[0, 2]], [0, K[0, 0], K[1, 2]],
+                                                                      [0, 0, 1]])),
+    }),
+    "check_warp": (lambda *a: warp_to_reference(*a)[0], {
+        "the neighbour image unwarped": lambda img, d, r, n: img,
+        "warped with the wrong depth": lambda img, d, r, n: warp_to_reference(img, 1.3 * d, r, n)[0],
+    }),
+    "check_fscore": (lambda p, r: 0.0 if p + r == 0 else 2 * p * r / (p + r), {
+        "arithmetic mean": lambda p, r: (p + r) / 2,
+        "geometric mean": lambda p, r: np.sqrt(p * r),
+        "the smaller of the two": lambda p, r: min(p, r),
+    }),
+    "check_nearest_fill": (_nearest, {
+        "zeros in the holes": lambda d: np.nan_to_num(d, nan=0.0),
+        "mean of the valid pixels": lambda d: np.where(np.isnan(d), np.nanmean(d), d),
+        "city-block nearest": lambda d: d[tuple(ndimage.distance_transform_cdt(np.isnan(d), metric="taxicab",
+                                                                               return_indices=True)[1])],
+    }),
+    "check_d1": (_d1(), {
+        "5 % of the prediction": _d1(of_truth=False),
+        ">= instead of >": _d1(compare=np.greater_equal),
+        "3 px only": lambda p, g: 100 * np.mean((np.abs(p - g) > 3)[np.isfinite(g)]),
+        "a fraction, not a percentage": lambda p, g: _d1()(p, g) / 100,
+        "NaN truths counted as good": lambda p, g: 100 * np.mean(np.nan_to_num(
+            (np.abs(p - g) > 3) & (np.abs(p - g) > 0.05 * g), nan=0.0)),
+    }),
+}
+
+
+def test_every_check_is_tested():
+    assert set(CASES) == set(exercises.__all__)
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_check_passes_the_right_answer(name, capsys):
+    right, _ = CASES[name]
+    assert getattr(exercises, name)(right) is True
+    assert capsys.readouterr().out.startswith("PASS")
+
+
+@pytest.mark.parametrize("name, mistake", [(name, mistake) for name, (_, wrongs) in sorted(CASES.items())
+                                           for mistake in wrongs])
+def test_check_fails_a_known_wrong_answer(name, mistake, capsys):
+    wrong = CASES[name][1][mistake]
+    with np.errstate(all="ignore"):
+        assert getattr(exercises, name)(wrong) is False, mistake
     out = capsys.readouterr().out
-    assert out.count("PASS") == len(pairs) and out.count("FAIL") == len(pairs)
+    assert out.startswith("FAIL") and "case" in out, out
 
 
-def test_nearest_fill_check_and_a_crashing_solution_is_reported_not_raised(capsys):
-    from scipy import ndimage
+def test_the_kit_ssim_is_a_right_answer_too():
+    assert exercises.check_ssim(lambda x, y: ssim(x, y)) is True
 
-    def nearest(depth):
-        holes = np.isnan(depth)
-        _, (rows, cols) = ndimage.distance_transform_edt(holes, return_indices=True)
-        return depth[rows, cols]
 
-    assert exercises.check_nearest_fill(nearest) is True
-    assert exercises.check_nearest_fill(lambda d: 1 / 0) is False
-    assert "ZeroDivisionError" in capsys.readouterr().out
+def test_d1_cases_agree_with_the_hand_computed_definition():
+    """The D1 check's reference for the random case is the kit's metric; both agree with _d1 here."""
+    from ddp_lite.metrics import d1_error
+    rng = np.random.default_rng(0)
+    gt = rng.uniform(5, 80, (10, 10))
+    pred = gt + rng.normal(0, 4, gt.shape)
+    assert np.isclose(100 * d1_error(pred, gt)["d1_all"], _d1()(pred, gt))
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_a_crashing_or_stub_answer_is_reported_not_raised(name, capsys):
+    def stub(*args):
+        raise NotImplementedError()
+
+    assert getattr(exercises, name)(stub) is False
+    out = capsys.readouterr().out
+    assert out.startswith("FAIL") and "NotImplementedError" in out

@@ -155,3 +155,20 @@ def test_fusion_inputs_are_checked(desk):
         fuse_depths(depths, cameras, [im[:, :, :2] for im in images])
     with pytest.raises(ValueError, match="voxel_length"):
         tsdf_fuse(depths, cameras, images, voxel_length=0.0)
+
+
+def test_depth_coloured_renders_share_a_given_scale_and_draw_a_colour_bar():
+    import matplotlib
+    import matplotlib.pyplot as plt
+
+    cam = Camera.from_fov(width=9, height=7, fov_x_deg=60.0)
+    near, far = np.array([[0.0, 0.0, 2.0]]), np.array([[0.0, 0.0, 4.0]])
+    colour = lambda z: matplotlib.colormaps["viridis_r"]((z - 1.0) / (5.0 - 1.0))[:3]  # the scale 1-5 m, by hand
+    fig, axes = plt.subplots(1, 2)
+    for ax, points, z in ((axes[0], near, 2.0), (axes[1], far, 4.0)):
+        image = render_point_cloud(points, cam, ax=ax, depth_range=(1.0, 5.0))
+        np.testing.assert_allclose(image[3, 4], colour(z), atol=1e-6)  # not each cloud's own percentiles
+    assert len(fig.axes) == 4 and "depth" in fig.axes[2].get_ylabel()  # one colour bar per render
+    plt.close(fig)
+    with pytest.raises(ValueError, match="depth_range"):
+        render_point_cloud(near, cam, depth_range=(5.0, 1.0))

@@ -1,0 +1,298 @@
+"""The classroom kit: student copies, solution copies and a grader for the notebooks' exercises.
+
+The notebooks in ``notebooks/`` are the *source* (instructor) version in nbgrader's format: solution
+code between ``### BEGIN SOLUTION`` / ``### END SOLUTION`` in solution cells, checks in read-only
+autograder test cells (``assert check_x(...)``, with points), open questions in manually graded
+answer cells. An nbgrader course can take them as they are; this module does the same jobs without
+a course database, with nbgrader's own preprocessors:
+
+- :func:`student_copy`: what a student gets (solutions → ``raise NotImplementedError()``, answers
+  → "YOUR ANSWER HERE", outputs cleared, test cells locked, checksums recorded);
+- :func:`execute`: run a notebook top to bottom under a profile (``DDP_PROFILE``);
+- :func:`grade_notebook` / :func:`grade`: run submissions at ``ci`` and score each test cell.
+
+A test cell scores its points when it ran without an error and printed nothing on stderr
+(nbgrader's rule), and 0 when it failed, timed out, or never ran because the kernel died first.
+"""
+from __future__ import annotations
+
+import contextlib
+import copy
+import csv
+import io
+import os
+import re
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import nbformat
+
+from .atomic import write_bytes_atomic
+
+__all__ = ["student_copy", "execute", "exercises", "grade_notebook", "grade", "format_grades", "write_csv",
+           "build_student", "build_solutions", "Score"]
+
+STATUSES = ("pass", "fail", "not run", "missing", "answered", "blank")
+
+
+@dataclass
+class Score:
+    """One exercise of one student: an autograded check or a hand-graded answer."""
+    student: str
+    notebook: str  # file stem, e.g. "01_deep_image_prior"
+    exercise: str  # "01.2": notebook number, exercise number
+    grade_id: str
+    kind: str  # "auto" or "manual"
+    points: float  # scored (autograded) or 0 until a person grades it (manual)
+    max_points: float
+    status: str  # one of STATUSES
+
+
+def _nbgrader_meta(cell) -> dict:
+    return cell.get("metadata", {}).get("nbgrader", {})
+
+
+def _read(path) -> nbformat.NotebookNode:
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"notebook {str(path)!r} does not exist")
+    return nbformat.read(path, as_version=4)
+
+
+def _write(nb, path) -> None:
+    """Write ``nb`` as the repository stores notebooks (indent 1, UTF-8, trailing newline), atomically."""
+    text = nbformat.writes(nb)
+    write_bytes_atomic(path, (text if text.endswith("\n") else text + "\n").encode("utf-8"))
+
+
+def _source_notebooks(source_dir) -> list[Path]:
+    source_dir = Path(source_dir)
+    found = sorted(source_dir.glob("[0-9][0-9]_*.ipynb"))
+    if not found:
+        raise ValueError(f"source_dir {str(source_dir)!r} holds no numbered notebooks (01_*.ipynb ...)")
+    return found
+
+
+def exercises(nb) -> list[tuple[str, dict]]:
+    """The graded cells of a notebook, in order: [(exercise label "01.2", nbgrader metadata)]."""
+    out = []
+    for cell in nb.cells:
+        meta = _nbgrader_meta(cell)
+        if meta.get("grade"):
+            number = re.match(r"ex(\d+)_", meta["grade_id"])
+            if number is None:
+                raise ValueError(f"grade_id {meta['grade_id']!r} must start with ex<N>_ (the exercise number)")
+            out.append((number.group(1), meta))
+    return out
+
+
+def student_copy(nb) -> nbformat.NotebookNode:
+    """The student version of a source notebook (a new object; ``nb`` is not modified)."""
+    from nbgrader.preprocessors import (CheckCellMetadata, ClearHiddenTests, ClearMarkScheme, ClearOutput,
+                                        ClearSolutions, ComputeChecksums, LockCells)
+    nb = copy.deepcopy(nb)
+    resources: dict = {}
+    # nbgrader's own order for `generate_assignment`, less the database steps (SaveCells).
+    for step in (LockCells(), ClearSolutions(), ClearOutput(), CheckCellMetadata(), ClearHiddenTests(),
+                 ClearMarkScheme(), ComputeChecksums()):
+        nb, resources = step.preprocess(nb, resources)
+    return nb
+
+
+@contextlib.contextmanager
+def _environment(**values):
+    """Set environment variables for a kernel started inside the block (it inherits them), then restore."""
+    saved = {name: os.environ.get(name) for name in values}
+    os.environ.update({name: str(value) for name, value in values.items()})
+    try:
+        yield
+    finally:
+        for name, value in saved.items():
+            if value is None:
+                os.environ.pop(name, None)
+            else:
+                os.environ[name] = value
+
+
+def execute(nb, profile: str = "ci", timeout: int = 600, workdir=None, allow_errors: bool = True,
+            figures: bool = False):
+    """Run ``nb`` (modified in place) top to bottom in a fresh kernel with ``DDP_PROFILE=profile``.
+
+    Args:
+        timeout: seconds one cell may take; a cell over it is interrupted and gets an error output.
+        workdir: the kernel's working folder (default: the current one).
+        allow_errors: go on after a failing cell (grading) or raise at the first one (solutions).
+        figures: keep the figures as outputs (Jupyter's inline backend) or draw none (Agg, faster).
+
+    Returns the exception that stopped the run early (the kernel died, ...) or None. Cells after
+    that point keep ``execution_count`` None.
+    """
+    from nbgrader.preprocessors import Execute
+    if profile not in ("ci", "class", "paper"):
+        raise ValueError(f"profile must be 'ci', 'class' or 'paper', got {profile!r}")
+    if not (isinstance(timeout, int) and timeout > 0):
+        raise ValueError(f"timeout must be a positive number of seconds, got {timeout!r}")
+    for cell in nb.cells:  # so that "did not run" is visible afterwards
+        if cell.cell_type == "code":
+            cell.outputs, cell.execution_count = [], None
+    runner = Execute(timeout=timeout, allow_errors=allow_errors, interrupt_on_timeout=True)
+    resources = {"metadata": {"path": str(workdir or os.getcwd())}}
+    backend = "module://matplotlib_inline.backend_inline" if figures else "Agg"
+    with _environment(DDP_PROFILE=profile, MPLBACKEND=backend):
+        try:
+            runner.preprocess(nb, resources)
+        except Exception as error:  # a dead kernel, or the first error when allow_errors is False
+            if not allow_errors:
+                raise
+            return error
+    return None
+
+
+def grade_notebook(submission, source, student: str = "", timeout: int = 600, profile: str = "ci",
+                   workdir=None, name: str | None = None, executed=None) -> list[Score]:
+    """Score one submitted notebook against its source notebook (both NotebookNodes or paths;
+    ``name``, the notebook's file stem such as "01_deep_image_prior", defaults to the source's).
+    ``executed``: where to write the executed notebook with its outputs (feedback), if given.
+
+    The test cells are taken from the source (matched by ``grade_id``), so an edited or deleted check
+    cannot pass; a missing solution cell just fails its check. ``submission=None`` scores a notebook
+    that was not handed in: every exercise 0, status "missing".
+    """
+    if not isinstance(source, nbformat.NotebookNode):
+        name = name or Path(source).stem
+        source = _read(source)
+    if not name:
+        raise ValueError("name: give the notebook's file stem when source is a NotebookNode")
+    expected = exercises(source)
+    if submission is None:
+        return [Score(student, name, f"{name[:2]}.{n}", m["grade_id"], "manual" if m.get("solution") else "auto",
+                      0.0, float(m["points"]), "missing") for n, m in expected]
+    nb = _read(submission) if not isinstance(submission, nbformat.NotebookNode) else copy.deepcopy(submission)
+    locked = {_nbgrader_meta(c)["grade_id"]: c for c in student_copy(source).cells
+              if _nbgrader_meta(c).get("locked") and _nbgrader_meta(c).get("grade_id")}
+    for index, cell in enumerate(nb.cells):
+        grade_id = _nbgrader_meta(cell).get("grade_id")
+        if grade_id in locked:  # nbgrader's OverwriteCells, from the source instead of a database
+            nb.cells[index] = copy.deepcopy(locked[grade_id])
+    execute(nb, profile=profile, timeout=timeout, workdir=workdir)
+    if executed is not None:
+        _write(nb, executed)
+
+    from nbgrader.utils import determine_grade
+    graded = {_nbgrader_meta(c)["grade_id"]: c for c in nb.cells if _nbgrader_meta(c).get("grade")}
+    scores = []
+    for number, meta in expected:
+        kind = "manual" if meta.get("solution") else "auto"
+        label = f"{name[:2]}.{number}"
+        cell = graded.get(meta["grade_id"])
+        if cell is None:
+            scores.append(Score(student, name, label, meta["grade_id"], kind, 0.0, float(meta["points"]), "missing"))
+            continue
+        if kind == "manual":
+            points, maximum = determine_grade(cell)  # 0 if unchanged from the student copy, None if answered
+            status = "blank" if points == 0 else "answered"
+            scores.append(Score(student, name, label, meta["grade_id"], kind, 0.0, maximum, status))
+        elif cell.execution_count is None:
+            scores.append(Score(student, name, label, meta["grade_id"], kind, 0.0, float(meta["points"]), "not run"))
+        else:
+            points, maximum = determine_grade(cell)
+            scores.append(Score(student, name, label, meta["grade_id"], kind, float(points), maximum,
+                                "pass" if points == maximum else "fail"))
+    return scores
+
+
+def grade(submissions_dir, source_dir="notebooks", timeout: int = 600, profile: str = "ci", log=print,
+          executed_dir=None) -> list[Score]:
+    """Grade every student folder in ``submissions_dir`` (``<dir>/<student>/**/NN_name.ipynb``).
+
+    A notebook is matched to its source by file name; a notebook that is missing scores 0, one that
+    crashes or times out scores 0 for what did not run, and neither stops the others.
+    ``executed_dir``: write each executed notebook to ``<executed_dir>/<student>/`` (feedback).
+    """
+    submissions_dir = Path(submissions_dir)
+    if not submissions_dir.is_dir():
+        raise ValueError(f"submissions_dir {str(submissions_dir)!r} is not a folder")
+    students = sorted(p for p in submissions_dir.iterdir() if p.is_dir() and not p.name.startswith("."))
+    if not students:
+        raise ValueError(f"submissions_dir {str(submissions_dir)!r} has no student folders (<dir>/<student>/*.ipynb)")
+    sources = _source_notebooks(source_dir)
+    scores = []
+    for student in students:
+        handed_in = {p.name: p for p in sorted(student.rglob("*.ipynb")) if ".ipynb_checkpoints" not in p.parts}
+        for source_path in sources:
+            source = _read(source_path)
+            path = handed_in.get(source_path.name)
+            try:
+                executed = Path(executed_dir) / student.name / source_path.name if executed_dir and path else None
+                result = grade_notebook(path, source, student.name, timeout, profile,
+                                        workdir=path.parent if path else None, name=source_path.stem,
+                                        executed=executed)
+            except Exception as error:  # an unreadable file: score it 0, go on with the others
+                log(f"{student.name}/{source_path.name}: could not be graded ({type(error).__name__}: {error})")
+                result = [replace(s, status="not run")
+                          for s in grade_notebook(None, source, student.name, name=source_path.stem)]
+            auto = [s for s in result if s.kind == "auto"]
+            log(f"{student.name:<16} {source_path.stem:<26} {sum(s.points for s in auto):g}/"
+                f"{sum(s.max_points for s in auto):g}" + ("  (not handed in)" if path is None else ""))
+            scores.extend(result)
+    return scores
+
+
+def format_grades(scores: list[Score]) -> str:
+    """A per-student, per-exercise table of the autograded checks (points), with totals and the count
+    of open answers written (they are graded by hand)."""
+    auto = [s for s in scores if s.kind == "auto"]
+    columns = list(dict.fromkeys(s.exercise for s in auto))
+    students = list(dict.fromkeys(s.student for s in scores))
+    width = max([7] + [len(s) for s in students])
+    lines = [f"{'student':<{width}} " + " ".join(f"{c:>5}" for c in columns) + f" {'auto':>7} {'open':>6}"]
+    for student in students:
+        mine = {s.exercise: s for s in auto if s.student == student}
+        cells = [f"{mine[c].points:>5g}" if c in mine else f"{'-':>5}" for c in columns]
+        total = sum(s.points for s in mine.values())
+        maximum = sum(s.max_points for s in mine.values())
+        manual = [s for s in scores if s.student == student and s.kind == "manual"]
+        answered = sum(s.status == "answered" for s in manual)
+        lines.append(f"{student:<{width}} " + " ".join(cells) + f" {f'{total:g}/{maximum:g}':>7}"
+                     f" {f'{answered}/{len(manual)}':>6}")
+    lines.append("points per autograded check; 'open': answers written to the open exercises (grade by hand)")
+    return "\n".join(lines)
+
+
+def write_csv(scores: list[Score], path) -> None:
+    """One row per student and exercise (student, notebook, exercise, grade_id, kind, points,
+    max_points, status), written atomically."""
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(["student", "notebook", "exercise", "grade_id", "kind", "points", "max_points", "status"])
+    for s in scores:
+        writer.writerow([s.student, s.notebook, s.exercise, s.grade_id, s.kind, f"{s.points:g}",
+                         f"{s.max_points:g}", s.status])
+    write_bytes_atomic(path, buffer.getvalue().encode("utf-8"))
+
+
+def build_student(source_dir="notebooks", out_dir="build/student") -> list[Path]:
+    """Write the student copy of every source notebook to ``out_dir``; returns the paths."""
+    written = []
+    for path in _source_notebooks(source_dir):
+        target = Path(out_dir) / path.name
+        _write(student_copy(_read(path)), target)
+        written.append(target)
+    return written
+
+
+def build_solutions(source_dir="notebooks", out_dir="build/solutions", profile: str = "class",
+                    timeout: int = 3600, names=None, log=print) -> list[Path]:
+    """Execute every source notebook (solutions in place) under ``profile`` and write it with its
+    outputs to ``out_dir``: the copy a teacher projects. Stops at the first failing cell."""
+    written = []
+    for path in _source_notebooks(source_dir):
+        if names and path.stem[:2] not in names and path.stem not in names:
+            continue
+        log(f"executing {path.name} at {profile} ...")
+        nb = _read(path)
+        execute(nb, profile=profile, timeout=timeout, workdir=path.parent, allow_errors=False, figures=True)
+        target = Path(out_dir) / path.name
+        _write(nb, target)
+        written.append(target)
+    return written

@@ -1,0 +1,212 @@
+"""The classroom kit: nbgrader-format source notebooks, student copies, and the grader (issue 15).
+
+The grader tests on tiny hand-made notebooks run in seconds; the two tests on the real notebooks run
+them at `ci` (a few minutes): every student copy, and the solutions of two notebooks (01 and 08; set
+DDP_GRADE_ALL=1 to grade all nine). nbval already runs every source notebook, where each check
+cell is an ``assert``, so the solutions of all nine pass their checks in every `make test`.
+"""
+import csv
+import json
+import os
+import re
+import shutil
+from pathlib import Path
+
+import nbformat
+import pytest
+
+from ddp_lite import classroom
+
+NOTEBOOKS = Path(__file__).resolve().parent.parent / "notebooks"
+SOURCES = sorted(NOTEBOOKS.glob("[0-9][0-9]_*.ipynb"))
+
+
+def _meta(cell):
+    return cell.metadata.get("nbgrader", {})
+
+
+def _exercise_list(nb) -> list[str]:
+    """Numbers of the exercises listed under the notebook's '## Exercises' heading."""
+    text = next(c.source for c in nb.cells if c.cell_type == "markdown" and "## Exercises" in c.source)
+    return re.findall(r"^(\d+)\. ", text.split("## Exercises", 1)[1], flags=re.M)
+
+
+@pytest.mark.parametrize("path", SOURCES, ids=lambda p: p.stem[:2])
+def test_every_listed_exercise_has_one_graded_cell_and_every_check_a_solution(path):
+    nb = nbformat.read(path, as_version=4)
+    graded = classroom.exercises(nb)
+    assert [n for n, _ in graded] == _exercise_list(nb)
+    for number, meta in graded:
+        if meta["solution"]:  # an open exercise: a hand-graded answer with the expected answer
+            cell = next(c for c in nb.cells if _meta(c).get("grade_id") == meta["grade_id"])
+            assert cell.cell_type == "markdown" and cell.source.startswith("*Expected answer*")
+        else:  # a coded exercise: a solution cell before its locked check
+            assert meta["locked"] and meta["points"] > 0
+            solution = [c for c in nb.cells if _meta(c).get("grade_id", "").startswith(f"ex{number}_")
+                        and _meta(c).get("solution")]
+            assert len(solution) == 1 and "### BEGIN SOLUTION" in solution[0].source
+
+
+@pytest.mark.parametrize("path", SOURCES, ids=lambda p: p.stem[:2])
+def test_source_notebooks_are_stored_without_outputs_in_the_repository_format(path):
+    text = path.read_text(encoding="utf-8")
+    nb = json.loads(text)
+    assert json.dumps(nb, indent=1, ensure_ascii=False) + "\n" == text
+    assert all(not c.get("outputs") and c.get("execution_count") is None for c in nb["cells"] if c["cell_type"] == "code")
+
+
+@pytest.mark.parametrize("path", SOURCES, ids=lambda p: p.stem[:2])
+def test_student_copy_has_stubs_no_solutions_and_the_same_checks(path):
+    source = nbformat.read(path, as_version=4)
+    student = classroom.student_copy(source)
+    assert nbformat.read(path, as_version=4) == source  # the source is not modified
+    assert "BEGIN SOLUTION" not in json.dumps(student) and "Expected answer" not in json.dumps(student)
+    checks = {_meta(c)["grade_id"]: c.source for c in source.cells if _meta(c).get("locked")}
+    for cell in student.cells:
+        meta = _meta(cell)
+        if meta.get("solution") and cell.cell_type == "code":
+            assert "raise NotImplementedError()" in cell.source
+        elif meta.get("solution"):
+            assert cell.source == "YOUR ANSWER HERE"
+        elif meta.get("locked"):
+            assert cell.source == checks[meta["grade_id"]] and cell.metadata["editable"] is False
+        if cell.cell_type == "code":
+            assert cell.outputs == [] and cell.execution_count is None
+
+
+def test_build_student_writes_every_notebook(tmp_path):
+    written = classroom.build_student(NOTEBOOKS, tmp_path / "student")
+    assert [p.name for p in written] == [p.name for p in SOURCES]
+    assert all(json.loads(p.read_text(encoding="utf-8"))["cells"] for p in written)
+
+
+# --- the grader on tiny notebooks: fast, and every way a submission can go wrong ---------------
+
+def _tiny_source(tmp_path) -> Path:
+    def cell(kind, source, **nbgrader):
+        meta = {"nbgrader": {"grade": False, "locked": False, "solution": False, "schema_version": 3, "task": False,
+                             **nbgrader}} if nbgrader else {}
+        make = nbformat.v4.new_code_cell if kind == "code" else nbformat.v4.new_markdown_cell
+        return make(source, metadata=meta)
+    nb = nbformat.v4.new_notebook(cells=[
+        cell("markdown", "# 01 · tiny\n## Exercises\n1. square\n2. cube\n3. why?"),
+        cell("code", "import time"),
+        cell("code", "def square(x):\n    ### BEGIN SOLUTION\n    return x * x\n    ### END SOLUTION",
+             grade_id="ex1_square", solution=True),
+        cell("code", "assert square(3) == 9", grade_id="ex1_square_check", grade=True, locked=True, points=2),
+        cell("code", "def cube(x):\n    ### BEGIN SOLUTION\n    return x ** 3\n    ### END SOLUTION",
+             grade_id="ex2_cube", solution=True),
+        cell("code", "assert cube(2) == 8", grade_id="ex2_cube_check", grade=True, locked=True, points=3),
+        cell("markdown", "*Expected answer*: because.", grade_id="ex3_answer", grade=True, solution=True, points=1),
+    ])
+    folder = tmp_path / "source"
+    folder.mkdir()
+    path = folder / "01_tiny.ipynb"
+    nbformat.write(nb, path)
+    return path
+
+
+def _submit(tmp_path, student: str, nb) -> None:
+    folder = tmp_path / "submissions" / student
+    folder.mkdir(parents=True)
+    nbformat.write(nb, folder / "01_tiny.ipynb")
+
+
+def _edit(nb, grade_id, source):
+    nb = nbformat.from_dict(json.loads(json.dumps(nb)))
+    next(c for c in nb.cells if _meta(c).get("grade_id") == grade_id).source = source
+    return nb
+
+
+def test_grader_scores_right_wrong_crashing_tampered_slow_and_missing_work(tmp_path):
+    source_path = _tiny_source(tmp_path)
+    source = nbformat.read(source_path, as_version=4)
+    student = classroom.student_copy(source)
+    _submit(tmp_path, "ada", source)  # the solutions
+    _submit(tmp_path, "ben", student)  # untouched
+    _submit(tmp_path, "cy", _edit(_edit(student, "ex1_square", "def square(x):\n    return x + x"),
+                                  "ex3_answer", "Because it is quick."))
+    _submit(tmp_path, "dee", _edit(source, "ex2_cube", "import os\nos._exit(1)  # the kernel dies"))
+    _submit(tmp_path, "eve", _edit(student, "ex1_square_check", "assert True  # edited check"))
+    _submit(tmp_path, "fay", _edit(source, "ex1_square", "import time\ntime.sleep(60)\ndef square(x):\n    return x * x"))
+    (tmp_path / "submissions" / "gus").mkdir()  # handed in nothing
+    log = []
+    scores = classroom.grade(tmp_path / "submissions", source_path.parent, timeout=5, log=log.append)
+    table = {(s.student, s.exercise): (s.points, s.status) for s in scores}
+    assert table[("ada", "01.1")] == (2, "pass") and table[("ada", "01.2")] == (3, "pass")
+    assert table[("ben", "01.1")] == (0, "fail") and table[("ben", "01.2")] == (0, "fail")
+    assert table[("ben", "01.3")] == (0, "blank") and table[("cy", "01.3")] == (0, "answered")
+    assert table[("cy", "01.1")] == (0, "fail")
+    assert table[("dee", "01.1")] == (2, "pass") and table[("dee", "01.2")] == (0, "not run")
+    assert table[("eve", "01.1")] == (0, "fail")  # the check came back from the source
+    assert table[("fay", "01.1")] == (0, "fail") and table[("fay", "01.2")] == (3, "pass")  # timed out, went on
+    assert table[("gus", "01.1")] == (0, "missing")
+    text = classroom.format_grades(scores)
+    assert re.search(r"^ada\s+2\s+3\s+5/5\s+1/1$", text, flags=re.M), text
+    assert re.search(r"^ben\s+0\s+0\s+0/5\s+0/1$", text, flags=re.M), text
+    classroom.write_csv(scores, tmp_path / "out" / "grades.csv")
+    rows = list(csv.DictReader(open(tmp_path / "out" / "grades.csv", encoding="utf-8")))
+    assert len(rows) == 7 * 3 and rows[0] == {"student": "ada", "notebook": "01_tiny", "exercise": "01.1",
+                                              "grade_id": "ex1_square_check", "kind": "auto", "points": "2",
+                                              "max_points": "2", "status": "pass"}
+
+
+@pytest.mark.parametrize("bad, match", [({"profile": "fast"}, "profile"), ({"timeout": 0}, "timeout")])
+def test_execute_refuses_bad_arguments(bad, match):
+    with pytest.raises(ValueError, match=match):
+        classroom.execute(nbformat.v4.new_notebook(), **bad)
+
+
+def test_grade_refuses_a_folder_without_students(tmp_path):
+    with pytest.raises(ValueError, match="submissions_dir"):
+        classroom.grade(tmp_path / "nowhere")
+    with pytest.raises(ValueError, match="no student folders"):
+        classroom.grade(tmp_path)
+
+
+# --- the real notebooks at ci: minutes ------------------------------------------------------------
+
+def test_untouched_student_copies_run_to_the_end_fail_every_check_cleanly_and_score_zero(tmp_path):
+    classroom.build_student(NOTEBOOKS, tmp_path / "submissions" / "untouched")
+    scores = classroom.grade(tmp_path / "submissions", NOTEBOOKS, executed_dir=tmp_path / "executed", log=print)
+    auto = [s for s in scores if s.kind == "auto"]
+    assert len(auto) == 13 and all(s.points == 0 and s.status == "fail" for s in auto)
+    assert all(s.status == "blank" for s in scores if s.kind == "manual")
+    for path in sorted((tmp_path / "executed" / "untouched").glob("*.ipynb")):
+        nb = nbformat.read(path, as_version=4)
+        for cell in (c for c in nb.cells if c.cell_type == "code"):
+            errors = [o for o in cell.outputs if o.output_type == "error"]
+            assert cell.execution_count is not None, f"{path.name}: a cell did not run"
+            if _meta(cell).get("grade"):  # the check printed why, then its assert failed
+                printed = "".join(o.get("text", "") for o in cell.outputs if o.output_type == "stream")
+                assert printed.startswith("FAIL") and "NotImplementedError" in printed, (path.name, printed)
+                assert [e.ename for e in errors] == ["AssertionError"], (path.name, errors)
+            else:
+                assert not errors, (path.name, cell.source[:80], errors)
+
+
+def test_solutions_get_full_marks(tmp_path):
+    chosen = SOURCES if os.environ.get("DDP_GRADE_ALL") else [p for p in SOURCES if p.stem[:2] in ("01", "08")]
+    source_dir = tmp_path / "source"
+    source_dir.mkdir()
+    for path in chosen:
+        shutil.copy(path, source_dir / path.name)
+    shutil.copytree(source_dir, tmp_path / "submissions" / "teacher")
+    scores = classroom.grade(tmp_path / "submissions", source_dir, log=print)
+    auto = [s for s in scores if s.kind == "auto"]
+    assert auto and all(s.points == s.max_points and s.status == "pass" for s in auto), auto
+
+
+def test_solution_copies_keep_their_figures_and_stop_at_a_failing_cell(tmp_path):
+    source = tmp_path / "source"
+    source.mkdir()
+    plot = nbformat.v4.new_code_cell("import matplotlib.pyplot as plt\nplt.plot([0, 1])\nprint('drawn')")
+    nbformat.write(nbformat.v4.new_notebook(cells=[plot]), source / "01_plot.ipynb")
+    [written] = classroom.build_solutions(source, tmp_path / "solutions", profile="ci", log=lambda *_: None)
+    outputs = nbformat.read(written, as_version=4).cells[0].outputs
+    assert any("image/png" in o.get("data", {}) for o in outputs)  # the teacher projects these
+    broken = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell("1 / 0")])
+    nbformat.write(broken, source / "02_broken.ipynb")
+    with pytest.raises(Exception, match="ZeroDivisionError"):
+        classroom.build_solutions(source, tmp_path / "solutions", profile="ci", names=["02"], log=lambda *_: None)
+    assert not (tmp_path / "solutions" / "02_broken.ipynb").exists()

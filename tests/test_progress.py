@@ -1,0 +1,62 @@
+"""Progress output: a bar on a terminal or in Jupyter, short lines in logs (issue 15)."""
+import io
+
+import pytest
+from tqdm import tqdm as tqdm_class
+
+from ddp_lite.progress import LineProgress, progress
+
+
+class FakeTerminal(io.StringIO):
+    def isatty(self):
+        return True
+
+
+def test_a_log_gets_one_short_line_every_ten_percent():
+    log = io.StringIO()
+    bar = progress(range(150), desc="DDP rgbd", stream=log)
+    assert isinstance(bar, LineProgress)
+    for i in bar:
+        if i == 100:
+            bar.set_postfix(heldout="0.0123", refresh=False)
+    bar.close()  # fit.py closes after the loop too: no second last line
+    lines = log.getvalue().splitlines()
+    assert "\r" not in log.getvalue()
+    assert [line.split()[2] for line in lines[:-1]] == [f"{p}%" for p in range(10, 100, 10)]
+    assert lines[0].startswith("DDP rgbd: 10% (15/150)")
+    assert lines[-1].startswith("DDP rgbd: done (150/150)") and lines[-1].endswith("heldout=0.0123")
+    assert max(len(line) for line in lines) < 80
+
+
+def test_an_early_stop_says_where_it_stopped():
+    log = io.StringIO()
+    bar = progress(range(200), desc="fit", stream=log, every=25)
+    for i in bar:
+        if i == 119:
+            break
+    bar.close()
+    lines = log.getvalue().splitlines()
+    assert [line.split()[1] for line in lines] == ["25%", "50%", "stopped"]
+    assert "stopped at 120/200" in lines[-1]
+
+
+def test_a_terminal_gets_tqdm_and_disable_prints_nothing():
+    assert isinstance(progress(range(3), stream=FakeTerminal()), tqdm_class)
+    log = io.StringIO()
+    assert list(progress(range(3), disable=True, stream=log)) == [0, 1, 2]
+    assert log.getvalue() == ""
+
+
+def test_small_totals_and_unknown_lengths():
+    log = io.StringIO()
+    assert list(progress(range(3), stream=log, every=10)) == [0, 1, 2]
+    assert [line.split()[0] for line in log.getvalue().splitlines()] == ["33%", "67%", "done"]
+    log = io.StringIO()
+    assert list(progress(iter("abc"), stream=log)) == ["a", "b", "c"]
+    assert log.getvalue().splitlines()[-1].startswith("done (3)")
+
+
+@pytest.mark.parametrize("every", [0, -5, 150])
+def test_every_must_be_a_percentage(every):
+    with pytest.raises(ValueError, match="every"):
+        progress(range(3), stream=io.StringIO(), every=every)

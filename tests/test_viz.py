@@ -1,0 +1,38 @@
+"""Figure helpers: one error scale across a comparison, outlines of unscored regions."""
+import matplotlib.pyplot as plt
+import numpy as np
+import pytest
+
+from ddp_lite.viz import error_vmax, outline, show_error
+
+
+def test_error_vmax_is_the_percentile_of_all_maps_together():
+    truth = np.zeros((4, 5))
+    small, large = np.full((4, 5), 0.1), np.arange(20.0).reshape(4, 5)
+    mask = np.ones((4, 5), bool)
+    mask[0, 0] = False  # outside the mask: not counted
+    errors = np.concatenate([np.full(19, 0.1), np.arange(1.0, 20.0)])
+    assert error_vmax([small, large], truth, mask) == pytest.approx(np.percentile(errors, 99))
+    assert error_vmax({"a": small, "b": large}, truth, mask, percentile=50) == pytest.approx(np.median(errors))
+    with pytest.raises(ValueError, match="estimates"):
+        error_vmax([], truth)
+
+
+def test_a_shared_vmax_gives_both_maps_the_same_colour_scale():
+    truth = np.zeros((3, 3))
+    fig, axes = plt.subplots(1, 2)
+    top = error_vmax([np.ones((3, 3)), 3 * np.ones((3, 3))], truth)
+    images = [show_error(ax, estimate, truth, vmax=top) for ax, estimate in zip(axes, (np.ones((3, 3)), 3 * np.ones((3, 3))))]
+    assert images[0].get_clim() == images[1].get_clim() == (0, pytest.approx(3.0))
+    plt.close(fig)
+
+
+def test_outline_draws_a_contour_and_a_legend_entry():
+    fig, ax = plt.subplots()
+    region = np.zeros((6, 6), bool)
+    region[:2] = True
+    outline(ax, region, label="sky: not scored")
+    assert ax.get_legend().get_texts()[0].get_text() == "sky: not scored"
+    assert ax.collections  # the contour
+    outline(ax, np.zeros((6, 6), bool))  # nothing to outline: no error
+    plt.close(fig)
