@@ -100,7 +100,8 @@ class FitConfig:
                       lr=profile.lr, iterations=iterations, lr_milestones=profile.milestones(iterations),
                       lr_gamma=profile.lr_gamma, auto_stop=profile.auto_stop, patience=profile.patience,
                       plateau_decays=profile.plateau_decays, eval_every=profile.eval_every,
-                      smoothness=profile.smoothness, smoothness_edge=profile.smoothness_edge, bf16=profile.bf16)
+                      smoothness=profile.smoothness, smoothness_edge=profile.smoothness_edge, bf16=profile.bf16,
+                      ensemble=profile.ensemble)
         values.update(overrides)
         return cls(**values)
 

@@ -56,6 +56,7 @@ class Profile:
     smoothness: float = 0.0  # FitConfig.smoothness: curvature penalty in the holes (0 = the paper's losses only)
     smoothness_edge: float = 10.0  # FitConfig.smoothness_edge
     bf16: bool | None = False  # FitConfig.bf16 (None: bfloat16 where the hardware computes it natively)
+    ensemble: int = 1  # FitConfig.ensemble: the mean disparity of this many seeds' fits
 
     def milestones(self, iterations: int) -> tuple[int, ...]:
         """The learning-rate decay iterations for a run of ``iterations``."""
