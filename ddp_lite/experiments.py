@@ -17,6 +17,7 @@ from .camera import Camera
 from .disparity import DisparityTransform
 from .fit import DepthResult, FitConfig, complete_depth
 from .profiles import Profile, get_profile
+from .variants import get_variant
 
 __all__ = ["Case", "make_case", "sgm_depth_at_scale", "edge_band", "disparity_rmse", "run_variants", "error_table", "format_table",
            "texture_leakage", "format_mean_spread", "cloud_scores", "ablation", "TABLE2_CONFIGS"]
@@ -116,7 +117,7 @@ def make_case(scene_name: str = "house", profile: Profile | str | None = None, r
     from .holes import edge_band_holes, random_holes
     from .scenes import make_scene, select_neighbors
 
-    profile = get_profile(profile) if profile is None or isinstance(profile, str) else profile
+    profile = get_profile(profile)
     scene = make_scene(scene_name, size=profile.size, n_views=profile.n_views, seed=seed)
     view = scene[ref]
     if holes == "sgm":
@@ -145,7 +146,7 @@ def run_variants(case: Case, variants=("d", "rgbd", "rgbd+warp"), profile=None, 
     results = {}
     for variant in variants:
         config = FitConfig.for_profile(profile, variant=variant, net=net, **config_overrides)
-        neighbors = case.neighbors if variant == "rgbd+warp" else ()
+        neighbors = case.neighbors if get_variant(variant).needs_neighbors else ()
         results[variant] = complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant,
                                           config=config, gt_depth=case.scored_gt, transform=case.transform)
     return results

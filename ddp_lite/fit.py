@@ -33,16 +33,16 @@ from .progress import progress as tqdm
 from .camera import Camera, view_overlap
 from .checks import check_bool, check_choice, check_int, check_int_tuple, check_real
 from .disparity import DisparityTransform
-from .losses import ConstantTarget, LossWeights, disparity_loss, rgb_loss, smoothness_loss, smoothness_weights, warp_loss
+from .losses import ConstantTarget, disparity_loss, rgb_loss, smoothness_loss, smoothness_weights, warp_loss
 from .nets import (DOWNSAMPLINGS, NETS, PADDINGS, SKIP_CHANNELS, UNET_CHANNELS, UPSAMPLINGS, build_net,
                    count_parameters, make_noise)
 from .profiles import get_profile
+from .variants import VARIANTS, get_variant
 from .warp import Warper
 
 __all__ = ["FitConfig", "DepthResult", "ImageResult", "complete_depth", "complete_depth_coarse_to_fine", "fit_image",
            "merge", "PlateauStopper", "VARIANTS"]
 
-VARIANTS = ("d", "rgbd", "rgbd+warp")
 HOLDOUTS = ("pixels", "blobs")
 MIN_VALID_PIXELS = 16
 
@@ -93,8 +93,8 @@ class FitConfig:
     @classmethod
     def for_profile(cls, profile=None, variant: str = "rgbd+warp", **overrides) -> "FitConfig":
         """The config of a profile (name, :class:`Profile` or None for ``DDP_PROFILE``)."""
-        profile = get_profile(profile) if profile is None or isinstance(profile, str) else profile
-        iterations = profile.iterations_depth_only if variant == "d" else profile.iterations
+        profile = get_profile(profile)
+        iterations = profile.iterations_for(get_variant(variant))
         net = overrides.get("net", "unet")
         values = dict(net=net, channels=profile.channels if net == "unet" else profile.skip_channels,
                       lr=profile.lr, iterations=iterations, lr_milestones=profile.milestones(iterations),
@@ -110,10 +110,10 @@ class FitConfig:
         return dataclasses.replace(self, **changes)
 
     def resolved_iterations(self, variant: str) -> int:
-        """The iteration count this config runs for ``variant``."""
+        """The iteration count this config runs for ``variant``: ``iterations``, or the paper's."""
         if self.iterations is not None:
             return int(self.iterations)
-        return 6000 if variant == "d" else 16000
+        return get_variant(variant).paper_iterations
 
     def validate(self) -> None:
         """Raise ``TypeError``/``ValueError`` naming the first bad field: every number must be finite and
@@ -543,7 +543,8 @@ def complete_depth(rgb, depth, camera: Camera | None = None, neighbors=(), varia
         >>> complete_depth(np.zeros((32, 32, 3), np.float32), depth, variant="d", config=cfg).depth.shape
         (32, 32)
     """
-    config = FitConfig.for_profile(variant=variant) if config is None and variant in VARIANTS else config
+    get_variant(variant)  # a bad name fails here, before any config is built
+    config = FitConfig.for_profile(variant=variant) if config is None else config
     if callback is not None and not callable(callback):
         raise TypeError(f"callback must be a function callback(iteration, outputs), got {type(callback).__name__}")
     if not isinstance(config, FitConfig) or config.ensemble == 1:
@@ -567,23 +568,22 @@ def complete_depth(rgb, depth, camera: Camera | None = None, neighbors=(), varia
 
 def _check_fit_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth, transform):
     """Validate a depth fit's inputs before any work: (config, depth, rgb, neighbors, gt_depth, transform)."""
-    if variant not in VARIANTS:
-        raise ValueError(f"variant must be one of {VARIANTS}, got {variant!r}")
+    spec = get_variant(variant)
     config = FitConfig.for_profile(variant=variant) if config is None else config
     if not isinstance(config, FitConfig):
         raise TypeError(f"config must be a FitConfig, got {type(config).__name__}")
     config.validate()
     depth = _check_depth(depth)
     H, W = depth.shape
-    rgb = _check_image(rgb, "rgb", (H, W)) if variant != "d" or rgb is not None else None
+    rgb = _check_image(rgb, "rgb", (H, W)) if spec.uses_rgb or rgb is not None else None
     neighbors = _check_neighbors(neighbors)
     if camera is not None and not isinstance(camera, Camera):
         raise TypeError(f"camera must be a ddp_lite.Camera, got {type(camera).__name__}")
     if camera is not None and (camera.height, camera.width) != (H, W):
         raise ValueError(f"camera is {camera.width}×{camera.height} but depth is {W}×{H}")
-    if variant == "rgbd+warp" and (camera is None or not neighbors):
-        raise ValueError("variant 'rgbd+warp' needs camera and at least one neighbor; use 'rgbd' without them")
-    if variant == "rgbd+warp":
+    if spec.needs_neighbors and (camera is None or not neighbors):
+        raise ValueError(f"variant {spec.name!r} needs camera and at least one neighbor; use 'rgbd' without them")
+    if spec.needs_neighbors:
         _check_overlap(camera, depth, neighbors)
     if gt_depth is not None:
         gt_depth = np.asarray(gt_depth, dtype=np.float32)
@@ -604,7 +604,8 @@ def _complete_depth(rgb, depth, camera, neighbors, variant, config, gt_depth, tr
 
     device = _device(config)
     iterations = config.resolved_iterations(variant)
-    w_disp, w_rgb, w_warp = LossWeights.for_variant(variant, config.gammas)
+    spec = get_variant(variant)
+    w_disp, w_rgb, w_warp = spec.loss_weights(config.gammas)
     valid = np.isfinite(depth)
     heldout = (_holdout_mask(valid, config.holdout_fraction, config.seed, config.holdout) if config.auto_stop
                else np.zeros_like(valid))
@@ -677,8 +678,8 @@ def _complete_depth(rgb, depth, camera, neighbors, variant, config, gt_depth, tr
 
     if init is not None and not isinstance(init, DepthResult):
         raise TypeError(f"init must be a DepthResult, got {type(init).__name__}")
-    _check_memory(config, 1 if variant == "d" else 4, H, W, len(warpers), device)
-    net, noise = _build(config, 1 if variant == "d" else 4, H, W, device, init.state if init is not None else None,
+    _check_memory(config, spec.out_channels, H, W, len(warpers), device)
+    net, noise = _build(config, spec.out_channels, H, W, device, init.state if init is not None else None,
                         noise)
     start = time.perf_counter()
     output, history, ran, best = _run(net, noise, loss_fn, config, iterations, heldout_error, evaluate,

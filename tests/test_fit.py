@@ -210,3 +210,22 @@ def test_bfloat16_and_channels_last_still_fill_the_hole():
     result = complete_depth(np.zeros((32, 48, 3), np.float32), depth, variant="d", config=config)
     rmse = float(np.sqrt(np.mean((result.depth[holes] - gt[holes]) ** 2)))
     assert rmse < 0.7 * float(np.sqrt(np.mean((nearest_fill(depth)[holes] - gt[holes]) ** 2)))
+
+
+def test_variant_table_is_the_papers():
+    """Every per-variant difference comes from one record: γ, output channels, needs, iterations."""
+    from ddp_lite.profiles import get_profile
+    from ddp_lite.variants import VARIANTS, get_variant
+    assert VARIANTS == ("d", "rgbd", "rgbd+warp")
+    d, rgbd, warp = (get_variant(name) for name in VARIANTS)
+    assert d.loss_weights((0.5, 0.5)) == (1.0, 0.0, 0.0) and d.out_channels == 1
+    assert rgbd.loss_weights() == (0.98, 0.01, 0.0) and rgbd.out_channels == 4
+    assert warp.loss_weights()[:2] == (0.96, 0.02) and warp.loss_weights()[2] == pytest.approx(0.02)
+    assert warp.loss_weights((0.9, 0.05))[2] == pytest.approx(0.05)
+    assert [v.needs_neighbors for v in (d, rgbd, warp)] == [False, False, True]
+    assert FitConfig().resolved_iterations("d") == 6000 and FitConfig().resolved_iterations("rgbd+warp") == 16000
+    paper = get_profile("paper")
+    assert paper.iterations_for("d") == 6000 and paper.iterations_for(warp) == 16000
+    assert get_profile(paper) is paper
+    with pytest.raises(ValueError, match="variant must be one of"):
+        get_variant("rgb")
