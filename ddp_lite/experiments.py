@@ -11,12 +11,13 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import ndimage
 
 from .camera import Camera
 from .disparity import DisparityTransform
 from .fit import DepthResult, FitConfig, complete_depth
+from .metrics import cloud_scores, disparity_rmse, edge_band, texture_leakage  # re-exported: notebooks import them here
 from .profiles import Profile, get_profile
+from .scenes import LABEL_SKY
 from .variants import get_variant
 
 __all__ = ["Case", "make_case", "sgm_depth_at_scale", "edge_band", "disparity_rmse", "run_variants", "error_table", "format_table",
@@ -36,12 +37,12 @@ class Case:
     transform: DisparityTransform | None = None
     scene: object = None
     ref: int = 0
-    labels: np.ndarray | None = None  # (H, W) uint8 texture classes (0 = sky), see scenes.LABELS
+    labels: np.ndarray | None = None  # (H, W) uint8 texture classes (LABEL_SKY = 0), see scenes.LABELS
 
     @property
     def scored(self) -> np.ndarray:
         """(H, W) bool: where ground truth is scored (everything but the sky)."""
-        return np.ones(self.gt.shape, bool) if self.labels is None else self.labels != 0
+        return np.ones(self.gt.shape, bool) if self.labels is None else self.labels != LABEL_SKY
 
     @property
     def scored_gt(self) -> np.ndarray:
@@ -56,29 +57,6 @@ class Case:
     def edge_holes(self, width: int = 3) -> np.ndarray:
         """(H, W) bool: holes within ``width`` px of a ground-truth depth edge."""
         return self.holes & edge_band(self.gt, width)
-
-
-def edge_band(depth, width: int = 3, relative_jump: float = 0.05) -> np.ndarray:
-    """(H, W) bool: pixels within ``width`` px of a depth discontinuity (a jump > 5 % between
-    4-neighbours) of a hole-free depth map (H, W) metres."""
-    depth = np.asarray(depth, dtype=np.float64)
-    jump = np.zeros(depth.shape, bool)
-    dx = np.abs(np.diff(depth, axis=1)) > relative_jump * np.minimum(depth[:, 1:], depth[:, :-1])
-    dy = np.abs(np.diff(depth, axis=0)) > relative_jump * np.minimum(depth[1:], depth[:-1])
-    jump[:, 1:] |= dx
-    jump[:, :-1] |= dx
-    jump[1:] |= dy
-    jump[:-1] |= dy
-    return ndimage.binary_dilation(jump, iterations=max(int(width), 0)) if width else jump
-
-
-def disparity_rmse(depth, gt, mask, transform: DisparityTransform) -> float:
-    """RMSE ×100 of normalised disparity between two depth maps (H, W metres) on ``mask``."""
-    mask = np.asarray(mask, bool) & np.isfinite(depth) & np.isfinite(gt)
-    if not mask.any():
-        return float("nan")
-    error = transform.to_disparity(np.asarray(depth, np.float64)) - transform.to_disparity(np.asarray(gt, np.float64))
-    return float(100.0 * np.sqrt(np.mean(error[mask] ** 2)))
 
 
 def sgm_depth_at_scale(scene_name: str, size, n_views: int, seed: int, ref=0, params="sparse",
@@ -174,28 +152,6 @@ def format_table(table: dict[str, dict[str, float]], digits: int = 2, title: str
     return "\n".join(lines)
 
 
-def texture_leakage(depth, gt, transform: DisparityTransform, band: int = 3, region=None) -> float:
-    """Mean |Laplacian| ×100 of the normalised disparity of ``depth`` (H, W metres) on the pixels
-    where the truth ``gt`` is locally planar (its own Laplacian ≈ 0) and away from depth edges.
-
-    For a plane, inverse depth is an affine function of the pixel coordinates, so its Laplacian is
-    zero; with ``transform.constant == 0`` the same holds for normalised disparity. Colour texture
-    copied into the depth (paper Fig. 4: wooden planks on a flat wall) shows up as a non-zero
-    Laplacian exactly there. ``region`` (H, W) bool restricts the measure further (for example
-    to the planks: ``case.labels == LABELS_PLANKS``).
-    """
-    kernel = np.array([[0.0, 1.0, 0.0], [1.0, -4.0, 1.0], [0.0, 1.0, 0.0]])
-    out = ndimage.convolve(transform.to_disparity(np.asarray(depth, np.float64)), kernel, mode="nearest")
-    truth = ndimage.convolve(transform.to_disparity(np.asarray(gt, np.float64)), kernel, mode="nearest")
-    planar = (np.abs(truth) < 1e-4) & ~edge_band(gt, band)
-    if region is not None:
-        planar &= np.asarray(region, bool)
-    planar = ndimage.binary_erosion(planar, iterations=1)
-    if not planar.any():
-        return float("nan")
-    return float(100.0 * np.mean(np.abs(out[planar])))
-
-
 def format_mean_spread(runs: list[dict[str, dict[str, float]]], digits: int = 2, title: str = "") -> str:
     """A plain-text table of "mean ± std" over several ``{row: {column: value}}`` tables (same rows
     and columns, e.g. one per scene and seed), rows in the order of the first; std is the sample
@@ -254,11 +210,3 @@ def ablation(cases, configs: dict | None = None, profile=None, holes: str = "edg
         runs.append(run)
         log(f"{scene} seed {seed}: " + ", ".join(f"{row} {v['holes']:.2f}" for row, v in run.items()))
     return runs, examples
-
-
-def cloud_scores(points, gt_points, tau: float) -> dict[str, float]:
-    """Tanks-and-Temples precision, recall and F-score in % of a point cloud ((N, 3) world metres or
-    an Open3D cloud) against ``gt_points`` at distance ``tau`` metres."""
-    from .metrics import point_cloud_prf
-    scores = point_cloud_prf(points, gt_points, tau)
-    return {"P": 100 * scores["precision"], "R": 100 * scores["recall"], "F": 100 * scores["fscore"]}
