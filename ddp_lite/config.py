@@ -14,7 +14,7 @@ import torch
 
 from .checks import check_bool, check_choice, check_int, check_int_tuple, check_real
 from .nets import DOWNSAMPLINGS, NETS, PADDINGS, UPSAMPLINGS
-from .profiles import get_profile
+from .profiles import Profile, get_profile
 from .variants import get_variant
 
 __all__ = ["FitConfig", "HOLDOUTS", "use_bf16", "resolve_device"]
@@ -67,16 +67,18 @@ class FitConfig:
 
     @classmethod
     def for_profile(cls, profile=None, variant: str = "rgbd+warp", **overrides) -> "FitConfig":
-        """The config of a profile (name, :class:`Profile` or None for ``DDP_PROFILE``)."""
+        """The config of a profile (name, :class:`Profile` or None for ``DDP_PROFILE``) for ``variant``.
+
+        Every :class:`Profile` field that is also a FitConfig field is copied, so a setting added to
+        both flows through; three are derived: ``channels`` (the UNet's or the SkipNet's widths, by
+        ``net``), ``iterations`` (the variant's count) and ``lr_milestones`` (fractions → iterations).
+        """
         profile = get_profile(profile)
         iterations = profile.iterations_for(get_variant(variant))
         net = overrides.get("net", "unet")
-        values = dict(net=net, channels=profile.channels if net == "unet" else profile.skip_channels,
-                      lr=profile.lr, iterations=iterations, lr_milestones=profile.milestones(iterations),
-                      lr_gamma=profile.lr_gamma, auto_stop=profile.auto_stop, patience=profile.patience,
-                      plateau_decays=profile.plateau_decays, eval_every=profile.eval_every,
-                      smoothness=profile.smoothness, smoothness_edge=profile.smoothness_edge, bf16=profile.bf16,
-                      ensemble=profile.ensemble)
+        values = {name: getattr(profile, name) for name in _COPIED_FROM_PROFILE}
+        values.update(net=net, channels=profile.channels if net == "unet" else profile.skip_channels,
+                      iterations=iterations, lr_milestones=profile.milestones(iterations))
         values.update(overrides)
         return cls(**values)
 
@@ -127,6 +129,12 @@ class FitConfig:
             check_real(self.max_memory_gb, "config.max_memory_gb", 0.0, None, low_open=True)
         if self.device is not None:
             resolve_device(self)  # a name torch knows and a device this machine has
+
+
+# the Profile fields for_profile copies as they are (channels, iterations, lr_milestones are derived)
+_COPIED_FROM_PROFILE = tuple(sorted({f.name for f in dataclasses.fields(Profile)}
+                                    & {f.name for f in dataclasses.fields(FitConfig)}
+                                    - {"channels", "iterations", "lr_milestones"}))
 
 
 def use_bf16(bf16: bool | None, device: torch.device) -> bool:

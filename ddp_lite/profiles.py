@@ -37,7 +37,9 @@ DEFAULT = "class"
 
 @dataclass(frozen=True)
 class Profile:
-    """Sizes and schedules one profile uses everywhere."""
+    """Sizes and schedules one profile uses everywhere. A field named like a ``FitConfig`` field is
+    copied into the configs :meth:`FitConfig.for_profile` builds (``channels``, ``iterations`` and
+    ``lr_milestones`` are derived per variant and net); the others size scenes, tables and DIP."""
 
     name: str
     size: tuple[int, int]  # (H, W) of scenes and images

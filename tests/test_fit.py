@@ -229,3 +229,20 @@ def test_variant_table_is_the_papers():
     assert get_profile(paper) is paper
     with pytest.raises(ValueError, match="variant must be one of"):
         get_variant("rgb")
+
+
+def test_for_profile_copies_every_shared_field_and_derives_the_rest():
+    """One source of fit settings: a Profile field named like a FitConfig field reaches the config."""
+    import dataclasses
+    from ddp_lite.profiles import PROFILES
+    for profile in PROFILES.values():
+        for variant in ("d", "rgbd+warp"):
+            config = FitConfig.for_profile(profile, variant=variant)
+            iterations = profile.iterations_depth_only if variant == "d" else profile.iterations
+            assert config.iterations == iterations and config.channels == profile.channels
+            assert config.lr_milestones == profile.milestones(iterations)
+            for field in dataclasses.fields(profile):
+                if hasattr(config, field.name) and field.name not in ("channels", "iterations", "lr_milestones"):
+                    assert getattr(config, field.name) == getattr(profile, field.name), field.name
+    assert FitConfig.for_profile("ci", net="skip").channels == PROFILES["ci"].skip_channels
+    assert FitConfig.for_profile("ci", lr=0.5).lr == 0.5  # overrides win
