@@ -15,9 +15,11 @@ import numpy as np
 from .camera import Camera
 from .disparity import DisparityTransform
 from .fit import DepthResult, FitConfig, complete_depth
+from .fusion import points_from_depth
+from .holes import edge_band_holes, random_holes, sgm_depth
 from .metrics import cloud_scores, disparity_rmse, edge_band, texture_leakage  # re-exported: notebooks import them here
 from .profiles import Profile, get_profile
-from .scenes import LABEL_SKY
+from .scenes import LABEL_SKY, make_scene, select_neighbors
 from .variants import get_variant
 
 __all__ = ["Case", "make_case", "sgm_depth_at_scale", "edge_band", "disparity_rmse", "run_variants", "error_table", "format_table",
@@ -71,9 +73,6 @@ def sgm_depth_at_scale(scene_name: str, size, n_views: int, seed: int, ref=0, pa
     pixel) that pixel's ray is *exactly* the small pixel's ray, so the kept depth belongs to the
     small image's geometry. ``scale=None`` → 3 below 96 rows, else 1.
     """
-    from .holes import sgm_depth
-    from .scenes import make_scene
-
     H, W = size
     scale = (3 if H < 96 else 1) if scale is None else int(scale)
     if scale < 1 or scale % 2 == 0:
@@ -92,9 +91,6 @@ def make_case(scene_name: str = "house", profile: Profile | str | None = None, r
     ``holes``: ``"sgm"`` (real OpenCV SGM holes), ``"random"`` (seeded blobs) or ``"edge"`` (a band
     across a depth edge plus random blobs).
     """
-    from .holes import edge_band_holes, random_holes
-    from .scenes import make_scene, select_neighbors
-
     profile = get_profile(profile)
     scene = make_scene(scene_name, size=profile.size, n_views=profile.n_views, seed=seed)
     view = scene[ref]
@@ -191,7 +187,6 @@ def ablation(cases, configs: dict | None = None, profile=None, holes: str = "edg
     each fit against the holes and ground truth it was fitted on. ``config_overrides`` go to every
     fit (e.g. ``gammas=(0.5, 0.5)``).
     """
-    from .fusion import points_from_depth
     configs = TABLE2_CONFIGS if configs is None else configs
     runs, examples = [], {}
     for scene, seed in cases:

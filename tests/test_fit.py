@@ -246,3 +246,12 @@ def test_for_profile_copies_every_shared_field_and_derives_the_rest():
                     assert getattr(config, field.name) == getattr(profile, field.name), field.name
     assert FitConfig.for_profile("ci", net="skip").channels == PROFILES["ci"].skip_channels
     assert FitConfig.for_profile("ci", lr=0.5).lr == 0.5  # overrides win
+
+
+def test_public_face_lists_what_users_call_and_keeps_the_building_blocks():
+    import ddp_lite
+    assert all(hasattr(ddp_lite, name) for name in ddp_lite.__all__)
+    assert {"complete_depth", "FitConfig", "get_profile", "make_scene", "Camera"} <= set(ddp_lite.__all__)
+    assert not {"pixel_grid", "make_noise", "masked_l1", "build_net"} & set(ddp_lite.__all__)  # building blocks
+    for name in ("pixel_grid", "make_noise", "masked_l1", "build_net", "ssim", "complete_depth_coarse_to_fine"):
+        assert hasattr(ddp_lite, name)  # still importable from the package, as before
