@@ -30,10 +30,10 @@ import torch  # noqa: E402
 from ddp_lite import FitConfig, complete_depth  # noqa: E402
 from ddp_lite.experiments import make_case  # noqa: E402
 from ddp_lite.fit import PlateauStopper  # noqa: E402
+from ddp_lite.variants import VARIANTS, get_variant  # noqa: E402
 from _common import add_profile_args, profile_from_args  # noqa: E402
 
 SCENES = ("house", "desk", "room", "street")
-VARIANTS = ("d", "rgbd", "rgbd+warp")
 
 
 def replay(heldout, patience: int, eval_every: int, decays: int):
@@ -69,7 +69,7 @@ def main() -> None:
                 if args.constant_lr:
                     config = config.replace(plateau_decays=0)
                     long_config = long_config.replace(lr_gamma=1.0)
-                neighbors = case.neighbors if variant == "rgbd+warp" else ()
+                neighbors = case.neighbors if get_variant(variant).needs_neighbors else ()
                 result = complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant,
                                         config=long_config, gt_depth=case.scored_gt, transform=case.transform)
                 h = result.history

@@ -23,6 +23,8 @@ import time
 import numpy as np
 import torch
 
+from ddp_lite.variants import VARIANTS
+
 
 CPU_FLAGS = ("avx512f", "avx512_bf16", "amx_bf16", "avx512_vnni")
 
@@ -86,8 +88,9 @@ def case(height: int, width: int, seed: int = 0):
 def run_one(variant: str, height: int, width: int, channels, iterations: int, overrides=None) -> dict:
     from torch.utils.flop_counter import FlopCounterMode
     from ddp_lite import FitConfig, complete_depth
+    from ddp_lite.variants import get_variant
     rgb, depth, ref, nbrs = case(height, width)
-    kwargs = dict(camera=ref, neighbors=nbrs) if variant == "rgbd+warp" else {}
+    kwargs = dict(camera=ref, neighbors=nbrs) if get_variant(variant).needs_neighbors else {}
     config = FitConfig(channels=tuple(channels), lr=1e-2, progress=False, eval_every=10 ** 9, **(overrides or {}))
     with FlopCounterMode(display=False) as counter:
         complete_depth(rgb, depth, variant=variant, config=config.replace(iterations=1), **kwargs)
@@ -124,7 +127,7 @@ def main() -> None:
     print(f"{'variant':<10} {'size':>7} {'net':>18} {'s/it':>7} {'GFLOP':>6} {'bound s':>8} {'ratio':>6} {'peak MB':>8}")
     for channels in widths:
         for height, width in ((48, 64), (96, 128)):
-            for variant in ("d", "rgbd", "rgbd+warp"):
+            for variant in VARIANTS:
                 sets = [arg for item in args.set for arg in ("--set", item)]
                 out = subprocess.run([sys.executable, __file__, "--iterations", str(args.iterations), *sets, "--one",
                                       variant, str(height), str(width), channels],

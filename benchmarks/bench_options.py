@@ -8,7 +8,7 @@
 Absolute s/it move with the machine's load, so every option runs its rounds in turn (A, B, C, A, B,
 C, ...) in one process and the table gives the median per option and its ratio to float32. Each
 option's net, noise and loss closure are built once by ``complete_depth`` (bench_fit's case,
-rgbd+warp) and then stepped by ``ddp_lite.fit._run``, the fit's own loop.
+rgbd+warp) and then stepped by ``ddp_lite.loop.run`` (``ddp_lite.fit._run`` before it moved), the fit's own loop.
 
 ``--errors``: the options that change numbers (bf16, zero padding) against float32 on real cases
 (``make_case(scene, "ci", holes="sgm")``, 48×64, ci net, rgbd, the ci schedule), seeds 0, 1, 2:
@@ -52,17 +52,20 @@ def prepare(package, size, channels, variant: str, options: dict, compile_mode=N
     ref, nbrs = as_own(ref), [(image, as_own(cam)) for image, cam in nbrs]
     kwargs = dict(camera=ref, neighbors=nbrs) if variant == "rgbd+warp" else {}
     config = fit.FitConfig(channels=channels, lr=1e-2, progress=False, eval_every=10 ** 9, iterations=1, **options)
-    pieces, run = {}, fit._run
+    # the loop is ddp_lite.loop.run; packages from before the split have it as ddp_lite.fit._run
+    owner = sys.modules.get(package.__name__ + ".loop")
+    owner, name = (owner, "run") if owner is not None else (fit, "_run")
+    pieces, run = {}, getattr(owner, name)
 
     def capture(net, noise, loss_fn, config, iterations, *args, **kw):
         pieces.update(net=net, noise=noise, loss_fn=loss_fn, config=config)
         return run(net, noise, loss_fn, config, iterations, *args, **kw)
 
-    fit._run = capture
+    setattr(owner, name, capture)
     try:
         fit.complete_depth(rgb, depth, variant=variant, config=config, **kwargs)
     finally:
-        fit._run = run
+        setattr(owner, name, run)
     net = pieces["net"]
     if compile_mode is not None:
         net = torch.compile(net, mode=compile_mode)

@@ -8,17 +8,30 @@ Units and conventions: images float32 (H, W, 3) in [0, 1]; depth float32 (H, W) 
 holes; cameras in the OpenCV convention (x right, y down, z forward), pixel (0, 0) = centre of the
 top-left pixel. ``DDP_PROFILE`` (ci / class / paper) sets sizes and schedules.
 """
-from .camera import Camera, backproject, look_at, pixel_grid, project, relative_pose
+# What a notebook or a user calls: completion, its config and profiles, scenes and cameras, the
+# transform DDP fits in, SGM input. ``from ddp_lite import *`` gives exactly these.
+__all__ = ["complete_depth", "DepthResult", "merge", "FitConfig", "VARIANTS", "fit_image", "ImageResult",
+           "get_profile", "Profile", "PROFILES", "make_scene", "list_scenes", "Scene", "View", "Camera", "look_at",
+           "DisparityTransform", "sgm_depth", "random_holes"]
+
+from .camera import Camera, look_at
 from .disparity import DisparityTransform
-from .fit import (VARIANTS, DepthResult, FitConfig, ImageResult, complete_depth, complete_depth_coarse_to_fine, fit_image,
-                  merge)
+from .fit import DepthResult, FitConfig, ImageResult, complete_depth, fit_image, merge
+from .holes import random_holes, sgm_depth
+from .profiles import PROFILES, Profile, get_profile
+from .scenes import Scene, View, list_scenes, make_scene
+from .variants import VARIANTS
+from . import organic  # registers the curved, photo-textured scenes in SCENES
+
+# Building blocks, importable from here as before; new code imports them from their modules
+# (ddp_lite.losses, ddp_lite.nets, ddp_lite.warp, ...), where their documentation lives.
+from .camera import backproject, pixel_grid, project, relative_pose
+from .coarse_to_fine import complete_depth_coarse_to_fine
+from .holes import edge_band_holes, kinect_noise, sgm_disparity
 from .losses import disparity_loss, masked_l1, rgb_loss, ssim, warp_loss
 from .nets import SkipNet, UNet, build_net, make_noise
-from .profiles import PROFILES, Profile, get_profile
-from . import baselines, datasets, fusion, metrics
-from .holes import edge_band_holes, kinect_noise, random_holes, sgm_depth, sgm_disparity
-from .scenes import Scene, View, list_scenes, make_scene, register_scene, select_neighbors
-from . import organic  # registers the curved, photo-textured scenes in SCENES
+from .scenes import register_scene, select_neighbors
 from .warp import Warper, warp_to_reference
+from . import baselines, datasets, fusion, metrics
 
 __version__ = "0.1.0"

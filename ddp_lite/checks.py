@@ -18,7 +18,13 @@ from __future__ import annotations
 import math
 import numbers
 
-__all__ = ["check_int", "check_real", "check_bool", "check_choice", "check_int_tuple"]
+import numpy as np
+import torch
+
+__all__ = ["check_int", "check_real", "check_bool", "check_choice", "check_int_tuple", "check_image", "check_depth",
+           "MIN_VALID_PIXELS"]
+
+MIN_VALID_PIXELS = 16  # a fit, or a mask, with fewer known pixels is refused
 
 
 def check_bool(value, name: str) -> bool:
@@ -73,3 +79,46 @@ def check_int_tuple(value, name: str, minimum: int, min_length: int = 0) -> tupl
     if len(value) < min_length:
         raise ValueError(f"{name} must list at least {min_length} integer(s), got {tuple(value)!r}")
     return tuple(check_int(v, f"{name}[{i}]", minimum=minimum) for i, v in enumerate(value))
+
+
+# --------------------------------------------------------------------------- arrays a fit takes
+
+def check_image(image, name: str, shape=None) -> np.ndarray:
+    """(H, W, 3) float32 in [0, 1] (uint8 is scaled by 1/255), a copy; ``shape`` (H, W) if given."""
+    if isinstance(image, torch.Tensor):
+        raise TypeError(f"{name} must be a NumPy array (H, W, 3), got a torch tensor")
+    array = np.asarray(image)
+    if array.dtype == np.uint8:
+        array = array.astype(np.float32) / 255.0
+    if not np.issubdtype(array.dtype, np.floating):
+        raise TypeError(f"{name} must be float in [0, 1] (or uint8), got dtype {array.dtype}")
+    if array.ndim != 3 or array.shape[2] != 3:
+        raise ValueError(f"{name} must have shape (H, W, 3), got {array.shape}")
+    if shape is not None and array.shape[:2] != shape:
+        raise ValueError(f"{name} must be {shape[0]}×{shape[1]} like depth, got {array.shape[0]}×{array.shape[1]}")
+    if not np.all(np.isfinite(array)):
+        raise ValueError(f"{name} must contain only finite values")
+    if array.min() < -1e-6 or array.max() > 1 + 1e-6:
+        raise ValueError(f"{name} must lie in [0, 1], got range [{array.min():.3g}, {array.max():.3g}]")
+    return np.clip(array, 0.0, 1.0).astype(np.float32)
+
+
+def check_depth(depth, name: str = "depth", allow_holes: bool = True) -> np.ndarray:
+    """(H, W) float32 metres, positive where finite, NaN holes, ≥ MIN_VALID_PIXELS valid; a copy."""
+    if isinstance(depth, torch.Tensor):
+        raise TypeError(f"{name} must be a NumPy array (H, W), got a torch tensor")
+    array = np.asarray(depth)
+    if not np.issubdtype(array.dtype, np.floating):
+        raise TypeError(f"{name} must be float metres with NaN holes, got dtype {array.dtype}")
+    if array.ndim != 2:
+        raise ValueError(f"{name} must have shape (H, W), got {array.shape}")
+    finite = np.isfinite(array)
+    if np.any(np.isinf(array)):
+        raise ValueError(f"{name} contains inf; mark holes with NaN (loaders convert a dataset's own marker)")
+    if np.any(array[finite] <= 0):
+        raise ValueError(f"{name} must be positive metres where valid, got minimum {array[finite].min():.3g}")
+    if finite.sum() < MIN_VALID_PIXELS:
+        raise ValueError(f"{name} has {int(finite.sum())} valid pixels; need at least {MIN_VALID_PIXELS}")
+    if not allow_holes and not finite.all():
+        raise ValueError(f"{name} must have no holes")
+    return array.astype(np.float32)

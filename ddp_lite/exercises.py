@@ -16,6 +16,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from .camera import Camera, look_at
+from .metrics import d1_error
+from .warp import warp_to_reference
+
 __all__ = ["check_psnr", "check_masked_mse", "check_disparity_transform", "check_hole_rmse", "check_ssim",
            "check_masked_l1", "check_backproject", "check_warp", "check_fscore", "check_nearest_fill",
            "check_d1"]
@@ -164,8 +168,6 @@ def check_backproject(student_backproject) -> bool:
 def check_warp(student_warp) -> bool:
     """``student_warp(nbr_image, ref_depth, ref_cam, nbr_cam)`` → (H, W, 3) vs the kit's tested warp
     (compared where the kit's warp is valid)."""
-    from .camera import Camera, look_at
-    from .warp import warp_to_reference
     rng = np.random.default_rng(4)
     ref = Camera.from_fov(32, 24, 60.0)
     failures = []
@@ -228,7 +230,6 @@ def check_nearest_fill(student_fill) -> bool:
 def check_d1(student_d1) -> bool:
     """``student_d1(pred_disp, gt_disp)`` → percentage of bad pixels among those with a finite truth;
     bad = error > 3 px **and** error > 5 % of the *true* disparity (KITTI 2015)."""
-    from .metrics import d1_error
     nan = np.nan
     cases = [
         # bad: 3.5 > 3 and > 0.5 ✓; 2.9 ✗; 4 > 3 but < 5 ✗; 6 > 3 and > 5 ✓; NaN truth not counted → 2 of 4

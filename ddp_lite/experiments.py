@@ -11,12 +11,16 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import ndimage
 
 from .camera import Camera
 from .disparity import DisparityTransform
 from .fit import DepthResult, FitConfig, complete_depth
+from .fusion import points_from_depth
+from .holes import edge_band_holes, random_holes, sgm_depth
+from .metrics import cloud_scores, disparity_rmse, edge_band, texture_leakage  # re-exported: notebooks import them here
 from .profiles import Profile, get_profile
+from .scenes import LABEL_SKY, make_scene, select_neighbors
+from .variants import get_variant
 
 __all__ = ["Case", "make_case", "sgm_depth_at_scale", "edge_band", "disparity_rmse", "run_variants", "error_table", "format_table",
            "texture_leakage", "format_mean_spread", "cloud_scores", "ablation", "TABLE2_CONFIGS"]
@@ -35,12 +39,12 @@ class Case:
     transform: DisparityTransform | None = None
     scene: object = None
     ref: int = 0
-    labels: np.ndarray | None = None  # (H, W) uint8 texture classes (0 = sky), see scenes.LABELS
+    labels: np.ndarray | None = None  # (H, W) uint8 texture classes (LABEL_SKY = 0), see scenes.LABELS
 
     @property
     def scored(self) -> np.ndarray:
         """(H, W) bool: where ground truth is scored (everything but the sky)."""
-        return np.ones(self.gt.shape, bool) if self.labels is None else self.labels != 0
+        return np.ones(self.gt.shape, bool) if self.labels is None else self.labels != LABEL_SKY
 
     @property
     def scored_gt(self) -> np.ndarray:
@@ -57,29 +61,6 @@ class Case:
         return self.holes & edge_band(self.gt, width)
 
 
-def edge_band(depth, width: int = 3, relative_jump: float = 0.05) -> np.ndarray:
-    """(H, W) bool: pixels within ``width`` px of a depth discontinuity (a jump > 5 % between
-    4-neighbours) of a hole-free depth map (H, W) metres."""
-    depth = np.asarray(depth, dtype=np.float64)
-    jump = np.zeros(depth.shape, bool)
-    dx = np.abs(np.diff(depth, axis=1)) > relative_jump * np.minimum(depth[:, 1:], depth[:, :-1])
-    dy = np.abs(np.diff(depth, axis=0)) > relative_jump * np.minimum(depth[1:], depth[:-1])
-    jump[:, 1:] |= dx
-    jump[:, :-1] |= dx
-    jump[1:] |= dy
-    jump[:-1] |= dy
-    return ndimage.binary_dilation(jump, iterations=max(int(width), 0)) if width else jump
-
-
-def disparity_rmse(depth, gt, mask, transform: DisparityTransform) -> float:
-    """RMSE ×100 of normalised disparity between two depth maps (H, W metres) on ``mask``."""
-    mask = np.asarray(mask, bool) & np.isfinite(depth) & np.isfinite(gt)
-    if not mask.any():
-        return float("nan")
-    error = transform.to_disparity(np.asarray(depth, np.float64)) - transform.to_disparity(np.asarray(gt, np.float64))
-    return float(100.0 * np.sqrt(np.mean(error[mask] ** 2)))
-
-
 def sgm_depth_at_scale(scene_name: str, size, n_views: int, seed: int, ref=0, params="sparse",
                        scale: int | None = None):
     """SGM depth (H, W) metres with NaN holes for a scene rendered at ``size``, matched at ``scale``× size;
@@ -92,9 +73,6 @@ def sgm_depth_at_scale(scene_name: str, size, n_views: int, seed: int, ref=0, pa
     pixel) that pixel's ray is *exactly* the small pixel's ray, so the kept depth belongs to the
     small image's geometry. ``scale=None`` → 3 below 96 rows, else 1.
     """
-    from .holes import sgm_depth
-    from .scenes import make_scene
-
     H, W = size
     scale = (3 if H < 96 else 1) if scale is None else int(scale)
     if scale < 1 or scale % 2 == 0:
@@ -113,10 +91,7 @@ def make_case(scene_name: str = "house", profile: Profile | str | None = None, r
     ``holes``: ``"sgm"`` (real OpenCV SGM holes), ``"random"`` (seeded blobs) or ``"edge"`` (a band
     across a depth edge plus random blobs).
     """
-    from .holes import edge_band_holes, random_holes
-    from .scenes import make_scene, select_neighbors
-
-    profile = get_profile(profile) if profile is None or isinstance(profile, str) else profile
+    profile = get_profile(profile)
     scene = make_scene(scene_name, size=profile.size, n_views=profile.n_views, seed=seed)
     view = scene[ref]
     if holes == "sgm":
@@ -145,7 +120,7 @@ def run_variants(case: Case, variants=("d", "rgbd", "rgbd+warp"), profile=None, 
     results = {}
     for variant in variants:
         config = FitConfig.for_profile(profile, variant=variant, net=net, **config_overrides)
-        neighbors = case.neighbors if variant == "rgbd+warp" else ()
+        neighbors = case.neighbors if get_variant(variant).needs_neighbors else ()
         results[variant] = complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant,
                                           config=config, gt_depth=case.scored_gt, transform=case.transform)
     return results
@@ -171,28 +146,6 @@ def format_table(table: dict[str, dict[str, float]], digits: int = 2, title: str
     for row, values in table.items():
         lines.append(f"{str(row):<{width}}" + "".join(f"{values[c]:>12.{digits}f}" for c in columns))
     return "\n".join(lines)
-
-
-def texture_leakage(depth, gt, transform: DisparityTransform, band: int = 3, region=None) -> float:
-    """Mean |Laplacian| ×100 of the normalised disparity of ``depth`` (H, W metres) on the pixels
-    where the truth ``gt`` is locally planar (its own Laplacian ≈ 0) and away from depth edges.
-
-    For a plane, inverse depth is an affine function of the pixel coordinates, so its Laplacian is
-    zero; with ``transform.constant == 0`` the same holds for normalised disparity. Colour texture
-    copied into the depth (paper Fig. 4: wooden planks on a flat wall) shows up as a non-zero
-    Laplacian exactly there. ``region`` (H, W) bool restricts the measure further (for example
-    to the planks: ``case.labels == LABELS_PLANKS``).
-    """
-    kernel = np.array([[0.0, 1.0, 0.0], [1.0, -4.0, 1.0], [0.0, 1.0, 0.0]])
-    out = ndimage.convolve(transform.to_disparity(np.asarray(depth, np.float64)), kernel, mode="nearest")
-    truth = ndimage.convolve(transform.to_disparity(np.asarray(gt, np.float64)), kernel, mode="nearest")
-    planar = (np.abs(truth) < 1e-4) & ~edge_band(gt, band)
-    if region is not None:
-        planar &= np.asarray(region, bool)
-    planar = ndimage.binary_erosion(planar, iterations=1)
-    if not planar.any():
-        return float("nan")
-    return float(100.0 * np.mean(np.abs(out[planar])))
 
 
 def format_mean_spread(runs: list[dict[str, dict[str, float]]], digits: int = 2, title: str = "") -> str:
@@ -234,7 +187,6 @@ def ablation(cases, configs: dict | None = None, profile=None, holes: str = "edg
     each fit against the holes and ground truth it was fitted on. ``config_overrides`` go to every
     fit (e.g. ``gammas=(0.5, 0.5)``).
     """
-    from .fusion import points_from_depth
     configs = TABLE2_CONFIGS if configs is None else configs
     runs, examples = [], {}
     for scene, seed in cases:
@@ -253,11 +205,3 @@ def ablation(cases, configs: dict | None = None, profile=None, holes: str = "edg
         runs.append(run)
         log(f"{scene} seed {seed}: " + ", ".join(f"{row} {v['holes']:.2f}" for row, v in run.items()))
     return runs, examples
-
-
-def cloud_scores(points, gt_points, tau: float) -> dict[str, float]:
-    """Tanks-and-Temples precision, recall and F-score in % of a point cloud ((N, 3) world metres or
-    an Open3D cloud) against ``gt_points`` at distance ``tau`` metres."""
-    from .metrics import point_cloud_prf
-    scores = point_cloud_prf(points, gt_points, tau)
-    return {"P": 100 * scores["precision"], "R": 100 * scores["recall"], "F": 100 * scores["fscore"]}

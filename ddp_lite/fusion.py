@@ -35,7 +35,7 @@ import os
 import numpy as np
 
 from .atomic import atomic_path
-from .camera import Camera
+from .camera import Camera, look_at
 
 __all__ = ["points_from_depth", "fuse_depths", "tsdf_fuse", "save_ply", "render_point_cloud"]
 
@@ -250,8 +250,6 @@ def save_ply(cloud, path) -> None:
 
 def _default_camera(points: np.ndarray) -> Camera:
     """A 128×96, 60° camera looking along +z at the cloud's centre, just far enough back to see every point."""
-    from .camera import look_at
-
     centre = (points.min(0) + points.max(0)) / 2.0
     offset = points - centre  # (N, 3)
     tan_x = 0.95 * np.tan(np.radians(30.0))  # a 5 % margin inside the frame

@@ -38,6 +38,8 @@ import cv2
 import numpy as np
 from scipy import ndimage
 
+from .scenes import Scene
+
 __all__ = ["SGM_PARAMS", "sgm_disparity", "sgm_depth", "gt_disparity", "random_holes", "edge_band_holes",
            "kinect_noise"]
 
@@ -71,7 +73,6 @@ def _check_seed(seed) -> int:
 
 
 def _stereo_pair(scene, ref):
-    from .scenes import Scene
     if not isinstance(scene, Scene):
         raise TypeError(f"scene must be a ddp_lite.Scene, got {type(scene).__name__}")
     if not scene.right or len(scene.right) != len(scene.views):

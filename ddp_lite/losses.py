@@ -32,7 +32,7 @@ import torch
 import torch.nn.functional as F
 
 __all__ = ["ssim", "masked_l1", "disparity_loss", "rgb_loss", "warp_loss", "smoothness_weights", "smoothness_loss",
-           "LossWeights", "ConstantTarget"]
+           "ConstantTarget"]
 
 C1_FACTOR, C2_FACTOR = 0.01, 0.03  # k1, k2 of Wang et al. 2004
 
@@ -223,23 +223,3 @@ def smoothness_loss(disparity: torch.Tensor, weights: torch.Tensor) -> torch.Ten
     dyy = disparity[..., 2:, :] - 2 * disparity[..., 1:-1, :] + disparity[..., :-2, :]  # (B, 1, H - 2, W)
     weighted = (dxx.abs() * weights[:, :1, :, 1:-1]).sum() + (dyy.abs() * weights[:, 1:, 1:-1, :]).sum()
     return weighted / weights.sum().clamp(min=1e-12) / disparity.shape[0]
-
-
-class LossWeights:
-    """The paper's γ1, γ2 (L_total = γ1 L_disp + γ2 L_rgb + (1 - γ1 - γ2) L_warp) for a variant."""
-
-    MULTI_VIEW = (0.96, 0.02)  # Tanks and Temples
-    SINGLE_VIEW = (0.98, 0.01)  # everything else
-
-    @staticmethod
-    def for_variant(variant: str, gammas=None) -> tuple[float, float, float]:
-        """(w_disp, w_rgb, w_warp) for ``"d"``, ``"rgbd"`` or ``"rgbd+warp"``."""
-        if variant == "d":
-            return 1.0, 0.0, 0.0
-        if variant == "rgbd":
-            g1, g2 = gammas or LossWeights.SINGLE_VIEW
-            return g1, g2, 0.0
-        if variant == "rgbd+warp":
-            g1, g2 = gammas or LossWeights.MULTI_VIEW
-            return g1, g2, 1.0 - g1 - g2
-        raise ValueError(f"variant must be 'd', 'rgbd' or 'rgbd+warp', got {variant!r}")

@@ -8,13 +8,21 @@ changes its inputs.
   so "error in the holes" is ``hole_rmse(pred, gt, ~input_mask)`` (paper Table 1, Fig. 5).
 - ``d1_error``: KITTI 2015's outlier rate (paper Table 4).
 - ``psnr``: 20·log10(MAX / √MSE) (paper Fig. 7, NYU v2).
-- ``point_cloud_prf``: Tanks and Temples' precision/recall/F-score at a distance τ (Table 3).
+- ``point_cloud_prf``: Tanks and Temples' precision/recall/F-score at a distance τ (Table 3);
+  ``cloud_scores`` the same in %.
+- ``disparity_rmse``, ``edge_band``, ``texture_leakage``: the notebooks' errors in normalised
+  disparity ×100 (the unit of the paper's Middlebury table), near depth edges (Fig. 3), and
+  colour texture copied into flat depth (Fig. 4).
 """
 from __future__ import annotations
 
 import numpy as np
+from scipy import ndimage
 
-__all__ = ["rmse", "mae", "hole_rmse", "d1_error", "psnr", "point_cloud_prf"]
+from .disparity import DisparityTransform
+
+__all__ = ["rmse", "mae", "hole_rmse", "d1_error", "psnr", "point_cloud_prf", "cloud_scores", "disparity_rmse",
+           "edge_band", "texture_leakage"]
 
 
 def _pair(pred, gt, names=("pred", "gt")) -> tuple[np.ndarray, np.ndarray]:
@@ -198,3 +206,57 @@ def point_cloud_prf(pred_points, gt_points, tau: float) -> dict:
     total = precision + recall
     fscore = 2.0 * precision * recall / total if total > 0 else 0.0
     return {"precision": precision, "recall": recall, "fscore": float(fscore)}
+
+
+def cloud_scores(points, gt_points, tau: float) -> dict[str, float]:
+    """Tanks-and-Temples precision, recall and F-score in % of a point cloud ((N, 3) world metres or
+    an Open3D cloud) against ``gt_points`` at distance ``tau`` metres."""
+    scores = point_cloud_prf(points, gt_points, tau)
+    return {"P": 100 * scores["precision"], "R": 100 * scores["recall"], "F": 100 * scores["fscore"]}
+
+
+# --------------------------------------------------------------------------- normalised disparity
+
+def edge_band(depth, width: int = 3, relative_jump: float = 0.05) -> np.ndarray:
+    """(H, W) bool: pixels within ``width`` px of a depth discontinuity (a jump > 5 % between
+    4-neighbours) of a hole-free depth map (H, W) metres."""
+    depth = np.asarray(depth, dtype=np.float64)
+    jump = np.zeros(depth.shape, bool)
+    dx = np.abs(np.diff(depth, axis=1)) > relative_jump * np.minimum(depth[:, 1:], depth[:, :-1])
+    dy = np.abs(np.diff(depth, axis=0)) > relative_jump * np.minimum(depth[1:], depth[:-1])
+    jump[:, 1:] |= dx
+    jump[:, :-1] |= dx
+    jump[1:] |= dy
+    jump[:-1] |= dy
+    return ndimage.binary_dilation(jump, iterations=max(int(width), 0)) if width else jump
+
+
+def disparity_rmse(depth, gt, mask, transform: DisparityTransform) -> float:
+    """RMSE ×100 of normalised disparity between two depth maps (H, W metres) on ``mask``."""
+    mask = np.asarray(mask, bool) & np.isfinite(depth) & np.isfinite(gt)
+    if not mask.any():
+        return float("nan")
+    error = transform.to_disparity(np.asarray(depth, np.float64)) - transform.to_disparity(np.asarray(gt, np.float64))
+    return float(100.0 * np.sqrt(np.mean(error[mask] ** 2)))
+
+
+def texture_leakage(depth, gt, transform: DisparityTransform, band: int = 3, region=None) -> float:
+    """Mean |Laplacian| ×100 of the normalised disparity of ``depth`` (H, W metres) on the pixels
+    where the truth ``gt`` is locally planar (its own Laplacian ≈ 0) and away from depth edges.
+
+    For a plane, inverse depth is an affine function of the pixel coordinates, so its Laplacian is
+    zero; with ``transform.constant == 0`` the same holds for normalised disparity. Colour texture
+    copied into the depth (paper Fig. 4: wooden planks on a flat wall) shows up as a non-zero
+    Laplacian exactly there. ``region`` (H, W) bool restricts the measure further (for example
+    to the planks: ``case.labels == scenes.LABEL_PLANKS``).
+    """
+    kernel = np.array([[0.0, 1.0, 0.0], [1.0, -4.0, 1.0], [0.0, 1.0, 0.0]])
+    out = ndimage.convolve(transform.to_disparity(np.asarray(depth, np.float64)), kernel, mode="nearest")
+    truth = ndimage.convolve(transform.to_disparity(np.asarray(gt, np.float64)), kernel, mode="nearest")
+    planar = (np.abs(truth) < 1e-4) & ~edge_band(gt, band)
+    if region is not None:
+        planar &= np.asarray(region, bool)
+    planar = ndimage.binary_erosion(planar, iterations=1)
+    if not planar.any():
+        return float("nan")
+    return float(100.0 * np.mean(np.abs(out[planar])))

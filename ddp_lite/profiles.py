@@ -33,6 +33,8 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass
 
+from .variants import get_variant
+
 __all__ = ["Profile", "PROFILES", "get_profile", "current_profile_name"]
 
 ENV_VAR = "DDP_PROFILE"
@@ -41,7 +43,9 @@ DEFAULT = "class"
 
 @dataclass(frozen=True)
 class Profile:
-    """Sizes and schedules one profile uses everywhere."""
+    """Sizes and schedules one profile uses everywhere. A field named like a ``FitConfig`` field is
+    copied into the configs :meth:`FitConfig.for_profile` builds (``channels``, ``iterations`` and
+    ``lr_milestones`` are derived per variant and net); the others size scenes, tables and DIP."""
 
     name: str
     size: tuple[int, int]  # (H, W) of scenes and images
@@ -63,6 +67,10 @@ class Profile:
     smoothness_edge: float = 10.0  # FitConfig.smoothness_edge
     bf16: bool | None = False  # FitConfig.bf16 (None: bfloat16 where the hardware computes it natively)
     ensemble: int = 1  # FitConfig.ensemble: the mean disparity of this many seeds' fits
+
+    def iterations_for(self, variant) -> int:
+        """The iteration count of ``variant`` (a name or :class:`~ddp_lite.variants.Variant`) here."""
+        return self.iterations_depth_only if get_variant(variant).depth_only else self.iterations
 
     def milestones(self, iterations: int) -> tuple[int, ...]:
         """The learning-rate decay iterations for a run of ``iterations``."""
@@ -103,8 +111,11 @@ def current_profile_name() -> str:
     return name
 
 
-def get_profile(name: str | None = None) -> Profile:
-    """The named profile, or the one ``DDP_PROFILE`` selects."""
+def get_profile(name: str | Profile | None = None) -> Profile:
+    """The named profile, or the one ``DDP_PROFILE`` selects; a :class:`Profile` is returned as is
+    (so every function taking ``profile`` accepts a name, a Profile or None the same way)."""
+    if isinstance(name, Profile):
+        return name
     name = current_profile_name() if name is None else name
     if name not in PROFILES:
         raise ValueError(f"profile must be one of {sorted(PROFILES)}, got {name!r}")

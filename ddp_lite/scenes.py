@@ -57,9 +57,11 @@ from .atomic import atomic_path
 from .camera import Camera, look_at
 
 __all__ = ["View", "Scene", "Texture", "Plane", "Box", "Sphere", "Cylinder", "render", "make_scene",
-           "list_scenes", "register_scene", "select_neighbors", "LABELS", "SCENES"]
+           "list_scenes", "register_scene", "select_neighbors", "LABELS", "LABEL_SKY",
+           "LABEL_TEXTURELESS", "LABEL_PLANKS", "LABEL_TEXTURED", "SCENES"]
 
-LABELS = {0: "sky", 1: "textureless", 2: "planks", 3: "textured"}
+LABEL_SKY, LABEL_TEXTURELESS, LABEL_PLANKS, LABEL_TEXTURED = 0, 1, 2, 3  # Scene.labels values
+LABELS = {LABEL_SKY: "sky", LABEL_TEXTURELESS: "textureless", LABEL_PLANKS: "planks", LABEL_TEXTURED: "textured"}
 
 
 @dataclass(eq=False)

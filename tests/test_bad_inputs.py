@@ -617,14 +617,14 @@ def test_umask_is_respected(tmp_path):
 
 def test_non_finite_output_raises(monkeypatch):
     """A diverged fit raises; it never returns NaN that merged() would hide among the valid pixels."""
-    import ddp_lite.fit as fit
+    import ddp_lite.loop as loop
 
-    real_run = fit._run
+    real_run = loop.run
 
     def diverging(*args, **kwargs):
         output, *rest = real_run(*args, **kwargs)
         return (torch.full_like(output, float("nan")), *rest)
-    monkeypatch.setattr(fit, "_run", diverging)
+    monkeypatch.setattr(loop, "run", diverging)
     with pytest.raises(FloatingPointError, match="lr"):
         complete_depth(rgb(), depth(), variant="d", config=tiny(iterations=1))
     with pytest.raises(FloatingPointError, match="lr"):

@@ -210,3 +210,48 @@ def test_bfloat16_and_channels_last_still_fill_the_hole():
     result = complete_depth(np.zeros((32, 48, 3), np.float32), depth, variant="d", config=config)
     rmse = float(np.sqrt(np.mean((result.depth[holes] - gt[holes]) ** 2)))
     assert rmse < 0.7 * float(np.sqrt(np.mean((nearest_fill(depth)[holes] - gt[holes]) ** 2)))
+
+
+def test_variant_table_is_the_papers():
+    """Every per-variant difference comes from one record: γ, output channels, needs, iterations."""
+    from ddp_lite.profiles import get_profile
+    from ddp_lite.variants import VARIANTS, get_variant
+    assert VARIANTS == ("d", "rgbd", "rgbd+warp")
+    d, rgbd, warp = (get_variant(name) for name in VARIANTS)
+    assert d.loss_weights((0.5, 0.5)) == (1.0, 0.0, 0.0) and d.out_channels == 1
+    assert rgbd.loss_weights() == (0.98, 0.01, 0.0) and rgbd.out_channels == 4
+    assert warp.loss_weights()[:2] == (0.96, 0.02) and warp.loss_weights()[2] == pytest.approx(0.02)
+    assert warp.loss_weights((0.9, 0.05))[2] == pytest.approx(0.05)
+    assert [v.needs_neighbors for v in (d, rgbd, warp)] == [False, False, True]
+    assert FitConfig().resolved_iterations("d") == 6000 and FitConfig().resolved_iterations("rgbd+warp") == 16000
+    paper = get_profile("paper")
+    assert paper.iterations_for("d") == 6000 and paper.iterations_for(warp) == 16000
+    assert get_profile(paper) is paper
+    with pytest.raises(ValueError, match="variant must be one of"):
+        get_variant("rgb")
+
+
+def test_for_profile_copies_every_shared_field_and_derives_the_rest():
+    """One source of fit settings: a Profile field named like a FitConfig field reaches the config."""
+    import dataclasses
+    from ddp_lite.profiles import PROFILES
+    for profile in PROFILES.values():
+        for variant in ("d", "rgbd+warp"):
+            config = FitConfig.for_profile(profile, variant=variant)
+            iterations = profile.iterations_depth_only if variant == "d" else profile.iterations
+            assert config.iterations == iterations and config.channels == profile.channels
+            assert config.lr_milestones == profile.milestones(iterations)
+            for field in dataclasses.fields(profile):
+                if hasattr(config, field.name) and field.name not in ("channels", "iterations", "lr_milestones"):
+                    assert getattr(config, field.name) == getattr(profile, field.name), field.name
+    assert FitConfig.for_profile("ci", net="skip").channels == PROFILES["ci"].skip_channels
+    assert FitConfig.for_profile("ci", lr=0.5).lr == 0.5  # overrides win
+
+
+def test_public_face_lists_what_users_call_and_keeps_the_building_blocks():
+    import ddp_lite
+    assert all(hasattr(ddp_lite, name) for name in ddp_lite.__all__)
+    assert {"complete_depth", "FitConfig", "get_profile", "make_scene", "Camera"} <= set(ddp_lite.__all__)
+    assert not {"pixel_grid", "make_noise", "masked_l1", "build_net"} & set(ddp_lite.__all__)  # building blocks
+    for name in ("pixel_grid", "make_noise", "masked_l1", "build_net", "ssim", "complete_depth_coarse_to_fine"):
+        assert hasattr(ddp_lite, name)  # still importable from the package, as before

@@ -139,7 +139,7 @@ def test_smoothness_fills_a_hole_in_a_plane_better_than_without():
 
 
 def test_bf16_none_follows_the_cpu_flags():
-    from ddp_lite.fit import _cpu_has_native_bf16, use_bf16
+    from ddp_lite.config import _cpu_has_native_bf16, use_bf16
     cpu = torch.device("cpu")
     assert use_bf16(True, cpu) is True and use_bf16(False, cpu) is False
     try:
@@ -154,20 +154,20 @@ def test_bf16_none_follows_the_cpu_flags():
 
 @pytest.mark.parametrize("shape", ["pixels", "blobs"])
 def test_holdout_takes_its_share_of_valid_pixels_only(shape):
-    from ddp_lite.fit import _holdout_mask
+    from ddp_lite.loop import holdout_mask
     valid = np.ones((48, 64), bool)
     valid[:, :20] = False  # a hole: never held out
-    held = _holdout_mask(valid, 0.05, seed=3, shape=shape)
+    held = holdout_mask(valid, 0.05, seed=3, shape=shape)
     assert not held[~valid].any()
     assert abs(held.sum() / valid.sum() - 0.05) < 0.02
-    np.testing.assert_array_equal(held, _holdout_mask(valid, 0.05, seed=3, shape=shape))  # seeded
+    np.testing.assert_array_equal(held, holdout_mask(valid, 0.05, seed=3, shape=shape))  # seeded
 
 
 def test_holdout_blobs_are_patches_not_scattered_pixels():
     from scipy import ndimage
-    from ddp_lite.fit import _holdout_mask
+    from ddp_lite.loop import holdout_mask
     valid = np.ones((96, 128), bool)
-    pixels, blobs = (_holdout_mask(valid, 0.05, seed=0, shape=s) for s in ("pixels", "blobs"))
+    pixels, blobs = (holdout_mask(valid, 0.05, seed=0, shape=s) for s in ("pixels", "blobs"))
     # 4-connected components: ~600 scattered pixels are mostly alone; blobs are a handful of patches
     assert ndimage.label(pixels)[1] > 400
     assert ndimage.label(blobs)[1] < 30

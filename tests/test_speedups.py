@@ -3,7 +3,8 @@ import numpy as np
 import pytest
 
 from ddp_lite import Camera, FitConfig, look_at
-from ddp_lite.fit import _downsample_camera, _downsample_depth, _downsample_image, complete_depth_coarse_to_fine
+from ddp_lite.coarse_to_fine import (_downsample_camera, _downsample_depth, _downsample_image,
+                                     complete_depth_coarse_to_fine)
 
 TINY = dict(channels=(8, 16, 32), lr=1e-2, progress=False)
 

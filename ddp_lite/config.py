@@ -1,0 +1,185 @@
+"""FitConfig: everything a fit needs besides the data; and the device and precision it runs on.
+
+Defaults are the paper's (supplement). A profile's sizes and schedules come from
+:meth:`FitConfig.for_profile`, the one place a :class:`~ddp_lite.profiles.Profile` becomes a config;
+what differs between the DDP variants comes from :mod:`ddp_lite.variants`.
+"""
+from __future__ import annotations
+
+import dataclasses
+import functools
+from dataclasses import dataclass
+
+import torch
+
+from .checks import check_bool, check_choice, check_int, check_int_tuple, check_real
+from .nets import DOWNSAMPLINGS, NETS, PADDINGS, UPSAMPLINGS
+from .profiles import Profile, get_profile
+from .variants import get_variant
+
+__all__ = ["FitConfig", "HOLDOUTS", "use_bf16", "resolve_device"]
+
+HOLDOUTS = ("pixels", "blobs")
+
+
+@dataclass
+class FitConfig:
+    """Everything a fit needs besides the data. Defaults are the paper's (supplement).
+
+    ``iterations=None`` means 16000 (6000 for depth only); milestones are absolute iterations.
+    Use :meth:`for_profile` for the sizes and schedules of ``DDP_PROFILE``.
+    """
+
+    net: str = "unet"  # "unet" or "skip"
+    channels: tuple | None = None  # encoder widths; None → the paper's
+    down: str = "stride"  # UNet down-sampling: "stride" (DIP) or "pool" (Ronneberger)
+    up: str = "bilinear"  # UNet up-sampling: "bilinear" or "nearest"
+    pad: str = "reflect"  # UNet conv padding: "reflect" (DIP) or "zeros"
+    noise_channels: int = 16
+    lr: float = 5e-5
+    schedule: str = "step"  # "step" (lr × lr_gamma at each milestone) or "cosine" (to 0 at the last iteration)
+    iterations: int | None = None
+    lr_milestones: tuple = (12000, 15000)
+    lr_gamma: float = 0.01
+    lambda_z: float = 0.8  # L1 share of L_disp
+    lambda_i: float = 0.5  # L1 share of L_rgb
+    lambda_w: float = 0.5  # SSIM share of L_warp
+    gammas: tuple | None = None  # (γ1, γ2); None → (0.96, 0.02) with warp, (0.98, 0.01) without
+    reg_noise_std: float = 0.0  # DIP input jitter: n + σ·N(0, 1) every iteration
+    average_outputs: float = 0.0  # DIP output averaging: EMA weight (0.99 in DIP), 0 = off
+    ensemble: int = 1  # fits with seeds seed, seed+1, ...; their disparities are averaged
+    smoothness: float = 0.0  # weight of an edge-aware second-order smoothness of disparity in the holes (0: the paper)
+    smoothness_edge: float = 10.0  # how strongly colour edges relax it: exp(-edge · |∇grey|)
+    disparity_margin: float = 1.25  # transform=None: d_min / margin … d_max × margin around the valid depth
+    auto_stop: bool = False
+    holdout_fraction: float = 0.05  # share of valid pixels held out when auto_stop is on
+    holdout: str = "pixels"  # their shape: "pixels" (scattered) or "blobs" (hole-like patches)
+    patience: int = 200  # iterations without held-out improvement that make a plateau
+    plateau_decays: int = 0  # auto-stop: cut lr by lr_gamma at the first this-many plateaus, stop at the next
+    eval_every: int = 10
+    seed: int = 0
+    device: str | None = None  # None → cuda or mps when available, else cpu
+    bf16: bool | None = False  # the network (not the losses) under bfloat16 autocast; None: where the hardware has it
+    channels_last: bool = False  # memory format of the network's activations
+    progress: bool = True
+    callback_every: int = 0
+    max_memory_gb: float | None = None  # refuse a fit whose estimated peak exceeds this; None → 75 % of RAM
+
+    @classmethod
+    def for_profile(cls, profile=None, variant: str = "rgbd+warp", **overrides) -> "FitConfig":
+        """The config of a profile (name, :class:`Profile` or None for ``DDP_PROFILE``) for ``variant``.
+
+        Every :class:`Profile` field that is also a FitConfig field is copied, so a setting added to
+        both flows through; three are derived: ``channels`` (the UNet's or the SkipNet's widths, by
+        ``net``), ``iterations`` (the variant's count) and ``lr_milestones`` (fractions → iterations).
+        """
+        profile = get_profile(profile)
+        iterations = profile.iterations_for(get_variant(variant))
+        net = overrides.get("net", "unet")
+        values = {name: getattr(profile, name) for name in _COPIED_FROM_PROFILE}
+        values.update(net=net, channels=profile.channels if net == "unet" else profile.skip_channels,
+                      iterations=iterations, lr_milestones=profile.milestones(iterations))
+        values.update(overrides)
+        return cls(**values)
+
+    def replace(self, **changes) -> "FitConfig":
+        """A copy with some fields changed."""
+        return dataclasses.replace(self, **changes)
+
+    def resolved_iterations(self, variant: str) -> int:
+        """The iteration count this config runs for ``variant``: ``iterations``, or the paper's."""
+        if self.iterations is not None:
+            return int(self.iterations)
+        return get_variant(variant).paper_iterations
+
+    def validate(self) -> None:
+        """Raise ``TypeError``/``ValueError`` naming the first bad field: every number must be finite and
+        of its type (no bool for an int, no 2.7 for an iteration count), every choice one of its values."""
+        check_choice(self.net, "config.net", NETS)
+        if self.channels is not None:
+            check_int_tuple(self.channels, "config.channels", minimum=1, min_length=2 if self.net == "unet" else 1)
+        for name, choices in (("down", DOWNSAMPLINGS), ("up", UPSAMPLINGS), ("pad", PADDINGS),
+                              ("schedule", ("step", "cosine")), ("holdout", HOLDOUTS)):
+            check_choice(getattr(self, name), f"config.{name}", choices)
+        for name, minimum in (("noise_channels", 1), ("ensemble", 1), ("patience", 1), ("plateau_decays", 0),
+                              ("eval_every", 1), ("seed", 0), ("callback_every", 0)):
+            check_int(getattr(self, name), f"config.{name}", minimum=minimum)
+        if self.iterations is not None:
+            check_int(self.iterations, "config.iterations", minimum=1)
+        check_int_tuple(self.lr_milestones, "config.lr_milestones", minimum=1)
+        for name, low, high, low_open, high_open in (
+                ("lr", 0.0, None, True, False), ("lr_gamma", 0.0, None, True, False),
+                ("lambda_z", 0.0, 1.0, False, False), ("lambda_i", 0.0, 1.0, False, False),
+                ("lambda_w", 0.0, 1.0, False, False), ("reg_noise_std", 0.0, None, False, False),
+                ("average_outputs", 0.0, 1.0, False, True), ("smoothness", 0.0, None, False, False),
+                ("smoothness_edge", 0.0, None, False, False), ("disparity_margin", 1.0, None, False, False),
+                ("holdout_fraction", 0.0, 0.5, True, True)):
+            check_real(getattr(self, name), f"config.{name}", low, high, low_open, high_open)
+        for name in ("auto_stop", "channels_last", "progress"):
+            check_bool(getattr(self, name), f"config.{name}")
+        if self.bf16 is not None:  # None: decided by the hardware (use_bf16)
+            check_bool(self.bf16, "config.bf16")
+        if self.gammas is not None:
+            if isinstance(self.gammas, (str, bytes)) or not isinstance(self.gammas, (tuple, list)) or len(self.gammas) != 2:
+                raise TypeError(f"config.gammas must be a pair (γ1, γ2), got {self.gammas!r}")
+            g1, g2 = (check_real(g, f"config.gammas[{i}]", 0.0, 1.0) for i, g in enumerate(self.gammas))
+            if g1 + g2 > 1.0:
+                raise ValueError(f"config.gammas must have γ1 + γ2 ≤ 1, got {self.gammas}")
+        if self.max_memory_gb is not None:
+            check_real(self.max_memory_gb, "config.max_memory_gb", 0.0, None, low_open=True)
+        if self.device is not None:
+            resolve_device(self)  # a name torch knows and a device this machine has
+
+
+# the Profile fields for_profile copies as they are (channels, iterations, lr_milestones are derived)
+_COPIED_FROM_PROFILE = tuple(sorted({f.name for f in dataclasses.fields(Profile)}
+                                    & {f.name for f in dataclasses.fields(FitConfig)}
+                                    - {"channels", "iterations", "lr_milestones"}))
+
+
+def use_bf16(bf16: bool | None, device: torch.device) -> bool:
+    """Whether a fit runs its net in bfloat16: ``bf16`` itself, or for ``None`` whether ``device``
+    computes bfloat16 natively (a CPU with AVX-512 BF16 or AMX, a CUDA GPU with bf16). Where it
+    is emulated it is slower than float32 (0.84× on a CPU without it), where it is native 1.37×
+    faster at 96×128 with no worse hole error over 8 seeds (``benchmarks/README.md``)."""
+    if bf16 is not None:
+        return bool(bf16)
+    if device.type == "cuda":
+        return torch.cuda.is_bf16_supported()
+    return device.type == "cpu" and _cpu_has_native_bf16()
+
+
+@functools.lru_cache(maxsize=1)
+def _cpu_has_native_bf16() -> bool:
+    # oneDNN reports bf16 "supported" on any AVX-512 CPU, emulated or not: ask the CPU itself
+    try:
+        with open("/proc/cpuinfo") as handle:
+            flags = next((line.split(":", 1)[1].split() for line in handle if line.startswith("flags")), [])
+    except OSError:
+        return False
+    return "avx512_bf16" in flags or "amx_bf16" in flags
+
+
+def resolve_device(config: FitConfig) -> torch.device:
+    if config.device is not None:
+        if not isinstance(config.device, (str, torch.device)):
+            raise TypeError(f"config.device must be None or a name like 'cpu', 'cuda', 'cuda:0', 'mps', "
+                            f"got {type(config.device).__name__}")
+        try:
+            device = torch.device(config.device)
+        except RuntimeError:
+            raise ValueError(f"config.device must be None, 'cpu', 'cuda[:N]' or 'mps', got {config.device!r}") from None
+        mps = getattr(torch.backends, "mps", None)
+        available = {"cpu": True, "cuda": torch.cuda.is_available(),
+                     "mps": mps is not None and mps.is_available()}
+        if not available.get(device.type, False):
+            raise ValueError(f"config.device={config.device!r}: this machine has no usable {device.type} device; "
+                             f"use 'cpu' or None (picks cuda/mps when present)")
+        if device.type == "cuda" and device.index is not None and device.index >= torch.cuda.device_count():
+            raise ValueError(f"config.device={config.device!r}: only {torch.cuda.device_count()} CUDA device(s)")
+        return device
+    if torch.cuda.is_available():
+        return torch.device("cuda")
+    if getattr(torch.backends, "mps", None) is not None and torch.backends.mps.is_available():
+        return torch.device("mps")
+    return torch.device("cpu")
