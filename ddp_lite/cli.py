@@ -51,7 +51,8 @@ def _demo(args) -> int:
     table = error_table(case, estimates)
     for name, depth in estimates.items():
         table[name]["holes (m)"] = hole_rmse(depth, case.gt, case.holes)
-    print(format_table(table, 3, f"RMSE in the holes (sky not scored), DDP after {result.iterations} iterations: "
+    print(format_table(table, 3, f"RMSE in the holes (sky not scored), DDP after {result.iterations} iterations"
+                                 + (f" (the mean of {result.fits} fits)" if result.fits > 1 else "") + ": "
                                  "normalised disparity ×100, its part near depth edges, metres"))
 
     ddp_error, linear_error = table["DDP rgbd+warp"]["holes (m)"], table["linear"]["holes (m)"]

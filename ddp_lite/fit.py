@@ -36,7 +36,12 @@ __all__ = ["FitConfig", "DepthResult", "ImageResult", "complete_depth", "complet
 
 @dataclass
 class DepthResult:
-    """What :func:`complete_depth` returns. Arrays are NumPy, (H, W) or (H, W, 3)."""
+    """What :func:`complete_depth` returns. Arrays are NumPy, (H, W) or (H, W, 3).
+
+    For the mean of several fits (``config.ensemble > 1``, ``fits`` of them) ``iterations`` and
+    ``seconds`` are totals over the fits; ``history``, ``best_iteration`` and ``state`` are the
+    first fit's.
+    """
 
     depth: np.ndarray  # metres, holes filled
     disparity: np.ndarray  # [0, 1], see ``transform``
@@ -47,6 +52,7 @@ class DepthResult:
     best_iteration: int  # the iteration whose output is returned
     seconds: float
     state: dict | None = field(default=None, repr=False)  # the net's final weights (CPU), for warm starts
+    fits: int = 1  # how many fits' disparities were averaged (config.ensemble)
 
     def merged(self, input_depth) -> np.ndarray:
         """"SGM+DDP": the input where it is valid, this result in its holes."""
@@ -143,7 +149,7 @@ def complete_depth(rgb, depth, camera: Camera | None = None, neighbors=(), varia
                        rgb=np.mean(rgbs, axis=0).astype(np.float32) if rgbs else None, history=members[0].history,
                        transform=transform, iterations=sum(m.iterations for m in members),
                        best_iteration=members[0].best_iteration, seconds=sum(m.seconds for m in members),
-                       state=members[0].state)
+                       state=members[0].state, fits=len(members))
 
 
 def _check_fit_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth, transform):

@@ -83,7 +83,8 @@ def test_ensemble_is_the_mean_disparity_of_its_seeds():
     expected = np.mean([m.disparity for m in members], axis=0)
     assert np.allclose(ensemble.disparity, expected, atol=1e-6)
     assert np.allclose(ensemble.depth, transform.to_depth(expected), rtol=1e-5)
-    assert ensemble.iterations == 45
+    assert ensemble.iterations == 45 and ensemble.fits == 3 and members[0].fits == 1
+    assert ensemble.best_iteration == members[0].best_iteration  # the first fit's, as documented
     assert not np.allclose(members[0].disparity, members[1].disparity)  # the seeds really differ
 
 
