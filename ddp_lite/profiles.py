@@ -24,10 +24,11 @@ structures).
 work) from three seeds and returns the mean of their disparities (``FitConfig.ensemble``). One
 fit's hole error moves by 10 % and more with the seed (2-4× on some cases), and at 96×128 the
 half-width net is no worse per fit than the paper's 32–512: over the suite's 22 ``class`` cases
-one half-width fit scored 1.16× the best classical fill of each case, one 32–512 fit 1.28×, the
-mean of two half-width fits 1.12× (``benchmarks/README.md``, issue 12); three of them cost about
-one full-width fit. A quarter-width net (8–128) looked as good on the 8 cases the study started
-with and failed on large border holes elsewhere (1.34×).
+one half-width fit scored 1.33× the best classical fill of each case (mean over 3 seeds), one
+32–512 fit 1.57× (seeds 0 and 1: 1.20× and 1.94×), the mean of three half-width fits 1.28×
+(``benchmarks/README.md``, issue 12); three of them cost about one full-width fit. A
+quarter-width net (8–128) looked as good on the 8 cases the study started with and failed on
+large border holes elsewhere (mean of four: 1.50×).
 ``paper`` keeps the paper's net and losses. ``class`` runs the net in bfloat16 where the CPU
 computes it natively (``FitConfig(bf16=None)``).
 """
