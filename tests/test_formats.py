@@ -142,48 +142,31 @@ def test_scene_folder_round_trip(tmp_path, scene):
 # refusals: the file and the line
 # ------------------------------------------------------------------------------------------------
 
-@pytest.mark.parametrize("text, line, match", [
-    ("# t f\n1.0 rgb/1.png\n2.0\n", 3, "expected 'timestamp filename'"),
-    ("1.0 rgb/1.png\nabc rgb/2.png\n", 2, "timestamp must be numbers"),
-])
-def test_tum_list_refusals(tmp_path, text, line, match):
-    (tmp_path / "rgb.txt").write_text(text)
-    with pytest.raises(ValueError, match=rf"rgb.txt, line {line}: .*{match}"):
-        read_tum_list(tmp_path / "rgb.txt")
+REFUSALS = [  # (file, reader, its text, the line the error must name, what it must say)
+    ("rgb.txt", read_tum_list, "# t f\n1.0 rgb/1.png\n2.0\n", 3, "expected 'timestamp filename'"),
+    ("rgb.txt", read_tum_list, "1.0 rgb/1.png\nabc rgb/2.png\n", 2, "timestamp must be numbers"),
+    ("groundtruth.txt", read_tum_trajectory, "1.0 0 0 0 0 0 0 1\n2.0 0 0 0 0 0 1\n", 2, "8 numbers"),
+    ("groundtruth.txt", read_tum_trajectory, "1.0 0 0 0 0 0 0 0\n", 1, "unit length"),
+    ("groundtruth.txt", read_tum_trajectory, "# header\n1.0 0 0 nan 0 0 0 1\n", 2, "finite"),
+    ("cameras.txt", read_colmap_cameras, "1 PINHOLE 32 24 30 30 16\n", 1,
+     r"PINHOLE needs 4 parameters \(fx fy cx cy\), got 3"),
+    ("cameras.txt", read_colmap_cameras, "# c\n1 FISHEYE 32 24 30 16 12 0.1\n", 2,
+     "camera model 'FISHEYE' is not supported"),
+    ("cameras.txt", read_colmap_cameras, "1 PINHOLE 32 x 30 30 16 12\n", 1, "positive integers"),
+    ("cameras.txt", read_colmap_cameras, "1 PINHOLE 32 24 30 30 16 12\n1 PINHOLE 32 24 30 30 16 12\n", 2,
+     "appears twice"),
+    ("images.txt", read_colmap_images, "1 1 0 0 0 0 0 0 1 a.png\n\n2 1 0 0 0 0 0 1 a.png\n", 3,
+     "expected 'IMAGE_ID QW"),
+    ("images.txt", read_colmap_images, "1 2 0 0 0 0 0 0 1 a.png\n\n", 1, "unit length"),
+    ("images.txt", read_colmap_images, "1 1 0 0 0 0 0 0 x a.png\n\n", 1, "must be integers"),
+]
 
 
-@pytest.mark.parametrize("text, line, match", [
-    ("1.0 0 0 0 0 0 0 1\n2.0 0 0 0 0 0 1\n", 2, "8 numbers"),
-    ("1.0 0 0 0 0 0 0 0\n", 1, "unit length"),
-    ("# header\n1.0 0 0 nan 0 0 0 1\n", 2, "finite"),
-])
-def test_tum_trajectory_refusals(tmp_path, text, line, match):
-    (tmp_path / "groundtruth.txt").write_text(text)
-    with pytest.raises(ValueError, match=rf"groundtruth.txt, line {line}: .*{match}"):
-        read_tum_trajectory(tmp_path / "groundtruth.txt")
-
-
-@pytest.mark.parametrize("text, line, match", [
-    ("1 PINHOLE 32 24 30 30 16\n", 1, r"PINHOLE needs 4 parameters \(fx fy cx cy\), got 3"),
-    ("# c\n1 FISHEYE 32 24 30 16 12 0.1\n", 2, "camera model 'FISHEYE' is not supported"),
-    ("1 PINHOLE 32 x 30 30 16 12\n", 1, "positive integers"),
-    ("1 PINHOLE 32 24 30 30 16 12\n1 PINHOLE 32 24 30 30 16 12\n", 2, "appears twice"),
-])
-def test_colmap_cameras_refusals(tmp_path, text, line, match):
-    (tmp_path / "cameras.txt").write_text(text)
-    with pytest.raises(ValueError, match=rf"cameras.txt, line {line}: .*{match}"):
-        read_colmap_cameras(tmp_path / "cameras.txt")
-
-
-@pytest.mark.parametrize("text, line, match", [
-    ("1 1 0 0 0 0 0 0 1 a.png\n\n2 1 0 0 0 0 0 1 a.png\n", 3, "expected 'IMAGE_ID QW"),
-    ("1 2 0 0 0 0 0 0 1 a.png\n\n", 1, "unit length"),
-    ("1 1 0 0 0 0 0 0 x a.png\n\n", 1, "must be integers"),
-])
-def test_colmap_images_refusals(tmp_path, text, line, match):
-    (tmp_path / "images.txt").write_text(text)
-    with pytest.raises(ValueError, match=rf"images.txt, line {line}: .*{match}"):
-        read_colmap_images(tmp_path / "images.txt")
+@pytest.mark.parametrize("name, reader, text, line, match", REFUSALS)
+def test_malformed_files_are_refused_naming_file_and_line(tmp_path, name, reader, text, line, match):
+    (tmp_path / name).write_text(text)
+    with pytest.raises(ValueError, match=rf"{name}, line {line}: .*{match}"):
+        reader(tmp_path / name)
 
 
 def test_colmap_refuses_distortion_unless_asked_and_unknown_cameras(tmp_path, scene):
