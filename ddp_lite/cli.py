@@ -12,7 +12,6 @@
 from __future__ import annotations
 
 import argparse
-import io
 import os
 import sys
 import tempfile
@@ -108,19 +107,14 @@ def _writers() -> dict:
     """Output writers by suffix: filled depth (H, W) float32 metres → bytes."""
     import cv2
 
-    from .datasets import pfm_bytes
+    from .datasets import depth_png_bytes, npy_bytes, pfm_bytes
 
-    def npy(depth):
-        buffer = io.BytesIO()
-        np.save(buffer, depth)
-        return buffer.getvalue()
-
-    def png(depth):  # 16-bit millimetres, 0 = no value (the usual depth-PNG convention)
-        return cv2.imencode(".png", np.round(np.nan_to_num(depth, nan=0.0) * 1000.0).astype(np.uint16))[1].tobytes()
+    def png(depth):  # 16-bit millimetres, 0 = no value; _complete refuses depth beyond PNG_MAX_METRES first
+        return depth_png_bytes(depth)[0]
 
     def exr(depth):
         return cv2.imencode(".exr", depth.astype(np.float32))[1].tobytes()
-    return {".npy": npy, ".png": png, ".pfm": pfm_bytes, ".exr": exr}
+    return {".npy": npy_bytes, ".png": png, ".pfm": pfm_bytes, ".exr": exr}
 
 
 PNG_MAX_METRES = 65.535  # uint16 millimetres

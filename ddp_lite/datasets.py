@@ -23,6 +23,7 @@ tests and notebooks can run the real-data path offline.
 """
 from __future__ import annotations
 
+import io
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -194,6 +195,24 @@ def write_pfm(path, array) -> None:
     if not (values.ndim == 2 or (values.ndim == 3 and values.shape[2] == 3)) or min(values.shape[:2]) == 0:
         raise ValueError(f"array must be (H, W), (H, W, 1) or (H, W, 3), got shape {np.shape(array)}")
     write_bytes_atomic(path, pfm_bytes(values))
+
+
+def npy_bytes(values) -> bytes:
+    """Any array → the bytes of a ``.npy`` file (``np.load`` reads them back)."""
+    buffer = io.BytesIO()
+    np.save(buffer, values)
+    return buffer.getvalue()
+
+
+def depth_png_bytes(depth, factor: float = 1000.0) -> tuple[bytes, int]:
+    """(H, W) depth × ``factor`` (1000: millimetres) → (16-bit PNG bytes, how many pixels did not fit).
+    NaN becomes 0 (the usual depth-PNG "no value"); values beyond 65535 are written as 0 too."""
+    scaled = np.round(np.nan_to_num(np.asarray(depth, np.float64), nan=0.0) * factor)
+    overflow = scaled > 65535
+    ok, buffer = cv2.imencode(".png", np.where(overflow, 0, scaled).astype(np.uint16))
+    if not ok:
+        raise RuntimeError("OpenCV could not encode a 16-bit PNG")
+    return buffer.tobytes(), int(overflow.sum())
 
 
 def pfm_bytes(values) -> bytes:

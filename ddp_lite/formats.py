@@ -30,7 +30,6 @@ Every reader refuses a malformed file with its path and line number before anyth
 """
 from __future__ import annotations
 
-import io
 import re
 import warnings
 from dataclasses import dataclass
@@ -42,7 +41,7 @@ from scipy.spatial.transform import Rotation, Slerp
 
 from .atomic import write_bytes_atomic
 from .camera import Camera
-from .datasets import _depth_range, _png_bytes, _read_rgb, _resize, pfm_bytes, read_pfm
+from .datasets import _depth_range, _png_bytes, _read_rgb, _resize, depth_png_bytes, npy_bytes, pfm_bytes, read_pfm
 from .scenes import Scene, View, check_size
 
 __all__ = ["TUM_INTRINSICS", "TUM_DEPTH_FACTOR", "read_tum", "write_tum", "associate", "read_tum_list",
@@ -123,14 +122,11 @@ def _undistort(rgb: np.ndarray, depth: np.ndarray, K: np.ndarray, dist) -> tuple
 
 def _depth_png_bytes(depth: np.ndarray, factor: float, path_for_errors) -> bytes:
     """(H, W) depth × ``factor`` → 16-bit PNG bytes, NaN → 0; refuse values the format cannot hold."""
-    scaled = np.round(np.nan_to_num(depth.astype(np.float64), nan=0.0) * factor)
-    if scaled.max(initial=0) > 65535:
+    png, overflow = depth_png_bytes(depth, factor)
+    if overflow:
         raise ValueError(f"{path_for_errors}: depth up to {np.nanmax(depth):.3f} does not fit a 16-bit PNG at "
                          f"{factor:g} units per metre (max {65535 / factor:.3f}); use .npy, .pfm or .bin")
-    ok, buffer = cv2.imencode(".png", scaled.astype(np.uint16))
-    if not ok:
-        raise RuntimeError("OpenCV could not encode a 16-bit PNG")
-    return buffer.tobytes()
+    return png
 
 
 def _read_depth_file(path: Path, scale: float | None) -> np.ndarray:
@@ -614,9 +610,7 @@ def write_colmap(scene: Scene, folder, depths=None, depth_format: str = "bin", m
             target = folder / "depth" / f"{Path(name).stem}.png"
             write_bytes_atomic(target, _depth_png_bytes(depth, 1.0 / depth_scale, target))
         elif depth_format == "npy":
-            buffer = io.BytesIO()
-            np.save(buffer, depth)
-            write_bytes_atomic(folder / "depth" / f"{Path(name).stem}.npy", buffer.getvalue())
+            write_bytes_atomic(folder / "depth" / f"{Path(name).stem}.npy", npy_bytes(depth))
         else:
             write_bytes_atomic(folder / "depth" / f"{Path(name).stem}.pfm", pfm_bytes(depth))
     write_bytes_atomic(folder / "sparse" / "cameras.txt", ("\n".join(camera_lines) + "\n").encode("utf-8"))

@@ -37,6 +37,7 @@ import numpy as np
 
 from .atomic import write_bytes_atomic
 from .camera import Camera
+from .datasets import depth_png_bytes, npy_bytes
 from .disparity import DisparityTransform
 from .fit import FitConfig, _check_fit_inputs, complete_depth, estimate_peak_memory_gb
 from .runner import run_jobs
@@ -48,7 +49,6 @@ __all__ = ["ViewJob", "plan_jobs", "fit_view", "run_sequence", "read_manifest", 
 MANIFEST = "manifest.json"
 VARIANT = "rgbd+warp"
 N_NEIGHBORS = 2  # the paper's N
-PNG_MAX_METRES = 65.535  # uint16 millimetres
 
 
 @dataclass
@@ -182,18 +182,10 @@ def _finished(out: Path, entry: dict | None, job: ViewJob) -> bool:
 
 def _write_view(out: Path, job: ViewJob, result: dict) -> int:
     """Write a finished view's files atomically; → the number of pixels a 16-bit mm PNG cannot hold."""
-    import io
-
-    import cv2
-
     files = _files(job)
-    buffer = io.BytesIO()
-    np.save(buffer, result["depth"])
-    write_bytes_atomic(out / files["npy"], buffer.getvalue())
-    millimetres = np.round(np.nan_to_num(result["depth"].astype(np.float64), nan=0.0) * 1000.0)
-    overflow = int((millimetres > 65535).sum())
-    ok, png = cv2.imencode(".png", np.where(millimetres > 65535, 0, millimetres).astype(np.uint16))
-    write_bytes_atomic(out / files["png"], png.tobytes())
+    write_bytes_atomic(out / files["npy"], npy_bytes(result["depth"]))
+    png, overflow = depth_png_bytes(result["depth"])  # millimetres
+    write_bytes_atomic(out / files["png"], png)
     _write_preview(out / files["preview"], job, result["depth"])
     return overflow
 
