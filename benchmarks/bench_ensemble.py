@@ -2,6 +2,7 @@
 
     python benchmarks/bench_ensemble.py               # 48×64 (ci net, 32–512) and 96×128 (32–512), K = 1, 2, 4, 8
     python benchmarks/bench_ensemble.py --threads 2
+    python benchmarks/bench_ensemble.py --fits --threads 2   # whole ensemble fits: members in turn vs side by side
 
 Per iteration, for K members with their own weights and noise:
 - ``loop``: K UNets called one after another, one loss (the sum), one backward, one fused Adam
@@ -13,6 +14,11 @@ Per iteration, for K members with their own weights and noise:
 The loss is a plain L1 against a fixed target (the same in both modes), so the table is the
 networks' cost; DDP's loss adds its own per-member cost on top. Modes and K are interleaved in one
 process (rounds of loop, vmap, ...); the table gives medians. ``× one`` = s/it ÷ (K × s/it of one net).
+
+``--fits`` times what ``complete_depth(config=FitConfig(ensemble=K))`` does (the `class` net and
+variant, a fixed iteration count so that every member does the same work): the K members one
+after another with all threads (``in turn``), or one member per thread side by side, each on one
+thread (``side by side``, what an ensemble does on a CPU with ≥ 2 threads).
 """
 from __future__ import annotations
 
@@ -71,14 +77,53 @@ def stepper(size, channels, K: int, mode: str):
     return step
 
 
+def ensemble_seconds(K: int, side_by_side: bool, iterations: int, size=(96, 128), variant: str = "rgbd") -> float:
+    """Wall seconds of one ``complete_depth`` ensemble of K members (bench_fit's textured plane)."""
+    from ddp_lite import FitConfig, complete_depth, fit
+    from bench_fit import case
+    rgb, depth, ref, nbrs = case(*size)
+    config = FitConfig.for_profile("class", variant=variant, iterations=iterations, auto_stop=False, ensemble=K,
+                                   progress=False)
+    members = fit._parallel_members
+    if not side_by_side:
+        fit._parallel_members = lambda *args, **kwargs: 1
+    try:
+        start = time.perf_counter()
+        complete_depth(rgb, depth, ref, nbrs if variant == "rgbd+warp" else (), variant=variant, config=config)
+        return time.perf_counter() - start
+    finally:
+        fit._parallel_members = members
+
+
+def main_fits(args) -> None:
+    print(f"whole ensembles: class net and recipe, {args.iterations} iterations per member, 96x128, "
+          f"{torch.get_num_threads()} thread(s), median of {args.rounds} interleaved rounds")
+    print(f"{'variant':>9} {'K':>2} {'in turn s':>10} {'side by side s':>14} {'ratio':>6} {'s per fit':>10}")
+    for variant in ("rgbd", "rgbd+warp"):
+        for K in args.members:
+            ensemble_seconds(K, True, 5, variant=variant)  # warm-up
+            times = {True: [], False: []}
+            for _ in range(args.rounds):
+                for side in (False, True):
+                    times[side].append(ensemble_seconds(K, side, args.iterations, variant=variant))
+            turn, side = statistics.median(times[False]), statistics.median(times[True])
+            print(f"{variant:>9} {K:>2} {turn:10.2f} {side:14.2f} {side / turn:6.2f} {side / K:10.2f}", flush=True)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--threads", type=int, default=1)
     parser.add_argument("--rounds", type=int, default=5)
-    parser.add_argument("--members", type=int, nargs="+", default=[1, 2, 4, 8])
+    parser.add_argument("--members", type=int, nargs="+", default=None, help="K values (default 1 2 4 8; --fits: 2 3 4)")
+    parser.add_argument("--fits", action="store_true", help="whole ensemble fits: members in turn vs side by side")
+    parser.add_argument("--iterations", type=int, default=60, help="--fits: iterations per member")
     args = parser.parse_args()
     torch.set_num_threads(args.threads)
     print(cpu_summary())
+    if args.fits:
+        args.members = args.members or [2, 3, 4]
+        return main_fits(args)
+    args.members = args.members or [1, 2, 4, 8]
     print(f"torch {torch.__version__}, {torch.get_num_threads()} thread(s), median of {args.rounds} interleaved rounds")
     print(f"{'size':>7} {'net':>18} {'K':>2} {'loop s/it':>10} {'vmap s/it':>10} {'vmap/loop':>9} "
           f"{'loop × one':>10} {'vmap × one':>10}")

@@ -50,6 +50,7 @@ class FitConfig:
     ensemble: int = 1  # fits with seeds seed, seed+1, ...; their disparities are averaged
     smoothness: float = 0.0  # weight of an edge-aware second-order smoothness of disparity in the holes (0: the paper)
     smoothness_edge: float = 10.0  # how strongly colour edges relax it: exp(-edge · |∇grey|)
+    flatness: float = 0.0  # weight of an edge-aware first-order smoothness in the holes (0: off)
     disparity_margin: float = 1.25  # transform=None: d_min / margin … d_max × margin around the valid depth
     auto_stop: bool = False
     holdout_fraction: float = 0.05  # share of valid pixels held out when auto_stop is on
@@ -112,6 +113,7 @@ class FitConfig:
                 ("lambda_z", 0.0, 1.0, False, False), ("lambda_i", 0.0, 1.0, False, False),
                 ("lambda_w", 0.0, 1.0, False, False), ("reg_noise_std", 0.0, None, False, False),
                 ("average_outputs", 0.0, 1.0, False, True), ("smoothness", 0.0, None, False, False),
+                ("flatness", 0.0, None, False, False),
                 ("smoothness_edge", 0.0, None, False, False), ("disparity_margin", 1.0, None, False, False),
                 ("holdout_fraction", 0.0, 0.5, True, True)):
             check_real(getattr(self, name), f"config.{name}", low, high, low_open, high_open)

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import time
 import warnings
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -26,7 +27,8 @@ from .dip import ImageResult, fit_image
 from .disparity import DisparityTransform
 from .loop import (PlateauStopper, check_finite_output, check_memory, estimate_peak_memory_gb, holdout_mask,
                    to_tensor)
-from .losses import ConstantTarget, disparity_loss, rgb_loss, smoothness_loss, smoothness_weights, warp_loss
+from .losses import (ConstantTarget, disparity_loss, flatness_loss, rgb_loss, smoothness_loss, smoothness_weights,
+                     warp_loss)
 from .variants import VARIANTS, get_variant
 from .warp import Warper
 
@@ -140,9 +142,12 @@ def complete_depth(rgb, depth, camera: Camera | None = None, neighbors=(), varia
     # one transform for every member (the checks derive it from the input depth when None)
     config, _, _, neighbors, _, transform = _check_fit_inputs(rgb, depth, camera, neighbors, variant, config,
                                                               gt_depth, transform)
-    members = [_fit_one(rgb, depth, camera, neighbors, variant, config.replace(seed=config.seed + k, ensemble=1),
+    def fit_member(k: int) -> DepthResult:
+        return _fit_one(rgb, depth, camera, neighbors, variant, config.replace(seed=config.seed + k, ensemble=1),
                         gt_depth=gt_depth, transform=transform, callback=callback, init=init)
-               for k in range(int(config.ensemble))]
+
+    workers = _parallel_members(config, variant, depth.shape, len(neighbors), callback)
+    members = _run_members(fit_member, int(config.ensemble), workers)
     disparity = np.mean([m.disparity for m in members], axis=0).astype(np.float32)  # (H, W)
     rgbs = [m.rgb for m in members if m.rgb is not None]
     return DepthResult(depth=transform.to_depth(disparity).astype(np.float32), disparity=disparity,
@@ -150,6 +155,40 @@ def complete_depth(rgb, depth, camera: Camera | None = None, neighbors=(), varia
                        transform=transform, iterations=sum(m.iterations for m in members),
                        best_iteration=members[0].best_iteration, seconds=sum(m.seconds for m in members),
                        state=members[0].state, fits=len(members))
+
+
+def _parallel_members(config: FitConfig, variant: str, shape, n_neighbors: int, callback) -> int:
+    """How many ensemble members run at once: on a CPU, one per torch thread (each member then
+    computes on one thread), as many as fit in memory side by side; 1 with a callback (it may
+    draw figures, which wants the main thread) or on a GPU."""
+    device = resolve_device(config)
+    if device.type != "cpu" or callback is not None:
+        return 1
+    workers = min(int(config.ensemble), torch.get_num_threads())
+    limit, _ = loop.memory_limit_gb(config, device)
+    if limit is not None and workers > 1:
+        one = estimate_peak_memory_gb(config, get_variant(variant).out_channels, *shape, n_neighbors)
+        workers = min(workers, max(1, int(limit // one)))
+    return workers
+
+
+def _run_members(fit_member, members: int, workers: int) -> list:
+    """``[fit_member(k) for k in range(members)]``, ``workers`` at a time in threads.
+
+    A small net does not keep two cores busy: two one-thread fits side by side do ~1.3× the
+    work of one two-thread fit (``benchmarks/bench_ensemble.py``). Each member then runs on one
+    thread, as it would with ``torch.set_num_threads(1)``, so an ensemble's numbers do not
+    depend on how many cores the machine has.
+    """
+    if workers <= 1:
+        return [fit_member(k) for k in range(members)]
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        with ThreadPoolExecutor(max_workers=workers) as pool:
+            return list(pool.map(fit_member, range(members)))
+    finally:
+        torch.set_num_threads(threads)
 
 
 def _check_fit_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth, transform):
@@ -209,7 +248,7 @@ def _fit_one(rgb, depth, camera, neighbors, variant, config, *, gt_depth=None, t
     rgb_target = ConstantTarget(rgb_t) if rgb_t is not None else None
 
     smooth_weights = None
-    if config.smoothness > 0:
+    if config.smoothness > 0 or config.flatness > 0:
         guide = rgb_t if rgb_t is not None else torch.zeros(1, 3, H, W, device=device)
         # the unconstrained pixels: holes, and the held-out pixels, which must behave like holes
         smooth_weights = smoothness_weights(guide, to_tensor(~(valid & ~heldout), device).bool(), config.smoothness_edge)
@@ -226,9 +265,12 @@ def _fit_one(rgb, depth, camera, neighbors, variant, config, *, gt_depth=None, t
             pairs = [warper(image, ref_depth) for warper, image in zip(warpers, nbr_images)]
             terms["warp"] = warp_loss(rgb_target, [p[0] for p in pairs], [p[1] for p in pairs], config.lambda_w)
             total = total + w_warp * terms["warp"]
-        if smooth_weights is not None:
+        if config.smoothness > 0:
             terms["smooth"] = smoothness_loss(disparity, smooth_weights)
             total = total + config.smoothness * terms["smooth"]
+        if config.flatness > 0:
+            terms["flat"] = flatness_loss(disparity, smooth_weights)
+            total = total + config.flatness * terms["flat"]
         return total, terms
 
     heldout_error = None

@@ -14,6 +14,7 @@ average against the best a long run reached (``benchmarks/bench_autostop.py``).
 from __future__ import annotations
 
 import os
+import threading
 
 import numpy as np
 import torch
@@ -24,7 +25,7 @@ from .nets import SKIP_CHANNELS, UNET_CHANNELS, build_net, count_parameters, mak
 from .progress import progress as tqdm
 
 __all__ = ["PlateauStopper", "run", "build", "holdout_mask", "estimate_peak_memory_gb", "check_memory",
-           "check_finite_output", "to_tensor"]
+           "check_finite_output", "to_tensor", "memory_limit_gb"]
 
 
 def to_tensor(array: np.ndarray, device) -> torch.Tensor:
@@ -140,8 +141,13 @@ def run(net, noise, loss_fn, config: FitConfig, iterations: int, heldout_error=N
     return best_output, history, it + 1, best_iteration
 
 
+# the seeded init below sets and draws from torch's one global generator: ensemble members
+# built in parallel threads take turns
+_INIT_LOCK = threading.Lock()
+
+
 def build(config: FitConfig, out_channels: int, height: int, width: int, device, init_state=None, noise=None):
-    with torch.random.fork_rng(devices=[]):  # deterministic init without touching the caller's RNG
+    with _INIT_LOCK, torch.random.fork_rng(devices=[]):  # deterministic init without touching the caller's RNG
         torch.manual_seed(config.seed)
         options = dict(down=config.down, up=config.up, pad=config.pad) if config.net == "unet" else {}
         net = build_net(config.net, config.noise_channels, out_channels, config.channels, **options)
@@ -183,7 +189,7 @@ def estimate_peak_memory_gb(config: FitConfig, out_channels: int, height: int, w
     return MEMORY_BASE_GB + (activations + BYTES_PER_PARAMETER * parameters) / 2 ** 30
 
 
-def _memory_limit_gb(config: FitConfig, device: torch.device) -> tuple[float | None, str]:
+def memory_limit_gb(config: FitConfig, device: torch.device) -> tuple[float | None, str]:
     """(limit in GB, where it comes from); (None, ...) when the machine's size is unknown."""
     if config.max_memory_gb is not None:
         return float(config.max_memory_gb), "config.max_memory_gb"
@@ -199,7 +205,7 @@ def _memory_limit_gb(config: FitConfig, device: torch.device) -> tuple[float | N
 
 def check_memory(config: FitConfig, out_channels: int, height: int, width: int, n_neighbors: int, device) -> None:
     """Refuse, before the net is built, a fit whose estimated peak exceeds the limit."""
-    limit, source = _memory_limit_gb(config, device)
+    limit, source = memory_limit_gb(config, device)
     if limit is None:
         return
     estimate = estimate_peak_memory_gb(config, out_channels, height, width, n_neighbors)

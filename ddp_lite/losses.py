@@ -31,7 +31,7 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-__all__ = ["ssim", "masked_l1", "disparity_loss", "rgb_loss", "warp_loss", "smoothness_weights", "smoothness_loss",
+__all__ = ["ssim", "masked_l1", "disparity_loss", "rgb_loss", "warp_loss", "smoothness_weights", "smoothness_loss", "flatness_loss",
            "ConstantTarget"]
 
 C1_FACTOR, C2_FACTOR = 0.01, 0.03  # k1, k2 of Wang et al. 2004
@@ -222,4 +222,19 @@ def smoothness_loss(disparity: torch.Tensor, weights: torch.Tensor) -> torch.Ten
     dxx = disparity[..., 2:] - 2 * disparity[..., 1:-1] + disparity[..., :-2]  # (B, 1, H, W - 2)
     dyy = disparity[..., 2:, :] - 2 * disparity[..., 1:-1, :] + disparity[..., :-2, :]  # (B, 1, H - 2, W)
     weighted = (dxx.abs() * weights[:, :1, :, 1:-1]).sum() + (dyy.abs() * weights[:, 1:, 1:-1, :]).sum()
+    return weighted / weights.sum().clamp(min=1e-12) / disparity.shape[0]
+
+
+def flatness_loss(disparity: torch.Tensor, weights: torch.Tensor) -> torch.Tensor:
+    """Edge-aware first-order smoothness of ``disparity`` (B, 1, H, W): the weighted mean of
+    |∂z/∂x| and |∂z/∂y| (forward differences) with the ``weights`` of :func:`smoothness_weights`.
+
+    Where a hole lies between valid pixels its minimum is still a plane through them (the
+    variation is fixed by the ends), but where a hole reaches the image border it continues
+    flat instead of carrying the last slope outward, as the curvature term alone lets it:
+    colorization's behaviour, which wins the suite's border holes.
+    """
+    dx = (disparity[..., 1:] - disparity[..., :-1]).abs()  # (B, 1, H, W - 1)
+    dy = (disparity[..., 1:, :] - disparity[..., :-1, :]).abs()  # (B, 1, H - 1, W)
+    weighted = (dx * weights[:, :1, :, :-1]).sum() + (dy * weights[:, 1:, :-1, :]).sum()
     return weighted / weights.sum().clamp(min=1e-12) / disparity.shape[0]

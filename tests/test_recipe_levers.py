@@ -1,5 +1,6 @@
 """The recipe levers of the quality study: UNet down/up-sampling and padding, the cosine schedule,
 ensembles of seeds and the disparity margin. Each is checked against an independent reference."""
+import contextlib
 import math
 
 import numpy as np
@@ -73,12 +74,45 @@ def test_cosine_schedule_follows_the_closed_form():
     assert np.isfinite(result.disparity).all() and not np.allclose(result.disparity, step.disparity)
 
 
+@contextlib.contextmanager
+def one_thread():
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        yield
+    finally:
+        torch.set_num_threads(threads)
+
+
+def test_ensemble_members_run_side_by_side_with_the_numbers_of_one_thread_in_turn():
+    from ddp_lite.fit import _parallel_members
+    _, depth = plane_with_hole()
+    rgb = np.random.default_rng(0).random(depth.shape + (3,)).astype(np.float32)
+    config = FitConfig(**TINY, iterations=12, ensemble=3, auto_stop=True, patience=20, eval_every=2)
+    threads = torch.get_num_threads()
+    torch.set_num_threads(2)
+    try:
+        assert _parallel_members(config, "rgbd", depth.shape, 0, callback=None) == 2
+        assert _parallel_members(config, "rgbd", depth.shape, 0, callback=lambda *a: None) == 1
+        side_by_side = complete_depth(rgb, depth, variant="rgbd", config=config)
+        assert torch.get_num_threads() == 2  # restored
+        torch.set_num_threads(1)
+        assert _parallel_members(config, "rgbd", depth.shape, 0, callback=None) == 1
+        in_turn = complete_depth(rgb, depth, variant="rgbd", config=config)
+    finally:
+        torch.set_num_threads(threads)
+    assert np.array_equal(side_by_side.disparity, in_turn.disparity)
+    assert np.array_equal(side_by_side.rgb, in_turn.rgb)
+    assert side_by_side.iterations == in_turn.iterations
+
+
 def test_ensemble_is_the_mean_disparity_of_its_seeds():
     gt, depth = plane_with_hole()
     config = FitConfig(**TINY, iterations=15)
     transform = DisparityTransform.from_depth(depth)
-    members = [complete_depth(None, depth, variant="d", config=config.replace(seed=s), transform=transform)
-               for s in (3, 4, 5)]
+    with one_thread():  # as each member of an ensemble runs, so the numbers match exactly
+        members = [complete_depth(None, depth, variant="d", config=config.replace(seed=s), transform=transform)
+                   for s in (3, 4, 5)]
     ensemble = complete_depth(None, depth, variant="d", config=config.replace(seed=3, ensemble=3), transform=transform)
     expected = np.mean([m.disparity for m in members], axis=0)
     assert np.allclose(ensemble.disparity, expected, atol=1e-6)
@@ -124,6 +158,37 @@ def test_smoothness_weights_relax_at_colour_edges_and_vanish_outside_the_region(
     assert torch.allclose(w[0, 0, 1:, 2], torch.ones(5))
     assert torch.all(w[0, :, 0] == 0)  # outside the region
     assert torch.all(w[0, 0, :, [0, -1]] == 0) and torch.all(w[0, 1, [0, -1], :] == 0)  # no second difference
+
+
+def test_flatness_is_zero_on_a_constant_and_hand_computed_on_a_ramp():
+    from ddp_lite.losses import flatness_loss, smoothness_weights
+    H, W = 12, 16
+    v, u = torch.meshgrid(torch.arange(H, dtype=torch.float64), torch.arange(W, dtype=torch.float64), indexing="ij")
+    weights = smoothness_weights(torch.zeros(1, 3, H, W, dtype=torch.float64), torch.ones(1, 1, H, W, dtype=torch.bool))
+    assert flatness_loss(torch.full((1, 1, H, W), 0.4, dtype=torch.float64), weights).item() == 0.0
+    ramp = (0.2 + 0.01 * u - 0.03 * v)[None, None]  # |∂/∂u| = 0.01, |∂/∂v| = 0.03 everywhere
+    n_x, n_y = H * (W - 2), (H - 2) * W  # pixels with weight 1 along x and along y (0 on the border)
+    expected = (0.01 * n_x + 0.03 * n_y) / (n_x + n_y)
+    assert flatness_loss(ramp, weights).item() == pytest.approx(expected, rel=1e-9)
+
+
+def test_flatness_continues_a_border_hole_flat_where_curvature_alone_carries_the_slope():
+    # a ramp in x whose last columns are a hole at the image border: the curvature term lets the
+    # ramp go on; the first-order term pulls the border hole toward the last valid value
+    H, W = 16, 32
+    u = np.arange(W, dtype=np.float32)[None, :].repeat(H, 0)
+    gt = 1.0 / (0.3 + 0.02 * u)  # metres: disparity rises along x
+    depth = gt.copy()
+    depth[:, 22:] = np.nan
+    transform = DisparityTransform.from_depth(depth)
+    last_valid = transform.to_disparity(depth[:, 21]).mean()
+
+    def border_mean(**weights):
+        config = FitConfig(**TINY, iterations=120, **weights)
+        result = complete_depth(None, depth, variant="d", config=config, transform=transform)
+        return float(result.disparity[:, 26:].mean())
+
+    assert abs(border_mean(smoothness=1.0, flatness=1.0) - last_valid) < abs(border_mean(smoothness=1.0) - last_valid)
 
 
 def test_smoothness_fills_a_hole_in_a_plane_better_than_without():
