@@ -137,7 +137,6 @@ def test_kinect_noise_drops_the_far_side_of_edges_only():
 @pytest.mark.parametrize("call, word", [
     (lambda d: random_holes(d, fraction=1.5), "fraction"),
     (lambda d: random_holes(d[None]), "depth"),
-    (lambda d: random_holes(d.astype(int)), "depth"),
     (lambda d: random_holes(d, seed=-1), "seed"),
     (lambda d: random_holes(np.where(d > 2, np.inf, d)), "depth"),
     (lambda d: edge_band_holes(d, width=0), "width"),
@@ -147,3 +146,8 @@ def test_kinect_noise_drops_the_far_side_of_edges_only():
 def test_hole_models_reject_bad_input(call, word):
     with pytest.raises(ValueError, match=word):
         call(_step_depth())
+
+
+def test_hole_models_refuse_a_non_float_depth_with_a_type_error():  # the one depth contract: checks.check_depth
+    with pytest.raises(TypeError, match="depth"):
+        random_holes(_step_depth().astype(int))
