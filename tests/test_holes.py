@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from ddp_lite.holes import (edge_band_holes, gt_disparity, kinect_noise, random_holes, sgm_depth,
-                            sgm_disparity)
+from ddp_lite.holes import edge_band_holes, kinect_noise, random_holes
 from ddp_lite.scenes import make_scene
+from ddp_lite.stereo import gt_disparity, sgm_depth, sgm_disparity
 
 
 @pytest.fixture(scope="module")
