@@ -21,7 +21,7 @@ from .metrics import cloud_scores, disparity_rmse, edge_band, texture_leakage  #
 from .profiles import Profile, get_profile
 from .neighbors import select_neighbors
 from .scenes import make_scene
-from .stereo import sgm_depth
+from .stereo import sgm_depth_subsampled
 from .variants import get_variant
 from .views import LABEL_SKY
 
@@ -82,8 +82,7 @@ def sgm_depth_at_scale(scene_name: str, size, n_views: int, seed: int, ref=0, pa
         raise ValueError(f"scale must be an odd positive integer (so a pixel has a centre sample), got {scale}")
     scene = make_scene(scene_name, size=(H * scale, W * scale), n_views=n_views, seed=seed)
     refs = [ref] if np.isscalar(ref) else list(ref)
-    depths = [sgm_depth(scene, i, params=params)[0][scale // 2::scale, scale // 2::scale].astype(np.float32)
-              for i in refs]  # each (H, W)
+    depths = [sgm_depth_subsampled(scene, i, scale, params) for i in refs]  # each (H, W)
     return depths[0] if np.isscalar(ref) else depths
 
 

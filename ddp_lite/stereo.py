@@ -34,7 +34,8 @@ import numpy as np
 
 from .views import Scene
 
-__all__ = ["SGM_PARAMS", "sgm_disparity", "sgm_depth", "gt_disparity", "pixel_disparity", "disparity_to_depth"]
+__all__ = ["SGM_PARAMS", "sgm_disparity", "sgm_depth", "sgm_depth_subsampled", "gt_disparity", "pixel_disparity",
+           "disparity_to_depth"]
 
 # block: SAD window (px); uniqueness: % margin; speckle_window: fraction of the image area;
 # speckle_range: px; texture: minimum mean |∂I/∂x| (8-bit levels) in the block, 0 = off.
@@ -135,6 +136,18 @@ def sgm_depth(scene, ref: int, params="dense"):
     depth = np.full(disparity.shape, np.nan, np.float32)
     depth[mask] = f * baseline / shifted[mask]
     return depth, mask
+
+
+def sgm_depth_subsampled(scene, ref: int, scale: int, params="dense") -> np.ndarray:
+    """SGM depth of view ``ref`` of a scene rendered (or resampled) at ``scale``× the working size →
+    (H, W) float32 metres at the working size, NaN holes: the centre pixel of each ``scale × scale``
+    block (``scale`` odd). With K scaled as ``Camera.resized`` does, that pixel's ray is exactly the
+    small pixel's ray, so the kept depth belongs to the small image's geometry."""
+    if isinstance(scale, bool) or int(scale) != scale or scale < 1 or scale % 2 == 0:
+        raise ValueError(f"scale must be an odd positive integer (so a pixel has a centre sample), got {scale!r}")
+    scale = int(scale)
+    depth, _ = sgm_depth(scene, ref, params=params)
+    return depth[scale // 2::scale, scale // 2::scale].astype(np.float32)  # a contiguous copy
 
 
 def gt_disparity(scene, ref: int) -> np.ndarray:
