@@ -6,7 +6,8 @@ from scipy import ndimage
 
 from ddp_lite.holes import edge_band_holes, kinect_noise, random_holes
 from ddp_lite.scenes import make_scene
-from ddp_lite.stereo import gt_disparity, sgm_depth, sgm_disparity
+from ddp_lite.stereo import (disparity_to_depth, gt_disparity, pixel_disparity, sgm_depth, sgm_depth_subsampled,
+                             sgm_disparity)
 
 
 @pytest.fixture(scope="module")
@@ -151,3 +152,15 @@ def test_hole_models_reject_bad_input(call, word):
 def test_hole_models_refuse_a_non_float_depth_with_a_type_error():  # the one depth contract: checks.check_depth
     with pytest.raises(TypeError, match="depth"):
         random_holes(_step_depth().astype(int))
+
+
+def test_pixel_disparity_and_depth_are_inverse_and_sgm_subsampling_keeps_block_centres():
+    depth = np.array([[1.0, 2.0], [np.nan, 4.0]], np.float32)
+    disparity = pixel_disparity(depth, 100.0, 0.5, doffs=2.0)  # f·B/z − doffs
+    np.testing.assert_allclose(disparity, [[48.0, 23.0], [np.nan, 10.5]])
+    np.testing.assert_allclose(disparity_to_depth(disparity, 100.0, 0.5, doffs=2.0), depth, rtol=1e-6)
+    scene = make_scene("desk", size=(48, 60), n_views=1)
+    full, _ = sgm_depth(scene, 0)
+    np.testing.assert_array_equal(sgm_depth_subsampled(scene, 0, 3), full[1::3, 1::3])
+    with pytest.raises(ValueError, match="scale"):
+        sgm_depth_subsampled(scene, 0, 2)
