@@ -126,7 +126,7 @@ def check_depth(depth, name: str = "depth", allow_holes: bool = True, min_valid:
     if np.any(array[finite] <= 0):
         raise ValueError(f"{name} must be positive metres where valid, got minimum {array[finite].min():.3g}")
     if finite.sum() < min_valid:
-        raise ValueError(f"{name} needs at least {min_valid} valid (finite) pixel(s), got {int(finite.sum())}")
+        raise ValueError(f"{name} has {int(finite.sum())} valid pixels; need at least {min_valid} valid (finite) pixel(s)")
     if not allow_holes and not finite.all():
         raise ValueError(f"{name} must have no holes")
     return array.astype(dtype)  # always a copy: astype copies by default
