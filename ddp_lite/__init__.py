@@ -17,20 +17,24 @@ __all__ = ["complete_depth", "DepthResult", "merge", "FitConfig", "VARIANTS", "f
 from .camera import Camera, look_at
 from .disparity import DisparityTransform
 from .fit import DepthResult, FitConfig, ImageResult, complete_depth, fit_image, merge
-from .holes import random_holes, sgm_depth
+from .holes import random_holes
 from .profiles import PROFILES, Profile, get_profile
-from .scenes import Scene, View, list_scenes, make_scene
+from .scenes import list_scenes, make_scene
+from .stereo import sgm_depth
 from .variants import VARIANTS
+from .views import Scene, View
 from . import organic  # registers the curved, photo-textured scenes in SCENES
 
 # Building blocks, importable from here as before; new code imports them from their modules
 # (ddp_lite.losses, ddp_lite.nets, ddp_lite.warp, ...), where their documentation lives.
 from .camera import backproject, pixel_grid, project, relative_pose
 from .coarse_to_fine import complete_depth_coarse_to_fine
-from .holes import edge_band_holes, kinect_noise, sgm_disparity
+from .holes import edge_band_holes, kinect_noise
 from .losses import disparity_loss, masked_l1, rgb_loss, ssim, warp_loss
 from .nets import SkipNet, UNet, build_net, make_noise
-from .scenes import register_scene, select_neighbors
+from .neighbors import select_neighbors
+from .scenes import register_scene
+from .stereo import sgm_disparity
 from .warp import Warper, warp_to_reference
 from . import baselines, datasets, fusion, metrics
 

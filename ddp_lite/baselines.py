@@ -28,24 +28,16 @@ from scipy import interpolate, ndimage, sparse
 from scipy.sparse.linalg import spsolve
 from scipy.spatial import QhullError
 
+from .checks import check_depth
+
 __all__ = ["fill_nearest", "fill_linear", "fill_cubic", "fill_telea", "fill_navier_stokes", "fill_biharmonic",
            "fill_colorization", "BASELINES", "fill"]
 
 
 def _check(depth, rgb=None, min_valid: int = 1, need_rgb: bool = False):
     """A float64 copy of ``depth`` (H, W), its valid mask, and ``rgb`` as float64 (or None)."""
-    array = np.asarray(depth)
-    if array.ndim != 2:
-        raise ValueError(f"depth must be (H, W) metres with NaN holes, got shape {array.shape}")
-    if not np.issubdtype(array.dtype, np.floating):
-        raise TypeError(f"depth must be a float array (metres, NaN = hole), got dtype {array.dtype}")
-    array = array.astype(np.float64)  # a copy: the caller's array is never written
-    if np.isinf(array).any():
-        raise ValueError("depth contains inf; mark holes with NaN")
+    array = check_depth(depth, "depth", min_valid=min_valid, dtype=np.float64)  # a copy: the caller's is never written
     valid = np.isfinite(array)
-    if valid.sum() < min_valid:
-        raise ValueError(f"depth needs at least {min_valid} valid (finite) pixel(s) to fill from, "
-                         f"got {int(valid.sum())}")
     if rgb is None:
         if need_rgb:
             raise ValueError("rgb is required: an (H, W, 3) image in [0, 1] guides this method")

@@ -16,7 +16,8 @@ import torch
 
 from .checks import check_int, check_real
 
-__all__ = ["Camera", "relative_pose", "pixel_grid", "backproject", "project", "look_at", "view_overlap"]
+__all__ = ["Camera", "relative_pose", "pixel_grid", "backproject", "project", "look_at", "view_overlap", "pixel_rays",
+           "backproject_pixels", "project_points"]
 
 MIN_FOCAL_RATIO, MAX_FOCAL_RATIO = 1e-3, 1e4  # focal length / larger image side
 
@@ -156,6 +157,37 @@ def look_at(eye, target, up=(0.0, -1.0, 0.0)) -> np.ndarray:
     world_from_cam[:3, 3] = eye
     return np.linalg.inv(world_from_cam)
 
+
+# ---------------------------------------------------------------- NumPy: pixel lists ↔ world points
+
+def pixel_rays(u, v, K) -> np.ndarray:
+    """Pixels ``u``, ``v`` (N,) → camera-frame rays ``K⁻¹ (u, v, 1)`` (N, 3) float64 with z = 1, so
+    the point at depth z (metres along the optical axis) on pixel (u, v) is ``z · ray``."""
+    pixels = np.stack([u, v, np.ones(len(u))], 1).astype(np.float64)  # (N, 3)
+    return pixels @ np.linalg.inv(K).T
+
+
+def backproject_pixels(u, v, z, camera: Camera) -> np.ndarray:
+    """Pixels ``u``, ``v`` (N,) with depths ``z`` (N,) metres → world points (N, 3) float64 metres."""
+    points = pixel_rays(u, v, camera.K) * np.asarray(z, dtype=np.float64)[:, None]  # (N, 3) camera frame
+    pose = camera.world_from_cam
+    return points @ pose[:3, :3].T + pose[:3, 3]
+
+
+def project_points(points, camera: Camera, eps: float = 1e-9):
+    """World points (N, 3) metres → pixel ``u``, ``v`` (N,) and camera depth ``z`` (N,) metres;
+    ``u``, ``v`` are NaN where the point is not in front of the camera (z ≤ ``eps``)."""
+    local = points @ camera.cam_from_world[:3, :3].T + camera.cam_from_world[:3, 3]  # (N, 3) camera frame
+    z = local[:, 2]
+    uvw = local @ camera.K.T
+    with np.errstate(divide="ignore", invalid="ignore"):
+        front = z > eps
+        u = np.where(front, uvw[:, 0] / z, np.nan)
+        v = np.where(front, uvw[:, 1] / z, np.nan)
+    return u, v, z
+
+
+# ---------------------------------------------------------------- torch: whole images, differentiable
 
 def pixel_grid(height: int, width: int, dtype=torch.float32, device=None) -> torch.Tensor:
     """Homogeneous pixel centres (3, H·W): rows (u, v, 1), u = column, v = row, (0, 0) top-left."""

@@ -22,7 +22,7 @@ import numpy as np
 import torch
 
 __all__ = ["check_int", "check_real", "check_bool", "check_choice", "check_int_tuple", "check_image", "check_depth",
-           "MIN_VALID_PIXELS"]
+           "check_size", "MIN_VALID_PIXELS"]
 
 MIN_VALID_PIXELS = 16  # a fit, or a mask, with fewer known pixels is refused
 
@@ -103,22 +103,41 @@ def check_image(image, name: str, shape=None) -> np.ndarray:
     return np.clip(array, 0.0, 1.0).astype(np.float32)
 
 
-def check_depth(depth, name: str = "depth", allow_holes: bool = True) -> np.ndarray:
-    """(H, W) float32 metres, positive where finite, NaN holes, ≥ MIN_VALID_PIXELS valid; a copy."""
+def check_depth(depth, name: str = "depth", allow_holes: bool = True, min_valid: int = MIN_VALID_PIXELS,
+                shape: tuple | None = None, dtype=np.float32) -> np.ndarray:
+    """The depth contract: (H, W) float metres, positive where finite, NaN holes, at least
+    ``min_valid`` valid pixels, (H, W) = ``shape`` if given → a copy as ``dtype`` (float32).
+
+    One error type per fault: a torch tensor or a non-float dtype → ``TypeError``; a wrong shape,
+    ``inf``, a value ≤ 0, too few valid pixels, or holes where ``allow_holes=False`` → ``ValueError``.
+    """
     if isinstance(depth, torch.Tensor):
         raise TypeError(f"{name} must be a NumPy array (H, W), got a torch tensor")
     array = np.asarray(depth)
     if not np.issubdtype(array.dtype, np.floating):
         raise TypeError(f"{name} must be float metres with NaN holes, got dtype {array.dtype}")
     if array.ndim != 2:
-        raise ValueError(f"{name} must have shape (H, W), got {array.shape}")
+        raise ValueError(f"{name} must be (H, W) metres with NaN holes, got shape {array.shape}")
+    if shape is not None and array.shape != tuple(shape):
+        raise ValueError(f"{name} is {array.shape[0]}×{array.shape[1]} but must be {shape[0]}×{shape[1]} (H×W)")
     finite = np.isfinite(array)
     if np.any(np.isinf(array)):
         raise ValueError(f"{name} contains inf; mark holes with NaN (loaders convert a dataset's own marker)")
     if np.any(array[finite] <= 0):
         raise ValueError(f"{name} must be positive metres where valid, got minimum {array[finite].min():.3g}")
-    if finite.sum() < MIN_VALID_PIXELS:
-        raise ValueError(f"{name} has {int(finite.sum())} valid pixels; need at least {MIN_VALID_PIXELS}")
+    if finite.sum() < min_valid:
+        raise ValueError(f"{name} has {int(finite.sum())} valid pixels; need at least {min_valid} valid (finite) pixel(s)")
     if not allow_holes and not finite.all():
         raise ValueError(f"{name} must have no holes")
-    return array.astype(np.float32)
+    return array.astype(dtype)  # always a copy: astype copies by default
+
+
+def check_size(size) -> tuple[int, int]:
+    """An image ``size`` as (H, W) ints, each ≥ 8; ``ValueError`` naming ``size`` otherwise."""
+    try:
+        H, W = (int(v) for v in size)
+    except (TypeError, ValueError):
+        raise ValueError(f"size must be (H, W), got {size!r}") from None
+    if H < 8 or W < 8 or tuple(size) != (H, W):
+        raise ValueError(f"size must be two integers >= 8, got {size!r}")
+    return H, W

@@ -1,6 +1,7 @@
 """``ddp-lite``: the kit's main job without a browser.
 
     ddp-lite demo [--out ddp_demo.png] [--scene house] [--holes edge|sgm|random] [--iterations 300]
+                  [--profile ci|class|paper]
     ddp-lite scenes
     ddp-lite complete --rgb image.png --depth depth.png --depth-scale 0.001 --out filled.npy|.png|.pfm|.exr
     ddp-lite sequence PATH --format tum|colmap|scene --out DIR [--views ...] [--workers N | --scheduler tcp://...]
@@ -12,32 +13,35 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 import sys
 import tempfile
 import time
 
+import cv2
 import numpy as np
+from matplotlib.figure import Figure  # no pyplot: no backend to choose, no global figure state
 
 from .atomic import write_bytes_atomic
+from .baselines import fill_colorization, fill_linear
+from .classroom import build_solutions, build_student, format_grades, grade, write_csv
+from .datasets import depth_png_bytes, npy_bytes, pfm_bytes, read_pfm
+from .experiments import error_table, format_table, make_case
+from .fit import FitConfig, complete_depth
+from .formats import TUM_INTRINSICS, load_sequence
+from .metrics import hole_rmse
+from .profiles import get_profile
+from .runner import open_client
+from .scenes import list_scenes
+from .sequence import VARIANT, estimate_sequence, format_estimate, run_sequence
+from .viz import save_figure, show_depth, show_error, show_image
 
 
 def _demo(args) -> int:
-    import dataclasses
-
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from .baselines import fill_colorization, fill_linear
-    from .experiments import error_table, format_table, make_case
-    from .fit import FitConfig, complete_depth
-    from .metrics import hole_rmse
-    from .profiles import get_profile
-    from .viz import save_figure, show_depth, show_error, show_image
-
     start = time.perf_counter()
-    profile = dataclasses.replace(get_profile("class"), size=tuple(args.size))
+    profile = get_profile(args.profile)  # --profile, else DDP_PROFILE, else class
+    profile = dataclasses.replace(profile, size=tuple(args.size)) if args.size else profile
     case = make_case(args.scene, profile, holes=args.holes, seed=args.seed)
     print(f"{case.scene}\n{args.holes} holes: {np.isnan(case.depth).mean():.0%} of the reference view; "
           f"warp loss uses views {[n.name for n in case.neighbors]}")
@@ -56,7 +60,8 @@ def _demo(args) -> int:
 
     ddp_error, linear_error = table["DDP rgbd+warp"]["holes (m)"], table["linear"]["holes (m)"]
     vmin, vmax = float(np.nanmin(case.gt)), float(np.nanmax(case.scored_gt))
-    fig, axes = plt.subplots(2, 3, figsize=(13, 6.5))
+    fig = Figure(figsize=(13, 6.5))
+    axes = fig.subplots(2, 3)
     show_image(axes[0, 0], case.rgb, f"'{case.name}' reference view")
     show_depth(axes[0, 1], case.depth, f"input ({np.isnan(case.depth).mean():.0%} holes)", vmin, vmax)
     show_depth(axes[0, 2], case.gt, "ground truth", vmin, vmax)
@@ -72,7 +77,6 @@ def _demo(args) -> int:
 
 
 def _scenes(args) -> int:
-    from .scenes import list_scenes
     for name, description in list_scenes().items():
         print(f"{name:<8} {description}")
     return 0
@@ -94,7 +98,6 @@ def _number(kind, minimum: float, name: str):
 
 
 def _exr_available() -> bool:
-    import cv2
     if os.environ.get("OPENCV_IO_ENABLE_OPENEXR", "").lower() not in ("1", "true", "on", "yes"):
         return False  # OpenCV's EXR codec is off by default (and probing it prints a warning)
     try:
@@ -105,10 +108,6 @@ def _exr_available() -> bool:
 
 def _writers() -> dict:
     """Output writers by suffix: filled depth (H, W) float32 metres → bytes."""
-    import cv2
-
-    from .datasets import depth_png_bytes, npy_bytes, pfm_bytes
-
     def png(depth):  # 16-bit millimetres, 0 = no value; _complete refuses depth beyond PNG_MAX_METRES first
         return depth_png_bytes(depth)[0]
 
@@ -160,10 +159,8 @@ def _read_depth(path: str, scale: float | None) -> np.ndarray:
         except (ValueError, OSError) as error:
             raise ValueError(f"--depth: cannot read {path!r} as a .npy array ({error})") from None
     elif suffix == ".pfm":
-        from .datasets import read_pfm
         raw = read_pfm(path)
     else:
-        import cv2
         raw = cv2.imread(path, cv2.IMREAD_UNCHANGED)
         if raw is None:
             raise ValueError(f"--depth: cannot read {path!r} as an image")
@@ -191,9 +188,6 @@ DEPTH_RANGE_M = (1e-3, 1e4)  # plausible metres; outside it the scale is almost 
 
 
 def _complete(args) -> int:
-    import cv2
-
-    from .fit import FitConfig, complete_depth
     writers = _writers()
     _check_out(args, writers)
     config = FitConfig.for_profile(args.profile, variant=args.variant, device=args.device,
@@ -219,7 +213,6 @@ def _complete(args) -> int:
 
 def _intrinsics(text: str):
     """--intrinsics: a TUM camera name, or "fx,fy,cx,cy" in pixels (pixel (0, 0) = centre of the top-left pixel)."""
-    from .formats import TUM_INTRINSICS
     if text in TUM_INTRINSICS:
         return text
     try:
@@ -262,12 +255,6 @@ def _view_indices(scene, tokens):
 
 
 def _sequence(args) -> int:
-    from .fit import FitConfig
-    from .formats import load_sequence
-    from .profiles import get_profile
-    from .runner import open_client
-    from .sequence import VARIANT, estimate_sequence, format_estimate, run_sequence
-
     profile = get_profile(args.profile)  # a bad --profile fails here, before the data is read
     options = _sequence_options(args)
     scene = load_sequence(args.path, args.format, **options)
@@ -297,21 +284,18 @@ def _sequence(args) -> int:
 
 
 def _student(args) -> int:
-    from .classroom import build_student
     for path in build_student(args.source, args.out):
         print(f"wrote {path}")
     return 0
 
 
 def _solutions(args) -> int:
-    from .classroom import build_solutions
     written = build_solutions(args.source, args.out, profile=args.profile, timeout=args.timeout, names=args.only)
     print(f"{len(written)} executed notebooks in {os.path.abspath(args.out)} ({args.profile})")
     return 0
 
 
 def _grade(args) -> int:
-    from .classroom import format_grades, grade, write_csv
     scores = grade(args.submissions, args.source, timeout=args.timeout, profile=args.profile,
                    executed_dir=args.executed)
     print()
@@ -329,8 +313,11 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--scene", default="house")
     demo.add_argument("--holes", choices=("edge", "sgm", "random"), default="edge",
                       help="a band across a depth edge plus blobs (default), real SGM holes, or blobs")
-    demo.add_argument("--iterations", type=_number(int, 1, "--iterations"), default=300)
-    demo.add_argument("--size", type=int, nargs=2, default=(96, 128), metavar=("H", "W"))
+    demo.add_argument("--iterations", type=_number(int, 1, "--iterations"), default=300,
+                      help="iteration cap of each fit (default 300; the profile's auto-stop may end it sooner)")
+    demo.add_argument("--size", type=int, nargs=2, default=None, metavar=("H", "W"),
+                      help="image size (default: the profile's; class: 96 128)")
+    demo.add_argument("--profile", default=None, help="ci, class or paper (default: $DDP_PROFILE or class)")
     demo.add_argument("--seed", type=int, default=0)
     demo.add_argument("--device", default=None)
     demo.set_defaults(run=_demo)

@@ -72,7 +72,7 @@ class FitConfig:
 
         Every :class:`Profile` field that is also a FitConfig field is copied, so a setting added to
         both flows through; three are derived: ``channels`` (the UNet's or the SkipNet's widths, by
-        ``net``), ``iterations`` (the variant's count) and ``lr_milestones`` (fractions → iterations).
+        ``net``), ``iterations`` (the variant's count) and ``lr_milestones`` (those the variant's run reaches).
         """
         profile = get_profile(profile)
         iterations = profile.iterations_for(get_variant(variant))

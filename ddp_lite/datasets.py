@@ -32,7 +32,10 @@ import numpy as np
 
 from .atomic import write_bytes_atomic
 from .camera import Camera
-from .scenes import Scene, View, check_size, make_scene
+from .checks import check_size
+from .scenes import make_scene  # the renderer, for make_middlebury_fixture only
+from .stereo import disparity_to_depth, pixel_disparity  # disparity_to_depth re-exported: its old home
+from .views import Scene, View
 
 __all__ = ["read_pfm", "write_pfm", "MiddleburyCalib", "parse_middlebury_calib", "read_middlebury_calib",
            "disparity_to_depth", "load_middlebury", "load_middlebury2006", "make_middlebury_fixture", "resize_scene",
@@ -226,24 +229,6 @@ def pfm_bytes(values) -> bytes:
 # Middlebury 2014 (and 2006)
 # ------------------------------------------------------------------------------------------------
 
-def disparity_to_depth(disparity, focal: float, baseline: float, doffs: float = 0.0) -> np.ndarray:
-    """Disparity (H, W) px → depth (H, W) float32 metres: Z = focal·baseline / (d + doffs); focal px,
-    baseline m, doffs px. Non-finite disparities (Middlebury's ``inf``) and d + doffs ≤ 0 → NaN."""
-    for name, value in (("focal", focal), ("baseline", baseline)):
-        if not np.isfinite(value) or value <= 0:
-            raise ValueError(f"{name} must be a positive finite number, got {value!r}")
-    if not np.isfinite(doffs):
-        raise ValueError(f"doffs must be finite, got {doffs!r}")
-    d = np.asarray(disparity, dtype=np.float64)
-    if d.ndim != 2:
-        raise ValueError(f"disparity must be (H, W), got shape {d.shape}")
-    denominator = d + float(doffs)
-    valid = np.isfinite(denominator) & (denominator > 0)
-    depth = np.full(d.shape, np.nan, dtype=np.float32)
-    depth[valid] = (float(focal) * float(baseline) / denominator[valid]).astype(np.float32)
-    return depth
-
-
 @dataclass(frozen=True, eq=False)
 class MiddleburyCalib:
     """A Middlebury ``calib.txt``: ``K0``/``K1`` (3×3 px), ``doffs`` (px, cx1 − cx0), ``baseline``
@@ -401,8 +386,7 @@ def make_middlebury_fixture(folder, size=(48, 64), seed: int = 0, scene: str = "
     synthetic = make_scene(scene, size=size, n_views=1, seed=seed)
     left, right = synthetic.views[0], synthetic.right[0]
     K, baseline = left.camera.K, float(synthetic.meta["baseline"])
-    disp0 = (K[0, 0] * baseline / left.depth.astype(np.float64)).astype(np.float32)
-    disp1 = (K[0, 0] * baseline / right.depth.astype(np.float64)).astype(np.float32)
+    disp0, disp1 = (pixel_disparity(v.depth, K[0, 0], baseline) for v in (left, right))  # doffs = 0
     rng = np.random.default_rng(seed)
     disp0[rng.random(disp0.shape) < hole_fraction] = np.inf
     folder = Path(folder)

@@ -15,6 +15,7 @@ failed, which is what nbgrader and ``ddp-lite grade`` (``ddp_lite.grading``) sco
 from __future__ import annotations
 
 import numpy as np
+from skimage.metrics import peak_signal_noise_ratio, structural_similarity
 
 from .camera import Camera, look_at
 from .metrics import d1_error
@@ -63,7 +64,6 @@ def _close(atol):
 
 def check_psnr(student_psnr) -> bool:
     """``student_psnr(a, b)`` for images in [0, 1] vs ``skimage.metrics.peak_signal_noise_ratio``."""
-    from skimage.metrics import peak_signal_noise_ratio
     rng = np.random.default_rng(0)
     cases = []
     for shape, sigma in (((16, 20, 3), 0.01), ((16, 20, 3), 0.05), ((16, 20, 3), 0.2), ((12, 9), 0.1)):
@@ -120,7 +120,6 @@ def check_hole_rmse(student_hole_rmse) -> bool:
 def check_ssim(student_ssim) -> bool:
     """``student_ssim(x, y)`` for grey images in [0, 1] vs scikit-image (Gaussian 11×11, σ = 1.5,
     population covariance, data range 1, mean over the windows that fit inside the image)."""
-    from skimage.metrics import structural_similarity
     rng = np.random.default_rng(2)
     cases = []
     # Low-contrast pairs come first: there the constants C1, C2 are as large as the variances, so a

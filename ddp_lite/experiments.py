@@ -16,11 +16,14 @@ from .camera import Camera
 from .disparity import DisparityTransform
 from .fit import DepthResult, FitConfig, complete_depth
 from .fusion import points_from_depth
-from .holes import edge_band_holes, random_holes, sgm_depth
+from .holes import edge_band_holes, random_holes
 from .metrics import cloud_scores, disparity_rmse, edge_band, texture_leakage  # re-exported: notebooks import them here
 from .profiles import Profile, get_profile
-from .scenes import LABEL_SKY, make_scene, select_neighbors
+from .neighbors import select_neighbors
+from .scenes import make_scene
+from .stereo import sgm_depth_subsampled
 from .variants import get_variant
+from .views import LABEL_SKY
 
 __all__ = ["Case", "make_case", "sgm_depth_at_scale", "edge_band", "disparity_rmse", "run_variants", "error_table", "format_table",
            "texture_leakage", "format_mean_spread", "cloud_scores", "ablation", "TABLE2_CONFIGS"]
@@ -39,7 +42,7 @@ class Case:
     transform: DisparityTransform | None = None
     scene: object = None
     ref: int = 0
-    labels: np.ndarray | None = None  # (H, W) uint8 texture classes (LABEL_SKY = 0), see scenes.LABELS
+    labels: np.ndarray | None = None  # (H, W) uint8 texture classes (views.LABEL_*), see views.LABELS
 
     @property
     def scored(self) -> np.ndarray:
@@ -79,8 +82,7 @@ def sgm_depth_at_scale(scene_name: str, size, n_views: int, seed: int, ref=0, pa
         raise ValueError(f"scale must be an odd positive integer (so a pixel has a centre sample), got {scale}")
     scene = make_scene(scene_name, size=(H * scale, W * scale), n_views=n_views, seed=seed)
     refs = [ref] if np.isscalar(ref) else list(ref)
-    depths = [sgm_depth(scene, i, params=params)[0][scale // 2::scale, scale // 2::scale].astype(np.float32)
-              for i in refs]  # each (H, W)
+    depths = [sgm_depth_subsampled(scene, i, scale, params) for i in refs]  # each (H, W)
     return depths[0] if np.isscalar(ref) else depths
 
 

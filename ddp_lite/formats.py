@@ -41,8 +41,9 @@ from scipy.spatial.transform import Rotation, Slerp
 
 from .atomic import write_bytes_atomic
 from .camera import Camera
+from .checks import check_size
 from .datasets import _depth_range, _png_bytes, _read_rgb, _resize, depth_png_bytes, npy_bytes, pfm_bytes, read_pfm
-from .scenes import Scene, View, check_size
+from .views import Scene, View
 
 __all__ = ["TUM_INTRINSICS", "TUM_DEPTH_FACTOR", "read_tum", "write_tum", "associate", "read_tum_list",
            "read_tum_trajectory", "COLMAP_MODELS", "ColmapCamera", "read_colmap_cameras", "read_colmap_images",

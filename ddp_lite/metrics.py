@@ -248,7 +248,7 @@ def texture_leakage(depth, gt, transform: DisparityTransform, band: int = 3, reg
     zero; with ``transform.constant == 0`` the same holds for normalised disparity. Colour texture
     copied into the depth (paper Fig. 4: wooden planks on a flat wall) shows up as a non-zero
     Laplacian exactly there. ``region`` (H, W) bool restricts the measure further (for example
-    to the planks: ``case.labels == scenes.LABEL_PLANKS``).
+    to the planks: ``case.labels == views.LABEL_PLANKS``).
     """
     kernel = np.array([[0.0, 1.0, 0.0], [1.0, -4.0, 1.0], [0.0, 1.0, 0.0]])
     out = ndimage.convolve(transform.to_disparity(np.asarray(depth, np.float64)), kernel, mode="nearest")

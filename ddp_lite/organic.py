@@ -9,7 +9,7 @@ scenes here are mostly curved: a height-field terrain, ellipsoids (boulders, org
 dome seen from inside), cylinders and cones on tilted axes and thin rods, textured with photos
 bundled with scikit-image.
 
-New primitives, with the interface of ``scenes.Plane``/``Sphere``: ``intersect(o, d)`` takes a
+New primitives, with the interface of ``render.Plane``/``Sphere``: ``intersect(o, d)`` takes a
 ray origin o (3,) and directions d (N, 3) (world frame, metres) and returns the ray parameter
 of the first hit t (N,) (``inf`` on a miss; the renderer's rays have camera z = 1, so t is the
 depth); ``surface(x)`` takes world points (M, 3) on the surface and returns
@@ -38,7 +38,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .scenes import _EPS, _fbm, _hash, _jitter, _sky, _tex, _unit, _yaw_matrix, register_scene
+from .render import EPS, unit_vector, yaw_matrix
+from .scenes import _jitter, _sky, _tex, register_scene
+from .textures import fbm, lattice_hash
 
 __all__ = ["PHOTOS", "PhotoTexture", "Ellipsoid", "Cone", "Capsule", "HeightField"]
 
@@ -103,7 +105,7 @@ class PhotoTexture:
     ``scale``: metres per image width; ``tint`` RGB multiplier; ``pixels``: width (texels) of the
     anti-aliased copy that is sampled; ``crop`` (top, bottom, left, right) fractions of the photo;
     ``variation``: strength of a slow, solid (3D) tone modulation that hides the tiling's repeats.
-    Same interface as ``scenes.Texture`` (``kind``, ``label``, ``albedo``).
+    Same interface as ``textures.Texture`` (``kind``, ``label``, ``albedo``).
     """
 
     image: str = "gravel"
@@ -142,7 +144,7 @@ class PhotoTexture:
 
     def shift(self, seed: int) -> np.ndarray:
         """Where the photo sits on the surface for ``seed``: an st offset (2,) metres in [0, 2·scale)."""
-        return _hash(int(seed), np.array([1, 2])) * 2.0 * self.scale
+        return lattice_hash(int(seed), np.array([1, 2])) * 2.0 * self.scale
 
     def albedo(self, local: np.ndarray, st: np.ndarray, seed: int) -> np.ndarray:
         """Colours (M, 3) at surface points: ``local`` (M, 3) metres in the object frame,
@@ -155,7 +157,7 @@ class PhotoTexture:
         y = _mirror((st[:, 1] + shift[1]) * texels_per_metre, h)
         colour = _bilinear(image, x, y).astype(np.float64) * np.asarray(self.tint)[None]  # (M, 3)
         if self.variation > 0:  # slow tone changes over a few tiles: a photo repeated looks tiled
-            tone = _fbm(local / (1.5 * self.scale), int(seed) + 11, octaves=2)
+            tone = fbm(local / (1.5 * self.scale), int(seed) + 11, octaves=2)
             colour *= (1.0 - self.variation / 2.0 + self.variation * tone)[:, None]
         return np.clip(colour, 0.0, 1.0)
 
@@ -166,16 +168,16 @@ class PhotoTexture:
 
 def _roots(a, b, c):
     """Roots (near, far) (N,) each of a·t² + b·t + c, sorted, ``inf`` where a root does not exist
-    or lies behind the origin (t <= _EPS). From inside a closed quadric ``near`` is the exit point,
+    or lies behind the origin (t <= EPS). From inside a closed quadric ``near`` is the exit point,
     so a dome can be seen from within; ``a`` may be negative (a ray steeper than a cone's wall)."""
     disc = b * b - 4.0 * a * c
     root = np.sqrt(np.maximum(disc, 0.0))
     with np.errstate(divide="ignore", invalid="ignore"):
         t1 = (-b - root) / (2.0 * a)
         t2 = (-b + root) / (2.0 * a)
-    ok = (disc >= 0) & (np.abs(a) > _EPS)
-    t1 = np.where(ok & (t1 > _EPS), t1, np.inf)
-    t2 = np.where(ok & (t2 > _EPS), t2, np.inf)
+    ok = (disc >= 0) & (np.abs(a) > EPS)
+    t1 = np.where(ok & (t1 > EPS), t1, np.inf)
+    t2 = np.where(ok & (t2 > EPS), t2, np.inf)
     return np.minimum(t1, t2), np.maximum(t1, t2)
 
 
@@ -203,7 +205,7 @@ class Ellipsoid:
     inside: bool = False
 
     def _frame(self):
-        return _yaw_matrix(self.yaw_deg), np.asarray(self.center, float), np.asarray(self.radii, float)
+        return yaw_matrix(self.yaw_deg), np.asarray(self.center, float), np.asarray(self.radii, float)
 
     def intersect(self, o, d):
         R, c, r = self._frame()
@@ -237,7 +239,7 @@ def _axis_frame(a, b):
     L = float(np.linalg.norm(b - a))
     w = (b - a) / L
     helper = np.array([0.0, -1.0, 0.0]) if abs(w[1]) < 0.9 else np.array([1.0, 0.0, 0.0])
-    e1 = _unit(helper - (helper @ w) * w)
+    e1 = unit_vector(helper - (helper @ w) * w)
     return a, w, L, e1, np.cross(w, e1)
 
 
@@ -264,7 +266,7 @@ def _disc_hits(o, d, centre, w, radius):
     with np.errstate(divide="ignore", invalid="ignore"):
         t = ((centre - o) @ w) / dw
     p = o + np.where(np.isfinite(t), t, 0.0)[:, None] * d - centre  # (N, 3)
-    ok = (np.abs(dw) > _EPS) & (t > _EPS) & (np.einsum("ij,ij->i", p, p) <= radius * radius)
+    ok = (np.abs(dw) > EPS) & (t > EPS) & (np.einsum("ij,ij->i", p, p) <= radius * radius)
     return np.where(ok, t, np.inf)
 
 
@@ -430,11 +432,11 @@ class HeightField:
         dy = d[:, 1]
         with np.errstate(divide="ignore", invalid="ignore"):
             t_top, t_bottom = (-high - o[1]) / dy, (-low - o[1]) / dy  # where the ray crosses the slab's faces
-        flat = np.abs(dy) < _EPS
+        flat = np.abs(dy) < EPS
         inside_slab = -high <= o[1] <= -low
         t0 = np.where(flat, 0.0 if inside_slab else np.inf, np.minimum(t_top, t_bottom))
         t1 = np.where(flat, np.inf if inside_slab else -np.inf, np.maximum(t_top, t_bottom))
-        t0, t1 = np.maximum(t0, _EPS), np.minimum(t1, self.max_distance)
+        t0, t1 = np.maximum(t0, EPS), np.minimum(t1, self.max_distance)
         # d/dt of the height over ground is at most d_y + slope·|d_xz|: how fast a ray can close in
         closing = dy + self.slope_bound() * np.hypot(d[:, 0], d[:, 2])  # (N,)
         out = np.full(N, np.inf)

@@ -1,7 +1,7 @@
 """A whole sequence, view by view: DDP (RGBD + warp) on every view, then one fused point cloud.
 
 The paper's own experiments are sequences (Tanks and Temples, 87–180+ views): every view's depth
-is completed with the warp loss over N = 2 neighbours chosen by MVSNet's score (``scenes.
+is completed with the warp loss over N = 2 neighbours chosen by MVSNet's score (``neighbors.
 select_neighbors``), SGM's depth is kept where valid and DDP's taken in the holes ("SGM+DDP"),
 and the views are fused into one point cloud (Fusibile; here ``fusion.fuse_depths``).
 
@@ -41,7 +41,8 @@ from .datasets import depth_png_bytes, npy_bytes
 from .disparity import DisparityTransform
 from .fit import FitConfig, _check_fit_inputs, complete_depth, estimate_peak_memory_gb
 from .runner import run_jobs
-from .scenes import Scene, select_neighbors
+from .neighbors import select_neighbors
+from .views import Scene
 
 __all__ = ["ViewJob", "plan_jobs", "fit_view", "run_sequence", "read_manifest", "measure_fit_cost",
            "estimate_sequence", "format_estimate", "MANIFEST", "VARIANT"]
@@ -315,7 +316,7 @@ def measure_fit_cost(profile="paper", size=(96, 128), iterations=(2, 8), threads
     scene = make_scene("desk", size=size, n_views=3, seed=0)
     base = FitConfig.for_profile(profile, variant=VARIANT, progress=False, auto_stop=False, bf16=False,
                                  max_memory_gb=None)
-    neighbors = [scene[1].neighbor, scene[2].neighbor]
+    neighbors = [scene[1].as_neighbor(), scene[2].as_neighbor()]
     previous = torch.get_num_threads()
     torch.set_num_threads(int(threads))
     try:

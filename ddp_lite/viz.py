@@ -1,4 +1,4 @@
-"""Figures: depth with holes in a distinct colour, images, error maps, loss curves.
+"""Figures: depth with holes in a distinct colour, images, error maps.
 
 Every depth panel has a colour bar (metres or disparity) and draws holes (NaN) in magenta, so a
 hole is never mistaken for a far or near value.
@@ -8,15 +8,15 @@ from __future__ import annotations
 import os
 
 import matplotlib
-import matplotlib.pyplot as plt
 import numpy as np
 
 from .atomic import atomic_path
 
-__all__ = ["show_depth", "show_image", "show_error", "error_vmax", "outline", "compare", "plot_history", "save_figure",
-           "HOLE_COLOUR"]
+__all__ = ["show_depth", "show_image", "show_error", "error_vmax", "outline", "overlay_holes", "save_figure",
+           "HOLE_COLOUR", "HOLE_RGB"]
 
 HOLE_COLOUR = "magenta"
+HOLE_RGB = matplotlib.colors.to_rgb(HOLE_COLOUR)  # (1.0, 0.0, 1.0)
 
 
 def show_depth(ax, depth, title: str = "", vmin=None, vmax=None, cmap: str = "viridis_r", label: str = "depth (m)"):
@@ -84,41 +84,10 @@ def outline(ax, region, colour: str = "white", label: str | None = None):
         ax.legend(loc="lower right", fontsize=7, framealpha=0.8)
 
 
-def compare(panels: dict, truth=None, ncols: int | None = None, size: float = 3.2):
-    """One row of depth panels {title: (H, W) depth} sharing one colour range. Returns the figure."""
-    ncols = ncols or len(panels)
-    nrows = int(np.ceil(len(panels) / ncols))
-    fig, axes = plt.subplots(nrows, ncols, figsize=(size * 1.25 * ncols, size * nrows), squeeze=False)
-    reference = truth if truth is not None else next(iter(panels.values()))
-    finite = np.asarray(reference)[np.isfinite(reference)]
-    vmin, vmax = float(finite.min()), float(finite.max())
-    for ax, (title, depth) in zip(axes.flat, panels.items()):
-        depth = np.asarray(depth)
-        if depth.ndim == 3:
-            show_image(ax, depth, title)
-        else:
-            show_depth(ax, depth, title, vmin=vmin, vmax=vmax)
-    for ax in list(axes.flat)[len(panels):]:
-        ax.axis("off")
-    fig.tight_layout()
-    return fig
-
-
-def plot_history(histories: dict, key: str = "hole_rmse", ax=None, ylabel: str | None = None, log: bool = False):
-    """Curves of ``history[key]`` against iterations for several runs {label: history}."""
-    if ax is None:
-        _, ax = plt.subplots(figsize=(6, 3.5))
-    for label, history in histories.items():
-        values = np.asarray(history[key])
-        x = history["eval_iteration"] if len(values) == len(history["eval_iteration"]) else np.arange(1, len(values) + 1)
-        ax.plot(x, values, label=label)
-    ax.set_xlabel("iteration")
-    ax.set_ylabel(ylabel or key)
-    if log:
-        ax.set_yscale("log")
-    ax.grid(alpha=0.3)
-    ax.legend()
-    return ax
+def overlay_holes(image, holes) -> np.ndarray:
+    """An (H, W, 3) image in [0, 1] with the pixels of the (H, W) bool ``holes`` painted in
+    ``HOLE_COLOUR`` (float64, a new array), to show where something is missing or scored."""
+    return np.where(np.asarray(holes, bool)[..., None], HOLE_RGB, image)
 
 
 def save_figure(fig, path, dpi: int = 120) -> None:

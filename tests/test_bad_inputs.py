@@ -39,7 +39,7 @@ from ddp_lite.camera import Camera, look_at  # noqa: E402
 from ddp_lite.cli import main as cli_main  # noqa: E402
 from ddp_lite.disparity import DisparityTransform  # noqa: E402
 from ddp_lite.fit import FitConfig, complete_depth, complete_depth_coarse_to_fine, fit_image, merge  # noqa: E402
-from ddp_lite.scenes import View  # noqa: E402
+from ddp_lite.views import View  # noqa: E402
 
 H, W = 24, 32
 BAD = (TypeError, ValueError)

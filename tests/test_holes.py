@@ -4,9 +4,10 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from ddp_lite.holes import (edge_band_holes, gt_disparity, kinect_noise, random_holes, sgm_depth,
-                            sgm_disparity)
+from ddp_lite.holes import edge_band_holes, kinect_noise, random_holes
 from ddp_lite.scenes import make_scene
+from ddp_lite.stereo import (disparity_to_depth, gt_disparity, pixel_disparity, sgm_depth, sgm_depth_subsampled,
+                             sgm_disparity)
 
 
 @pytest.fixture(scope="module")
@@ -137,7 +138,6 @@ def test_kinect_noise_drops_the_far_side_of_edges_only():
 @pytest.mark.parametrize("call, word", [
     (lambda d: random_holes(d, fraction=1.5), "fraction"),
     (lambda d: random_holes(d[None]), "depth"),
-    (lambda d: random_holes(d.astype(int)), "depth"),
     (lambda d: random_holes(d, seed=-1), "seed"),
     (lambda d: random_holes(np.where(d > 2, np.inf, d)), "depth"),
     (lambda d: edge_band_holes(d, width=0), "width"),
@@ -147,3 +147,20 @@ def test_kinect_noise_drops_the_far_side_of_edges_only():
 def test_hole_models_reject_bad_input(call, word):
     with pytest.raises(ValueError, match=word):
         call(_step_depth())
+
+
+def test_hole_models_refuse_a_non_float_depth_with_a_type_error():  # the one depth contract: checks.check_depth
+    with pytest.raises(TypeError, match="depth"):
+        random_holes(_step_depth().astype(int))
+
+
+def test_pixel_disparity_and_depth_are_inverse_and_sgm_subsampling_keeps_block_centres():
+    depth = np.array([[1.0, 2.0], [np.nan, 4.0]], np.float32)
+    disparity = pixel_disparity(depth, 100.0, 0.5, doffs=2.0)  # f·B/z − doffs
+    np.testing.assert_allclose(disparity, [[48.0, 23.0], [np.nan, 10.5]])
+    np.testing.assert_allclose(disparity_to_depth(disparity, 100.0, 0.5, doffs=2.0), depth, rtol=1e-6)
+    scene = make_scene("desk", size=(48, 60), n_views=1)
+    full, _ = sgm_depth(scene, 0)
+    np.testing.assert_array_equal(sgm_depth_subsampled(scene, 0, 3), full[1::3, 1::3])
+    with pytest.raises(ValueError, match="scale"):
+        sgm_depth_subsampled(scene, 0, 2)

@@ -5,7 +5,10 @@ import pytest
 
 from ddp_lite.camera import Camera, look_at
 from ddp_lite.organic import Capsule, Cone, Ellipsoid, HeightField, PhotoTexture
-from ddp_lite.scenes import LABELS, SCENES, Cylinder, Plane, Sphere, Texture, list_scenes, make_scene, register_scene, render
+from ddp_lite.render import Cylinder, Plane, Sphere, render
+from ddp_lite.scenes import SCENES, list_scenes, make_scene, register_scene
+from ddp_lite.textures import Texture
+from ddp_lite.views import LABELS
 
 NEW = ("hills", "sculpture", "logs")
 FLAT = Texture("flat")

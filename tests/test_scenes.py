@@ -5,9 +5,13 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
+from ddp_lite import datasets, holes, neighbors, render as render_module, scenes, stereo, textures, views
 from ddp_lite.camera import Camera, look_at
-from ddp_lite.scenes import (LABELS, Box, Plane, Scene, Sphere, Texture, View, list_scenes, make_scene, render,
-                             select_neighbors)
+from ddp_lite.neighbors import select_neighbors
+from ddp_lite.render import Box, Plane, Sphere, render
+from ddp_lite.scenes import list_scenes, make_scene
+from ddp_lite.textures import Texture
+from ddp_lite.views import LABELS, Scene, View
 
 NOISE = Texture("noise", (0.9, 0.6, 0.3), (0.1, 0.2, 0.4), 0.05)
 
@@ -224,3 +228,22 @@ def test_select_neighbors_rejects_bad_input(desk):
         select_neighbors(desk, 7)
     with pytest.raises(ValueError, match="n"):
         select_neighbors(desk, 0, n=3)
+
+
+def test_old_import_paths_keep_working():  # notebooks and user code written before the split
+    for name in ("View", "Scene", "LABELS", "LABEL_SKY", "LABEL_TEXTURELESS", "LABEL_PLANKS", "LABEL_TEXTURED"):
+        assert getattr(scenes, name) is getattr(views, name)
+    for name in ("Plane", "Box", "Sphere", "Cylinder", "render"):
+        assert getattr(scenes, name) is getattr(render_module, name)
+    assert scenes.Texture is textures.Texture and scenes.select_neighbors is neighbors.select_neighbors
+    for name in ("SGM_PARAMS", "sgm_disparity", "sgm_depth", "gt_disparity"):
+        assert getattr(holes, name) is getattr(stereo, name)
+    assert datasets.disparity_to_depth is stereo.disparity_to_depth
+
+
+def test_a_view_as_a_warp_neighbour():
+    view = make_scene("desk", size=(16, 16), n_views=1)[0]
+    rgb, camera = view.as_neighbor()
+    assert rgb is view.rgb and camera is view.camera
+    assert view.neighbor == view.as_neighbor()  # the old name
+

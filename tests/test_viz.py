@@ -3,7 +3,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 
-from ddp_lite.viz import error_vmax, outline, show_error
+from ddp_lite.viz import HOLE_RGB, error_vmax, outline, overlay_holes, show_error
 
 
 def test_error_vmax_is_the_percentile_of_all_maps_together():
@@ -36,3 +36,13 @@ def test_outline_draws_a_contour_and_a_legend_entry():
     assert ax.collections  # the contour
     outline(ax, np.zeros((6, 6), bool))  # nothing to outline: no error
     plt.close(fig)
+
+
+def test_overlay_holes_paints_only_the_holes_in_the_hole_colour():
+    image = np.full((2, 3, 3), 0.25, np.float32)
+    holes = np.array([[True, False, False], [False, False, True]])
+    out = overlay_holes(image, holes)
+    assert HOLE_RGB == (1.0, 0.0, 1.0)  # magenta
+    np.testing.assert_array_equal(out[holes], [HOLE_RGB] * 2)
+    np.testing.assert_array_equal(out[~holes], image[~holes])
+    assert image[0, 0, 0] == 0.25  # the input is not modified
