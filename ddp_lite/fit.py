@@ -173,22 +173,25 @@ def _parallel_members(config: FitConfig, variant: str, shape, n_neighbors: int, 
 
 
 def _run_members(fit_member, members: int, workers: int) -> list:
-    """``[fit_member(k) for k in range(members)]``, ``workers`` at a time in threads.
+    """``[fit_member(k) for k in range(members)]``: in rounds of ``workers`` side by side in threads,
+    each on one torch thread; what is left over (fewer than ``workers``) in turn on all threads.
 
-    A small net does not keep two cores busy: two one-thread fits side by side do ~1.3× the
-    work of one two-thread fit (``benchmarks/bench_ensemble.py``). Each member then runs on one
-    thread, as it would with ``torch.set_num_threads(1)``, so an ensemble's numbers do not
-    depend on how many cores the machine has.
+    A small net does not keep two cores busy: two one-thread fits side by side do ~1.3× the work
+    of one two-thread fit (``benchmarks/bench_ensemble.py --fits``), but one one-thread fit alone
+    leaves a core idle, hence whole rounds only. A member run side by side gives the numbers it
+    gives with ``torch.set_num_threads(1)``.
     """
-    if workers <= 1:
-        return [fit_member(k) for k in range(members)]
-    threads = torch.get_num_threads()
-    torch.set_num_threads(1)
-    try:
-        with ThreadPoolExecutor(max_workers=workers) as pool:
-            return list(pool.map(fit_member, range(members)))
-    finally:
-        torch.set_num_threads(threads)
+    side_by_side = members - members % workers if workers > 1 else 0
+    results = []
+    if side_by_side:
+        threads = torch.get_num_threads()
+        torch.set_num_threads(1)
+        try:
+            with ThreadPoolExecutor(max_workers=workers) as pool:
+                results = list(pool.map(fit_member, range(side_by_side)))
+        finally:
+            torch.set_num_threads(threads)
+    return results + [fit_member(k) for k in range(side_by_side, members)]
 
 
 def _check_fit_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth, transform):

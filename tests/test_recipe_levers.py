@@ -88,7 +88,7 @@ def test_ensemble_members_run_side_by_side_with_the_numbers_of_one_thread_in_tur
     from ddp_lite.fit import _parallel_members
     _, depth = plane_with_hole()
     rgb = np.random.default_rng(0).random(depth.shape + (3,)).astype(np.float32)
-    config = FitConfig(**TINY, iterations=12, ensemble=3, auto_stop=True, patience=20, eval_every=2)
+    config = FitConfig(**TINY, iterations=12, ensemble=2, auto_stop=True, patience=20, eval_every=2)
     threads = torch.get_num_threads()
     torch.set_num_threads(2)
     try:
