@@ -50,11 +50,13 @@ QUICK = ("desk/sgm-dense", "house/blobs", "fixture/sgm-dense")
 # name → FitConfig overrides on top of the profile's config
 RECIPES = {
     "default": {},
-    "paper-losses": dict(smoothness=0.0, bf16=False, channels=(32, 64, 128, 256, 512), ensemble=1),  # class before issue 12
-    "paper-net": dict(channels=(32, 64, 128, 256, 512), ensemble=1),  # class before the third pass (one 32-512 fit)
-    "one-fit": dict(ensemble=1),  # one fit of the class net instead of the mean of three
-    "quarter-ens4": dict(channels=(8, 16, 32, 64, 128), ensemble=4),  # chosen on 8 cases, failed on the others
-    "ens3": dict(ensemble=3),
+    "paper-losses": dict(smoothness=0.0, flatness=0.0, bf16=False, channels=(32, 64, 128, 256, 512)),  # class before issue 12
+    "paper-net": dict(channels=(32, 64, 128, 256, 512), flatness=0.0),  # class before the third pass (one 32-512 fit)
+    "curvature-ens3": dict(flatness=0.0, ensemble=3),  # class before the fourth pass: the mean of three, no flatness
+    "one-fit-curvature": dict(flatness=0.0),  # one fit of that recipe
+    "flat0.3": dict(flatness=0.3),  # the flatness term at 0.3 instead of 1
+    "ens3": dict(ensemble=3),  # the mean of three fits of the class recipe
+    "quarter-ens4": dict(channels=(8, 16, 32, 64, 128), ensemble=4, flatness=0.0),  # chosen on 8 cases, failed on the others
     "ema": dict(average_outputs=0.9),
     "cosine": dict(schedule="cosine"),
     "lr3e-3": dict(lr=3e-3),
