@@ -26,15 +26,16 @@ from matplotlib.figure import Figure  # no pyplot: no backend to choose, no glob
 from .atomic import write_bytes_atomic
 from .baselines import fill_colorization, fill_linear
 from .classroom import build_solutions, build_student, format_grades, grade, write_csv
-from .datasets import depth_png_bytes, npy_bytes, pfm_bytes, read_pfm
 from .experiments import error_table, format_table, make_case
+from .fileio import depth_png_bytes, npy_bytes, pfm_bytes, read_pfm
 from .fit import FitConfig, complete_depth
-from .formats import TUM_INTRINSICS, load_sequence
+from .formats import load_sequence
 from .metrics import hole_rmse
 from .profiles import get_profile
 from .runner import open_client
 from .scenes import list_scenes
 from .sequence import VARIANT, estimate_sequence, format_estimate, run_sequence
+from .tum import TUM_INTRINSICS
 from .viz import save_figure, show_depth, show_error, show_image
 
 

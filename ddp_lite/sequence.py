@@ -37,7 +37,7 @@ import numpy as np
 
 from .atomic import write_bytes_atomic
 from .camera import Camera
-from .datasets import depth_png_bytes, npy_bytes
+from .fileio import depth_png_bytes, npy_bytes
 from .disparity import DisparityTransform
 from .fit import FitConfig, _check_fit_inputs, complete_depth, estimate_peak_memory_gb
 from .runner import run_jobs
