@@ -18,7 +18,9 @@ from .fit import FitConfig
 from .formats import load_sequence
 from .profiles import get_profile
 from .runner import open_client
-from .sequence import VARIANT, estimate_sequence, format_estimate, run_sequence
+from .sequence import run_sequence
+from .sequence_cost import estimate_sequence, format_estimate
+from .sequence_jobs import VARIANT
 from .tum import TUM_INTRINSICS
 
 
