@@ -37,9 +37,10 @@ import numpy as np  # noqa: E402
 
 import ddp_lite as ddp  # noqa: E402
 from ddp_lite import baselines  # noqa: E402
-from ddp_lite.datasets import load_middlebury, make_middlebury_fixture, resize_scene  # noqa: E402
 from ddp_lite.experiments import Case, make_case, sgm_depth_at_scale  # noqa: E402
 from ddp_lite.holes import random_holes  # noqa: E402
+from ddp_lite.middlebury import load_middlebury, make_middlebury_fixture  # noqa: E402
+from ddp_lite.resample import resize_scene  # noqa: E402
 from ddp_lite.scenes import SCENES  # noqa: E402
 from _common import add_profile_args, profile_from_args  # noqa: E402
 

@@ -6,7 +6,7 @@ How it works (all NumPy, no loop over pixels):
    exactly 1. Rotated into the world, a point ``C + t·d`` on that ray has camera depth
    ``z = t``, so the ray parameter of the first hit *is* the depth map, with no conversion.
 2. **Intersections.** Each primitive (``Plane``, ``Box``, ``Sphere``, ``Cylinder``; more in
-   ``organic.py``) returns the ray parameter of its first hit (``inf`` on a miss) in closed
+   ``solids.py`` and ``terrain.py``) returns the ray parameter of its first hit (``inf`` on a miss) in closed
    form: one linear equation for a plane, the slab test for a box, a quadratic for a sphere or a
    cylinder's side. The nearest hit over the few primitives wins (a loop over primitives, not
    pixels). Interface: ``intersect(o (3,), d (N, 3)) -> t (N,)`` and ``surface(x (M, 3)) ->

@@ -7,14 +7,12 @@ from scipy.interpolate import griddata
 from ddp_lite import (Camera, FitConfig, SkipNet, UNet, complete_depth, disparity_loss, fit_image, look_at, merge,
                       warp_loss, warp_to_reference)
 from ddp_lite.fit import PlateauStopper
-
-TINY = dict(channels=(8, 16, 32), lr=1e-2, progress=False)
+from conftest import TINY, tilted_plane
 
 
 def slanted_plane(height=32, width=48):
     """Depth of a plane tilted in x (metres) and a hole in its middle."""
-    u = np.arange(width, dtype=np.float32)
-    gt = np.broadcast_to(2.0 + 0.04 * u, (height, width)).astype(np.float32).copy()
+    gt = tilted_plane(height, width)
     depth = gt.copy()
     depth[10:22, 18:30] = np.nan
     return gt, depth

@@ -10,12 +10,11 @@ import torch.nn.functional as F
 
 from ddp_lite import DisparityTransform, FitConfig, UNet, complete_depth
 from ddp_lite.nets import _conv
-
-TINY = dict(channels=(8, 16, 32), lr=1e-2, progress=False)
+from conftest import TINY, tilted_plane
 
 
 def plane_with_hole(height=24, width=32):
-    gt = np.broadcast_to(2.0 + 0.05 * np.arange(width, dtype=np.float32), (height, width)).astype(np.float32).copy()
+    gt = tilted_plane(height, width, slope=0.05)
     depth = gt.copy()
     depth[8:16, 10:20] = np.nan
     return gt, depth

@@ -5,13 +5,11 @@ import pytest
 from ddp_lite import Camera, FitConfig, look_at
 from ddp_lite.coarse_to_fine import (_downsample_camera, _downsample_depth, _downsample_image,
                                      complete_depth_coarse_to_fine)
-
-TINY = dict(channels=(8, 16, 32), lr=1e-2, progress=False)
+from conftest import TINY, tilted_plane
 
 
 def plane_case(height=24, width=32):
-    u = np.arange(width, dtype=np.float32)
-    gt = np.broadcast_to(2.0 + 0.04 * u, (height, width)).astype(np.float32).copy()
+    gt = tilted_plane(height, width)
     depth = gt.copy()
     depth[8:16, 10:20] = np.nan
     rgb = np.random.default_rng(0).random((height, width, 3)).astype(np.float32)

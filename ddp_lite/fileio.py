@@ -1,0 +1,223 @@
+"""Image and depth-map files ↔ arrays: PNG colour, 16-bit depth PNG, ``.npy``, PFM, COLMAP ``.bin``.
+
+Conventions: colour comes back as float32 (H, W, 3) RGB in [0, 1] (8- or 16-bit files; grey is
+repeated to 3 channels); depth as float32 (H, W) with 0, negative and non-finite values turned
+into NaN (a file's "no value" marker becomes NaN here). Writers work on bytes (``*_bytes``) so a
+caller writes them atomically (``atomic.write_bytes_atomic``); ``write_*`` do that themselves.
+A missing file raises ``FileNotFoundError`` naming the argument it came from.
+
+* **PFM** (Middlebury 2014 disparities): header ``PF`` (3 channels) or ``Pf`` (1 channel), then
+  ``width height``, then a scale whose *sign* gives the byte order (negative = little-endian),
+  each ending in one whitespace byte; float32 rows follow **bottom to top**.
+* **16-bit depth PNG**: integer value = depth × factor (1000 for millimetres, 5000 for TUM), 0 = none.
+* **COLMAP dense maps** (``stereo/depth_maps/NAME.geometric.bin``): an ASCII header
+  ``width&height&channels&`` then float32 values, column by column; 0 = no depth.
+"""
+from __future__ import annotations
+
+import io
+import re
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from .atomic import write_bytes_atomic
+from .textparse import _fail
+
+
+def _existing(path, name: str) -> Path:
+    path = Path(path)
+    if not path.exists():
+        raise FileNotFoundError(f"{name}: {path} does not exist")
+    return path
+
+
+def _read_text(path, name: str) -> str:
+    """A small text file (calibration) → str; a clear error naming it if it is not UTF-8 text."""
+    path = _existing(path, name)
+    try:
+        return path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as error:
+        raise ValueError(f"{name}: {path} is not a UTF-8 text file (byte {error.start}); is it the right file?") from None
+
+
+def _read_rgb(path, name: str = "path") -> np.ndarray:
+    """An 8- or 16-bit image file → (H, W, 3) float32 RGB in [0, 1]."""
+    image = cv2.imread(str(_existing(path, name)), cv2.IMREAD_UNCHANGED)
+    if image is None:
+        raise ValueError(f"{name}: {path} is not an image OpenCV can read")
+    if image.dtype not in (np.uint8, np.uint16):
+        raise ValueError(f"{name}: {path} must be an 8- or 16-bit image, got {image.dtype}")
+    scale = 255.0 if image.dtype == np.uint8 else 65535.0
+    if image.ndim == 2:
+        image = np.repeat(image[:, :, None], 3, axis=2)
+    else:
+        image = cv2.cvtColor(image[:, :, :3], cv2.COLOR_BGR2RGB)
+    return (image.astype(np.float32) / np.float32(scale))
+
+
+def _png_bytes(rgb: np.ndarray) -> bytes:
+    bgr = cv2.cvtColor(np.clip(rgb * 255.0 + 0.5, 0, 255).astype(np.uint8), cv2.COLOR_RGB2BGR)
+    ok, buffer = cv2.imencode(".png", bgr)
+    if not ok:
+        raise RuntimeError("OpenCV could not encode a PNG")
+    return buffer.tobytes()
+
+
+def _pfm_header(data: bytes, path) -> tuple[int, int, int, float, int]:
+    """(channels, width, height, scale, data offset) of a PFM: three header lines (``\n`` or
+    ``\r\n`` line ends; ``#`` comment lines skipped), or the same tokens on fewer lines."""
+    tokens, offset = [], 0
+    while len(tokens) < 4:
+        end = data.find(b"\n", offset, offset + 256)
+        if end < 0:
+            raise ValueError(f"path: {path} is not a PFM file (expected 'PF' or 'Pf', width, height, scale)")
+        line, offset = data[offset:end].strip(), end + 1
+        if not line.startswith(b"#"):
+            tokens += line.split()
+    kind, width, height, scale = tokens[:4] if len(tokens) == 4 else (None,) * 4
+    if kind not in (b"PF", b"Pf") or not (width.isdigit() and height.isdigit()):
+        raise ValueError(f"path: {path} is not a PFM file (expected 'PF' or 'Pf', width, height, scale)")
+    try:
+        scale = float(scale)
+    except ValueError:
+        raise ValueError(f"path: {path} has a PFM scale that is not a number: {scale!r}") from None
+    if int(width) == 0 or int(height) == 0 or scale == 0.0 or not np.isfinite(scale):
+        raise ValueError(f"path: {path} has an empty size or a zero or non-finite scale in its PFM header")
+    return 3 if kind == b"PF" else 1, int(width), int(height), scale, offset
+
+
+def read_pfm(path) -> np.ndarray:
+    """A PFM file → float32 (H, W) or (H, W, 3), top row first, native byte order (either file endianness)."""
+    data = _existing(path, "path").read_bytes()
+    channels, width, height, scale, offset = _pfm_header(data, path)
+    count = width * height * channels
+    if len(data) - offset < 4 * count:
+        raise ValueError(f"path: {path} is truncated: {len(data) - offset} data bytes, expected {4 * count}")
+    array = np.frombuffer(data, dtype="<f4" if scale < 0 else ">f4", count=count, offset=offset)
+    shape = (height, width, 3) if channels == 3 else (height, width)
+    return np.flipud(array.reshape(shape)).astype(np.float32)
+
+
+def write_pfm(path, array) -> None:
+    """Write (H, W), (H, W, 1) or (H, W, 3) real values as a little-endian float32 PFM, atomically."""
+    values = np.asarray(array)
+    if values.dtype == bool or not (np.issubdtype(values.dtype, np.integer) or np.issubdtype(values.dtype, np.floating)):
+        raise ValueError(f"array must hold real numbers, got dtype {values.dtype}")
+    if values.ndim == 3 and values.shape[2] == 1:
+        values = values[:, :, 0]
+    if not (values.ndim == 2 or (values.ndim == 3 and values.shape[2] == 3)) or min(values.shape[:2]) == 0:
+        raise ValueError(f"array must be (H, W), (H, W, 1) or (H, W, 3), got shape {np.shape(array)}")
+    write_bytes_atomic(path, pfm_bytes(values))
+
+
+def npy_bytes(values) -> bytes:
+    """Any array → the bytes of a ``.npy`` file (``np.load`` reads them back)."""
+    buffer = io.BytesIO()
+    np.save(buffer, values)
+    return buffer.getvalue()
+
+
+def depth_png_bytes(depth, factor: float = 1000.0) -> tuple[bytes, int]:
+    """(H, W) depth × ``factor`` (1000: millimetres) → (16-bit PNG bytes, how many pixels did not fit).
+    NaN becomes 0 (the usual depth-PNG "no value"); values beyond 65535 are written as 0 too."""
+    scaled = np.round(np.nan_to_num(np.asarray(depth, np.float64), nan=0.0) * factor)
+    overflow = scaled > 65535
+    ok, buffer = cv2.imencode(".png", np.where(overflow, 0, scaled).astype(np.uint16))
+    if not ok:
+        raise RuntimeError("OpenCV could not encode a 16-bit PNG")
+    return buffer.tobytes(), int(overflow.sum())
+
+
+def pfm_bytes(values) -> bytes:
+    """(H, W) or (H, W, 3) real values → the bytes of a little-endian float32 PFM file."""
+    height, width = values.shape[:2]
+    header = f"{'PF' if values.ndim == 3 else 'Pf'}\n{width} {height}\n-1.0\n".encode("ascii")
+    return header + np.ascontiguousarray(np.flipud(values).astype("<f4")).tobytes()  # a copy: the input is untouched
+
+
+def read_depth_image(path, scale: float = 0.001) -> np.ndarray:
+    """A 16-bit depth PNG or a ``.npy`` (millimetres by default) → (H, W) float32 metres = value·scale;
+    0 and non-finite → NaN."""
+    if not np.isfinite(scale) or scale <= 0:
+        raise ValueError(f"scale must be a positive number (metres per unit), got {scale!r}")
+    path = _existing(path, "path")
+    if path.suffix.lower() == ".npy":
+        raw = np.load(path, allow_pickle=False)
+    else:
+        raw = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+        if raw is None or raw.dtype != np.uint16:
+            raise ValueError(f"path: {path} must be a 16-bit depth PNG or a .npy")
+    if raw.ndim != 2:
+        raise ValueError(f"path: {path} must hold an (H, W) depth map, got shape {raw.shape}")
+    depth = raw.astype(np.float64) * float(scale)
+    return np.where(np.isfinite(depth) & (depth > 0), depth, np.nan).astype(np.float32)
+
+
+def read_colmap_depth(path) -> np.ndarray:
+    """A COLMAP dense depth map (``*.geometric.bin`` / ``*.photometric.bin``) → (H, W) float32, as stored (0 = none).
+
+    The file: ASCII ``width&height&channels&``, then width·height·channels little-endian float32
+    values in column-major order (x fastest is *not* the order: the first column comes first)."""
+    data = Path(path).read_bytes()
+    header = re.match(rb"(\d+)&(\d+)&(\d+)&", data[:64])
+    if header is None:
+        raise _fail(path, 1, "not a COLMAP dense map: expected the header 'width&height&channels&'")
+    width, height, channels = (int(v) for v in header.groups())
+    count = width * height * channels
+    if channels != 1 or count == 0:
+        raise _fail(path, 1, f"a depth map has 1 channel and a positive size, got {width}&{height}&{channels}&")
+    body = data[header.end():]
+    if len(body) != 4 * count:
+        raise _fail(path, None, f"holds {len(body)} data bytes, expected {4 * count} for {width}×{height}")
+    return np.frombuffer(body, dtype="<f4").reshape(width, height).T.astype(np.float32)
+
+
+def colmap_depth_bytes(depth) -> bytes:
+    """(H, W) depth → the bytes of a COLMAP dense ``.bin`` map (NaN stored as 0, COLMAP's 'no depth')."""
+    values = np.nan_to_num(np.asarray(depth, np.float32), nan=0.0)
+    H, W = values.shape
+    return f"{W}&{H}&1&".encode("ascii") + np.ascontiguousarray(values.T).astype("<f4").tobytes()
+
+
+def write_colmap_depth(path, depth) -> None:
+    """Write (H, W) depth as a COLMAP dense ``.bin`` map, atomically."""
+    write_bytes_atomic(path, colmap_depth_bytes(depth))
+
+
+def _depth_png_bytes(depth: np.ndarray, factor: float, path_for_errors) -> bytes:
+    """(H, W) depth × ``factor`` → 16-bit PNG bytes, NaN → 0; refuse values the format cannot hold."""
+    png, overflow = depth_png_bytes(depth, factor)
+    if overflow:
+        raise ValueError(f"{path_for_errors}: depth up to {np.nanmax(depth):.3f} does not fit a 16-bit PNG at "
+                         f"{factor:g} units per metre (max {65535 / factor:.3f}); use .npy, .pfm or .bin")
+    return png
+
+
+def _read_depth_file(path: Path, scale: float | None) -> np.ndarray:
+    """A depth map file → (H, W) float32 × ``scale``; 0, negative and non-finite → NaN.
+
+    ``.bin`` (COLMAP dense), ``.npy``, ``.pfm`` store floats (scale defaults to 1); 16-bit ``.png``
+    stores integers and needs ``scale`` (metres per unit: 0.001 for millimetres, 1/5000 for TUM)."""
+    suffix = path.suffix.lower()
+    if suffix == ".bin":
+        raw = read_colmap_depth(path)
+    elif suffix == ".npy":
+        raw = np.load(path, allow_pickle=False)
+    elif suffix == ".pfm":
+        raw = read_pfm(path)
+    elif suffix == ".png":
+        raw = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+        if raw is None or raw.dtype != np.uint16 or raw.ndim != 2:
+            raise ValueError(f"{path}: a depth PNG must be 1-channel 16-bit, got "
+                             f"{None if raw is None else (raw.dtype, raw.shape)}")
+        if scale is None:
+            raise ValueError(f"{path} stores integers; give depth_scale (CLI: --depth-scale), the metres per stored "
+                             f"unit (0.001 for millimetres)")
+    else:
+        raise ValueError(f"{path}: depth maps must be .bin (COLMAP), .png (16-bit), .npy or .pfm")
+    if raw.ndim != 2 or not np.issubdtype(raw.dtype, np.number):
+        raise ValueError(f"{path} must hold one (H, W) map of numbers, got {raw.dtype} {raw.shape}")
+    depth = raw.astype(np.float64) * (1.0 if scale is None else float(scale))
+    return np.where(np.isfinite(depth) & (depth > 0), depth, np.nan).astype(np.float32)

@@ -1,0 +1,211 @@
+"""Middlebury stereo (2014 and 2005/2006) → a one-view stereo ``Scene``, and a tiny offline fixture.
+
+* **calib.txt** (2014): ``cam0=[f 0 cx0; 0 f cy; 0 0 1]``, ``cam1=[...]``, ``doffs`` = cx1 − cx0
+  (px), ``baseline`` (mm), ``width``, ``height``, ``ndisp``; depth Z = f·B / (d + doffs).
+  Disparities are PFM (``disp0.pfm``), ``inf`` = unknown → NaN.
+* **2005/2006**: ``view1.png``/``view5.png``, disparity PNG (0 = unknown → NaN), ``dmin.txt``.
+
+A stereo scene has the left view at the world origin, the rectified right view in ``right``,
+``meta`` baseline (m), doffs/ndisp/focal (px), d_min/d_max (m). ``MiddleburyCalib`` and
+``_stereo_scene`` serve KITTI too (``datasets.load_kitti``). ``make_middlebury_fixture`` writes a
+tiny Middlebury-2014-format scene from the kit's renderer, so tests and notebooks run offline.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from .atomic import write_bytes_atomic
+from .camera import Camera
+from .fileio import _existing, _png_bytes, _read_rgb, _read_text, read_pfm, write_pfm
+from .resample import _check_size, _depth_range, resize_scene
+from .scenes import make_scene  # the renderer, for make_middlebury_fixture only
+from .stereo import disparity_to_depth, pixel_disparity
+from .views import Scene, View
+
+
+def _require_valid(depth: np.ndarray, what: str, path) -> np.ndarray:
+    """Refuse a ground-truth map with no valid pixel: it is a wrong file, not a scene."""
+    if not np.isfinite(depth).any():
+        raise ValueError(f"{what}: {path} has no valid disparity (every pixel is the 'unknown' marker)")
+    return depth
+
+
+@dataclass(frozen=True, eq=False)
+class MiddleburyCalib:
+    """A Middlebury ``calib.txt``: ``K0``/``K1`` (3×3 px), ``doffs`` (px, cx1 − cx0), ``baseline``
+    (**metres**; the file gives mm), ``width``/``height``/``ndisp`` (px), ``extra`` (other keys)."""
+
+    K0: np.ndarray
+    K1: np.ndarray
+    doffs: float
+    baseline: float
+    width: int
+    height: int
+    ndisp: int
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def focal(self) -> float:
+        """Focal length f (px) of the left camera, the f in Z = f·B / (d + doffs)."""
+        return float(self.K0[0, 0])
+
+    def cameras(self) -> tuple[Camera, Camera]:
+        """``(left, right)``: left at the world origin, right translated by ``baseline`` metres along x."""
+        right_pose = np.eye(4)
+        right_pose[0, 3] = -self.baseline  # camera centre at (+B, 0, 0) in the left camera's frame
+        return (Camera(self.K0, np.eye(4), self.width, self.height),
+                Camera(self.K1, right_pose, self.width, self.height))
+
+    def depth(self, disparity) -> np.ndarray:
+        """Disparity (H, W) px → depth (H, W) float32 metres; ``inf`` → NaN."""
+        return disparity_to_depth(disparity, self.focal, self.baseline, self.doffs)
+
+
+def _matrix(text: str, key: str) -> np.ndarray:
+    rows = [r.split() for r in text.strip().strip("[]").split(";")]
+    try:
+        K = np.array(rows, dtype=np.float64)
+    except ValueError:
+        raise ValueError(f"text: {key} must be a 3×3 matrix like [f 0 cx; 0 f cy; 0 0 1], got {text!r}") from None
+    if K.shape != (3, 3):
+        raise ValueError(f"text: {key} must be 3×3, got shape {K.shape}")
+    return K
+
+
+def parse_middlebury_calib(text: str) -> MiddleburyCalib:
+    """The contents of a Middlebury ``calib.txt`` → ``MiddleburyCalib`` (baseline converted mm → m)."""
+    if not isinstance(text, str):
+        raise ValueError(f"text must be the contents of calib.txt (str), got {type(text).__name__}")
+    entries = {}
+    for line in text.splitlines():
+        if "=" in line:
+            key, value = line.split("=", 1)
+            if key.strip() in entries:
+                raise ValueError(f"text: {key.strip()} appears twice in calib.txt")
+            entries[key.strip()] = value.strip()
+    missing = [k for k in ("cam0", "cam1", "doffs", "baseline", "width", "height", "ndisp") if k not in entries]
+    if missing:
+        raise ValueError(f"text: calib.txt lacks {', '.join(missing)}")
+    try:
+        numbers = {k: float(v) for k, v in entries.items() if k not in ("cam0", "cam1")}
+    except ValueError as error:
+        raise ValueError(f"text: a calib.txt value is not a number ({error})") from None
+    for key in ("doffs", "baseline", "width", "height", "ndisp"):
+        if not np.isfinite(numbers[key]):
+            raise ValueError(f"text: {key} must be a finite number, got {entries[key]!r}")
+    if numbers["baseline"] <= 0:
+        raise ValueError(f"text: baseline must be positive (mm), got {numbers['baseline']}")
+    for key in ("width", "height", "ndisp"):
+        if numbers[key] != int(numbers[key]) or numbers[key] <= 0:
+            raise ValueError(f"text: {key} must be a positive integer, got {entries[key]!r}")
+    K0, K1 = _matrix(entries["cam0"], "cam0"), _matrix(entries["cam1"], "cam1")
+    extra = {k: v for k, v in numbers.items() if k not in ("doffs", "baseline", "width", "height", "ndisp")}
+    return MiddleburyCalib(K0, K1, numbers["doffs"], numbers["baseline"] / 1000.0, int(numbers["width"]),
+                           int(numbers["height"]), int(numbers["ndisp"]), extra)
+
+
+def read_middlebury_calib(path) -> MiddleburyCalib:
+    """Read a Middlebury ``calib.txt`` file (see ``parse_middlebury_calib``)."""
+    text = _read_text(path, "path")
+    try:
+        return parse_middlebury_calib(text)
+    except ValueError as error:
+        raise ValueError(f"{error} (in {path})") from None
+
+
+def _stereo_scene(name, rgb0, rgb1, depth0, depth1, calib: MiddleburyCalib, size) -> Scene:
+    """A one-view stereo Scene (left view + rectified right view) from loaded arrays."""
+    size = _check_size(size)
+    cam0, cam1 = calib.cameras()
+    for what, array in (("left image", rgb0), ("right image", rgb1), ("left depth", depth0), ("right depth", depth1)):
+        if array.shape[:2] != (calib.height, calib.width):
+            raise ValueError(f"{what} is {array.shape[1]}×{array.shape[0]} but calib says {calib.width}×{calib.height}")
+    # the depth range comes from the full-resolution map, so it does not depend on ``size``
+    meta = {"baseline": float(calib.baseline), "doffs": float(calib.doffs), "ndisp": float(calib.ndisp),
+            "focal": cam0.focal, **_depth_range([depth0])}
+    scene = Scene(name, [View(rgb0, depth0, cam0, f"{name}-left")], [View(rgb1, depth1, cam1, f"{name}-right")], meta)
+    return scene if size is None else resize_scene(scene, size)
+
+
+def load_middlebury(folder, size=None, name: str | None = None) -> Scene:
+    """A Middlebury 2014 scene folder (im0.png, im1.png, disp0.pfm, calib.txt; disp1.pfm optional) →
+    one-view stereo ``Scene``: GT depth (metres, NaN where disparity is inf), ``right`` view, and
+    ``meta`` (baseline m, doffs px, ndisp, focal px, d_min, d_max). ``size`` (H, W) resamples
+    (colour by area, depth by nearest, K accordingly). Note: Z = f·B/(d + doffs), doffs ≠ 0 here."""
+    folder = _existing(folder, "folder")
+    calib = read_middlebury_calib(folder / "calib.txt")
+    disparity = read_pfm(folder / "disp0.pfm")
+    if disparity.ndim != 2:
+        raise ValueError(f"folder: {folder / 'disp0.pfm'} must be a 1-channel PFM")
+    depth0 = _require_valid(calib.depth(disparity), "folder", folder / "disp0.pfm")
+    depth1 = calib.depth(read_pfm(folder / "disp1.pfm")) if (folder / "disp1.pfm").exists() \
+        else np.full_like(depth0, np.nan)
+    return _stereo_scene(name or folder.name, _read_rgb(folder / "im0.png", "folder"),
+                         _read_rgb(folder / "im1.png", "folder"), depth0, depth1, calib, size)
+
+
+def load_middlebury2006(folder, focal: float = 3740.0, baseline: float = 0.160, size=None,
+                        name: str | None = None) -> Scene:
+    """A Middlebury 2005/2006 full-size scene folder (view1.png, view5.png, disp1.png, dmin.txt;
+    disp5.png optional) → one-view stereo ``Scene``. Disparity = PNG value (0 = unknown → NaN) and
+    Z = focal·baseline / (d + dmin). The defaults (3740 px, 160 mm) are the values the dataset page
+    gives for the full-size images; the principal point is assumed at the image centre."""
+    folder = _existing(folder, "folder")
+    try:
+        dmin = float(_read_text(folder / "dmin.txt", "folder").split()[0])
+    except (IndexError, ValueError) as error:
+        raise ValueError(f"folder: {folder / 'dmin.txt'} must hold one number ({error})") from None
+    if not np.isfinite(dmin):
+        raise ValueError(f"folder: {folder / 'dmin.txt'} must hold a finite number, got {dmin}")
+    rgb0, rgb1 = _read_rgb(folder / "view1.png", "folder"), _read_rgb(folder / "view5.png", "folder")
+    H, W = rgb0.shape[:2]
+    K0 = np.array([[focal, 0.0, (W - 1) / 2.0], [0.0, focal, (H - 1) / 2.0], [0.0, 0.0, 1.0]])
+    K1 = K0.copy()
+    K1[0, 2] += dmin
+    calib = MiddleburyCalib(K0, K1, dmin, float(baseline), W, H, 256)
+
+    def depth_of(file):
+        if not (folder / file).exists():
+            return np.full((H, W), np.nan, np.float32)
+        raw = cv2.imread(str(folder / file), cv2.IMREAD_UNCHANGED)
+        if raw is None or raw.ndim != 2:
+            raise ValueError(f"folder: {folder / file} must be a 1-channel disparity PNG")
+        return calib.depth(np.where(raw > 0, raw.astype(np.float64), np.nan))
+    depth1 = _require_valid(depth_of("disp1.png"), "folder", folder / "disp1.png") if (folder / "disp1.png").exists() \
+        else depth_of("disp1.png")
+    return _stereo_scene(name or folder.name, rgb0, rgb1, depth1, depth_of("disp5.png"), calib, size)
+
+
+def make_middlebury_fixture(folder, size=(48, 64), seed: int = 0, scene: str = "desk",
+                            hole_fraction: float = 0.1) -> Path:
+    """Write a tiny Middlebury-2014-format scene (im0.png, im1.png, disp0.pfm, disp1.pfm, calib.txt)
+    rendered by ``make_scene(scene, size, n_views=1, seed)`` into ``folder``; ``hole_fraction`` of
+    disp0 is set to ``inf`` (unknown). doffs = 0 (the renderer's right view shares K). Returns the folder."""
+    size = _check_size(size)
+    if not 0.0 <= hole_fraction < 1.0:
+        raise ValueError(f"hole_fraction must be in [0, 1), got {hole_fraction!r}")
+    synthetic = make_scene(scene, size=size, n_views=1, seed=seed)
+    left, right = synthetic.views[0], synthetic.right[0]
+    K, baseline = left.camera.K, float(synthetic.meta["baseline"])
+    disp0, disp1 = (pixel_disparity(v.depth, K[0, 0], baseline) for v in (left, right))  # doffs = 0
+    rng = np.random.default_rng(seed)
+    disp0[rng.random(disp0.shape) < hole_fraction] = np.inf
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+
+    def matrix(M):
+        return "[" + "; ".join(" ".join(repr(float(v)) for v in row) for row in M) + "]"
+    finite = disp0[np.isfinite(disp0)]
+    calib = (f"cam0={matrix(K)}\ncam1={matrix(right.camera.K)}\ndoffs=0\nbaseline={baseline * 1000.0!r}\n"
+             f"width={size[1]}\nheight={size[0]}\nndisp={int(np.ceil(finite.max())) + 1}\nisint=0\n"
+             f"vmin={int(np.floor(finite.min()))}\nvmax={int(np.ceil(finite.max()))}\n")
+    write_bytes_atomic(folder / "im0.png", _png_bytes(left.rgb))
+    write_bytes_atomic(folder / "im1.png", _png_bytes(right.rgb))
+    write_pfm(folder / "disp0.pfm", disp0)
+    write_pfm(folder / "disp1.pfm", disp1)
+    write_bytes_atomic(folder / "calib.txt", calib.encode("ascii"))
+    return folder

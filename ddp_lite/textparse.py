@@ -1,0 +1,54 @@
+"""Parsing text files line by line, with errors that name the file and the line.
+
+The readers of TUM lists and trajectories, COLMAP models and the kit's ``intrinsics.txt`` share
+these: ``#`` starts a comment; lines are numbered from 1; a fault raises ``ValueError`` with
+``"<path>, line <n>: <what was wrong>"`` (``_fail``), before anything runs. Quaternions are
+(x, y, z, w) here; a reader whose file writes w first reorders before calling ``_rotation``.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+
+def _fail(path, line: int | None, message: str) -> ValueError:
+    where = f"{path}, line {line}" if line is not None else f"{path}"
+    return ValueError(f"{where}: {message}")
+
+
+def _text_lines(path, keep_blank: bool = False) -> list[tuple[int, str]]:
+    """(1-based line number, stripped text) of a text file, ``#`` comments dropped (blank lines too unless asked)."""
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"{path} does not exist (or is not a file)")
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as error:
+        raise _fail(path, None, f"not a UTF-8 text file (byte {error.start}); is it the right file?") from None
+    lines = []
+    for number, line in enumerate(text.splitlines(), 1):
+        line = line.strip()
+        if line.startswith("#") or (not line and not keep_blank):
+            continue
+        lines.append((number, line))
+    return lines
+
+
+def _floats(tokens, path, line: int, what: str) -> np.ndarray:
+    try:
+        values = np.array([float(t) for t in tokens], dtype=np.float64)
+    except ValueError:
+        raise _fail(path, line, f"{what} must be numbers, got {' '.join(tokens)!r}") from None
+    if not np.all(np.isfinite(values)):
+        raise _fail(path, line, f"{what} must be finite numbers, got {' '.join(tokens)!r}")
+    return values
+
+
+def _rotation(quat_xyzw: np.ndarray, path, line: int) -> np.ndarray:
+    """A (nearly) unit quaternion (x, y, z, w) → 3×3 rotation; refuse zero or far-from-unit ones."""
+    norm = float(np.linalg.norm(quat_xyzw))
+    if not abs(norm - 1.0) < 1e-3:
+        raise _fail(path, line, f"the quaternion must have unit length, got length {norm:.6g}")
+    return Rotation.from_quat(quat_xyzw / norm).as_matrix()
