@@ -55,7 +55,8 @@ RECIPES = {
     "paper-net": dict(channels=(32, 64, 128, 256, 512), flatness=0.0),  # class before the third pass (one 32-512 fit)
     "curvature-ens3": dict(flatness=0.0, ensemble=3),  # class before the fourth pass: the mean of three, no flatness
     "one-fit-curvature": dict(flatness=0.0),  # one fit of that recipe
-    "flat0.3": dict(flatness=0.3),  # the flatness term at 0.3 instead of 1
+    "flat0.3": dict(flatness=0.3),  # the flatness term at 0.3 instead of 0.6
+    "flat1": dict(flatness=1.0),  # ... at 1
     "ens3": dict(ensemble=3),  # the mean of three fits of the class recipe
     "quarter-ens4": dict(channels=(8, 16, 32, 64, 128), ensemble=4, flatness=0.0),  # chosen on 8 cases, failed on the others
     "ema": dict(average_outputs=0.9),
