@@ -8,9 +8,10 @@ is compared and which pixels count:
 - ``L_warp``: the reference colour vs each neighbour warped through the output depth, only where
   the warp lands inside the neighbour.
 
-One more term is the kit's, not the paper's: :func:`smoothness_loss`, an edge-aware curvature
-penalty on the disparity in the holes (``FitConfig.smoothness``; on in the ``ci`` and ``class``
-profiles, off in ``paper``). See ``profiles.py`` for why.
+Two more terms are the kit's, not the paper's, both on the disparity in the holes and weaker
+across colour edges: :func:`smoothness_loss`, a curvature penalty (``FitConfig.smoothness``; on in
+the ``ci`` and ``class`` profiles), and :func:`flatness_loss`, a first-order one
+(``FitConfig.flatness``; on in ``class``). ``paper`` has neither. See ``profiles.py`` for why.
 
 Masking SSIM needs care: an 11×11 window centred on a valid pixel next to a hole would see the
 hole's values. So before SSIM both images get the *same* value wherever a pixel does not count
