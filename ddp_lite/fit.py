@@ -261,7 +261,7 @@ def _fit_one(rgb, depth, camera, neighbors, variant, config, *, gt_depth=None, t
         terms = {"disp": disparity_loss(disparity, disp_target, lambda_z=config.lambda_z)}
         total = w_disp * terms["disp"]
         if w_rgb > 0:
-            terms["rgb"] = rgb_loss(output[:, 1:4], rgb_target, config.lambda_i)
+            terms["rgb"] = rgb_loss(output[:, 1:4], rgb_target, lambda_i=config.lambda_i)
             total = total + w_rgb * terms["rgb"]
         if w_warp > 0:
             ref_depth = transform.to_depth(disparity)  # differentiable: a tensor in, a tensor out

@@ -170,9 +170,12 @@ def disparity_loss(output: torch.Tensor, target, mask: torch.Tensor | None = Non
     return _l1_ssim(output, _prepared(target, mask), None, lambda_z)
 
 
-def rgb_loss(output: torch.Tensor, target, lambda_i: float = 0.5, mask=None):
+def rgb_loss(output: torch.Tensor, target, mask: torch.Tensor | None = None, lambda_i: float = 0.5):
     """L_RGB: output colour (B, 3, H, W) vs the input image (a tensor or a :class:`ConstantTarget`),
-    on every pixel (or on ``mask``)."""
+    on every pixel (or on ``mask`` (B, 1, H, W)). Arguments in :func:`disparity_loss`'s order."""
+    if mask is not None and not isinstance(mask, torch.Tensor):
+        raise TypeError(f"rgb_loss: mask must be a bool tensor (B, 1, H, W) or None, got {type(mask).__name__}; "
+                        f"pass the weight as lambda_i=")
     return _l1_ssim(output, _prepared(target, mask), None, lambda_i)
 
 

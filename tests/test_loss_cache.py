@@ -66,10 +66,10 @@ def test_losses_with_constant_targets_equal_the_uncached_formula_value_and_gradi
     warped = [(rgb.detach() + 0.1 * k).clamp(0, 1) * rgb for k in (1, 2)]
     valid = [mask, torch.roll(mask, 5, dims=-1)]
     disp_target, rgb_target = ConstantTarget(target[:, :1], mask), ConstantTarget(target[:, 1:4])
-    cached = (disparity_loss(disp, disp_target, lambda_z=0.8), rgb_loss(rgb, rgb_target, 0.5),
-              warp_loss(rgb_target, warped, valid, 0.5), rgb_loss(rgb, ConstantTarget(target[:, 1:4], mask), 0.5))
-    plain = (disparity_loss(disp, target[:, :1], mask, 0.8), rgb_loss(rgb, target[:, 1:4], 0.5),
-             warp_loss(target[:, 1:4], warped, valid, 0.5), rgb_loss(rgb, target[:, 1:4], 0.5, mask))
+    cached = (disparity_loss(disp, disp_target, lambda_z=0.8), rgb_loss(rgb, rgb_target, lambda_i=0.5),
+              warp_loss(rgb_target, warped, valid, 0.5), rgb_loss(rgb, ConstantTarget(target[:, 1:4], mask), lambda_i=0.5))
+    plain = (disparity_loss(disp, target[:, :1], mask, 0.8), rgb_loss(rgb, target[:, 1:4], lambda_i=0.5),
+             warp_loss(target[:, 1:4], warped, valid, 0.5), rgb_loss(rgb, target[:, 1:4], mask, 0.5))
     reference = (reference_l1_ssim(disp, target[:, :1], mask, 0.8), reference_l1_ssim(rgb, target[:, 1:4], None, 0.5),
                  torch.stack([_warp_reference(w, target[:, 1:4], v) for w, v in zip(warped, valid)]).mean(),
                  reference_l1_ssim(rgb, target[:, 1:4], mask, 0.5))
@@ -94,3 +94,15 @@ def test_a_prepared_target_refuses_a_second_mask():
         disparity_loss(torch.rand_like(y), ConstantTarget(y, mask), mask.clone())
     with pytest.raises(ValueError, match="mask"):
         disparity_loss(torch.rand_like(y), y)
+
+
+def test_rgb_loss_takes_its_arguments_in_disparity_loss_order_and_refuses_a_weight_as_mask():
+    from ddp_lite.losses import rgb_loss
+    rgb, target = torch.full((1, 3, 16, 16), 0.25), torch.full((1, 3, 16, 16), 0.75)
+    mask = torch.zeros(1, 1, 16, 16, dtype=torch.bool)
+    mask[..., :8] = True
+    # L1 only (lambda_i = 1): |0.25 - 0.75| = 0.5 on every counted pixel, with or without the mask
+    assert rgb_loss(rgb, target, mask, 1.0).item() == pytest.approx(0.5)
+    assert rgb_loss(rgb, target, lambda_i=1.0).item() == pytest.approx(0.5)
+    with pytest.raises(TypeError, match="mask"):
+        rgb_loss(rgb, target, 0.5)
