@@ -233,10 +233,16 @@ def flatness_loss(disparity: torch.Tensor, weights: torch.Tensor) -> torch.Tenso
     """Edge-aware first-order smoothness of ``disparity`` (B, 1, H, W): the weighted mean of
     |∂z/∂x| and |∂z/∂y| (forward differences) with the ``weights`` of :func:`smoothness_weights`.
 
-    Where a hole lies between valid pixels its minimum is still a plane through them (the
-    variation is fixed by the ends), but where a hole reaches the image border it continues
-    flat instead of carrying the last slope outward, as the curvature term alone lets it:
-    colorization's behaviour, which wins the suite's border holes.
+    Where a hole lies between valid pixels a plane through them is among its minima (along a
+    line, any monotone profile between two fixed ends has the same variation), but where a hole
+    reaches the image border the minimum levels off instead of carrying the last slope outward,
+    as the curvature term alone lets it; colorization, a first-order fill, does the same.
+
+    Example:
+        >>> ramp = torch.arange(8.0).repeat(8, 1)[None, None] / 8  # (1, 1, 8, 8), slope 1/8 along x
+        >>> w = smoothness_weights(torch.zeros(1, 3, 8, 8), torch.ones(1, 1, 8, 8, dtype=torch.bool))
+        >>> round(flatness_loss(ramp, w).item(), 4)  # 1/8 × (8·6 x-weights) / (8·6 + 6·8 weights)
+        0.0625
     """
     dx = (disparity[..., 1:] - disparity[..., :-1]).abs()  # (B, 1, H, W - 1)
     dy = (disparity[..., 1:, :] - disparity[..., :-1, :]).abs()  # (B, 1, H - 1, W)
