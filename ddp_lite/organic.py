@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from .photo_texture import PHOTOS, PhotoTexture
-from .scenes import _jitter, _sky, _tex, register_scene
+from .scenes import jitter_colour, register_scene, seeded_texture, sky_plane
 from .solids import Capsule, Cone, Ellipsoid
 from .terrain import HeightField
 
@@ -30,8 +30,8 @@ __all__ = ["PHOTOS", "PhotoTexture", "Ellipsoid", "Cone", "Capsule", "HeightFiel
 
 
 def _photo_tex(rng, image, scale, tint=(1.0, 1.0, 1.0), crop=(0.0, 1.0, 0.0, 1.0), variation=0.25):
-    """A PhotoTexture whose tint varies a little with the seed (as ``_tex`` does for colours)."""
-    return PhotoTexture(image, scale, _jitter(rng, tint), crop=crop, variation=variation)
+    """A PhotoTexture whose tint varies a little with the seed (as ``seeded_texture`` does for colours)."""
+    return PhotoTexture(image, scale, jitter_colour(rng, tint), crop=crop, variation=variation)
 
 
 def _bumps(rng, n, x_range, z_range, height_range, sigma_range) -> np.ndarray:
@@ -71,7 +71,7 @@ def _hills(rng):
                             _bumps(rng, 4, (-4, 4), (3, 10), (-0.1, 0.35), (0.5, 1.2))])  # mounds nearby
     waves = np.concatenate([_waves(rng, 2, (0.5, 1.6), (0.08, 0.2)), _waves(rng, 1, (2.0, 4.0), (0.03, 0.06))])
     ground = _terrain(hills, waves, _photo_tex(rng, "grass", 5.0, (0.6, 0.85, 0.4)), max_distance=65.0)
-    prims = [_sky(rng, 60.0, 30.0), ground]
+    prims = [sky_plane(rng, 60.0, 30.0), ground]
     for _ in range(5):  # boulders, a third buried
         x, z = rng.uniform(-4.0, 4.0), rng.uniform(4.0, 12.0)
         r = rng.uniform(0.35, 0.8) * np.array([rng.uniform(1.0, 1.6), rng.uniform(0.6, 0.9), rng.uniform(0.9, 1.3)])
@@ -95,7 +95,7 @@ def _hills(rng):
         prims.append(Capsule(tuple(a), tuple(b), rng.uniform(0.025, 0.05), bark))
     x, z = rng.uniform(2.5, 4.0), rng.uniform(6.0, 8.0)  # a painted fence post: textureless on purpose
     prims.append(Capsule((x, _ground_y(ground, x, z) + 0.1, z), (x + 0.25, _ground_y(ground, x, z) - 1.6, z + 0.1),
-                         0.06, _tex(rng, "flat", (0.85, 0.85, 0.8))))
+                         0.06, seeded_texture(rng, "flat", (0.85, 0.85, 0.8))))
     return prims, dict(eye=(0.0, -1.6, 0.0), target=(0.0, -0.8, 9.0), fov=60.0, baseline=0.5, sky=60.0)
 
 

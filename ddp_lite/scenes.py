@@ -39,85 +39,87 @@ __all__ = ["View", "Scene", "Texture", "Plane", "Box", "Sphere", "Cylinder", "re
            "LABEL_TEXTURELESS", "LABEL_PLANKS", "LABEL_TEXTURED", "SCENES"]
 
 
-def _jitter(rng, colour, amount=0.08):
+def jitter_colour(rng, colour, amount=0.08):
     """A seeded variation of a base colour, so a new seed changes colours as well as patterns."""
     return tuple(np.clip(np.asarray(colour) * (1.0 + rng.uniform(-amount, amount, 3)), 0.0, 1.0))
 
 
-def _tex(rng, kind, color, color2=(0.0, 0.0, 0.0), scale=0.05):
-    return Texture(kind, _jitter(rng, color), _jitter(rng, color2), scale)
+def seeded_texture(rng, kind, color, color2=(0.0, 0.0, 0.0), scale=0.05):
+    """A :class:`Texture` whose two colours are seeded variations of ``color`` and ``color2``."""
+    return Texture(kind, jitter_colour(rng, color), jitter_colour(rng, color2), scale)
 
 
-def _sky(rng, distance, height):
+def sky_plane(rng, distance, height):
+    """The sky: a plane facing the camera ``distance`` m away, textured at the scale ``height`` m."""
     return Plane((0.0, 0.0, distance), (0, 0, -1), (1, 0, 0),
-                 Texture("sky", _jitter(rng, (0.82, 0.88, 0.95), 0.03), _jitter(rng, (0.42, 0.6, 0.88), 0.03),
+                 Texture("sky", jitter_colour(rng, (0.82, 0.88, 0.95), 0.03), jitter_colour(rng, (0.42, 0.6, 0.88), 0.03),
                          height))
 
 
 def _house(rng):
     prims = [
-        _sky(rng, 60.0, 30.0),
-        Plane((0, 0, 0), (0, -1, 0), (1, 0, 0), _tex(rng, "noise", (0.35, 0.55, 0.2), (0.15, 0.3, 0.08), 0.08)),
-        Plane((0, -2.0, 8.0), (0, 0, -1), (1, 0, 0), _tex(rng, "planks", (0.75, 0.5, 0.3), (0.45, 0.26, 0.12), 0.35),
+        sky_plane(rng, 60.0, 30.0),
+        Plane((0, 0, 0), (0, -1, 0), (1, 0, 0), seeded_texture(rng, "noise", (0.35, 0.55, 0.2), (0.15, 0.3, 0.08), 0.08)),
+        Plane((0, -2.0, 8.0), (0, 0, -1), (1, 0, 0), seeded_texture(rng, "planks", (0.75, 0.5, 0.3), (0.45, 0.26, 0.12), 0.35),
               (3.5, 2.0)),
-        Box((0, -4.2, 8.3), (3.9, 0.2, 0.6), _tex(rng, "flat", (0.45, 0.2, 0.15))),  # roof eave
-        Plane((1.9, -2.5, 7.98), (0, 0, -1), (1, 0, 0), _tex(rng, "flat", (0.92, 0.9, 0.82)), (0.7, 0.65)),  # shutter
-        Box((-0.9, -0.6, 5.0), (0.7, 0.6, 0.5), _tex(rng, "noise", (0.7, 0.66, 0.6), (0.3, 0.28, 0.26), 0.05), 20.0),
-        Sphere((1.5, -0.5, 6.0), 0.5, _tex(rng, "noise", (0.25, 0.45, 0.15), (0.05, 0.2, 0.05), 0.04)),
+        Box((0, -4.2, 8.3), (3.9, 0.2, 0.6), seeded_texture(rng, "flat", (0.45, 0.2, 0.15))),  # roof eave
+        Plane((1.9, -2.5, 7.98), (0, 0, -1), (1, 0, 0), seeded_texture(rng, "flat", (0.92, 0.9, 0.82)), (0.7, 0.65)),  # shutter
+        Box((-0.9, -0.6, 5.0), (0.7, 0.6, 0.5), seeded_texture(rng, "noise", (0.7, 0.66, 0.6), (0.3, 0.28, 0.26), 0.05), 20.0),
+        Sphere((1.5, -0.5, 6.0), 0.5, seeded_texture(rng, "noise", (0.25, 0.45, 0.15), (0.05, 0.2, 0.05), 0.04)),
     ]
     return prims, dict(eye=(0.0, -1.6, 0.0), target=(0.0, -1.9, 8.0), fov=60.0, baseline=0.5, sky=60.0)
 
 
 def _desk(rng):
     prims = [
-        Plane((0, 0, 2.2), (0, 0, -1), (1, 0, 0), _tex(rng, "flat", (0.88, 0.86, 0.8))),  # painted wall
+        Plane((0, 0, 2.2), (0, 0, -1), (1, 0, 0), seeded_texture(rng, "flat", (0.88, 0.86, 0.8))),  # painted wall
         Plane((-0.55, -0.45, 2.19), (0, 0, -1), (1, 0, 0),
-              _tex(rng, "noise", (0.9, 0.7, 0.3), (0.2, 0.3, 0.6), 0.02), (0.25, 0.18)),  # poster
-        Plane((0, 0, 0), (0, -1, 0), (1, 0, 0), _tex(rng, "noise", (0.6, 0.42, 0.25), (0.35, 0.22, 0.1), 0.015)),
-        Box((-0.33, -0.06, 1.0), (0.15, 0.06, 0.11), _tex(rng, "noise", (0.75, 0.2, 0.15), (0.3, 0.05, 0.05), 0.01),
+              seeded_texture(rng, "noise", (0.9, 0.7, 0.3), (0.2, 0.3, 0.6), 0.02), (0.25, 0.18)),  # poster
+        Plane((0, 0, 0), (0, -1, 0), (1, 0, 0), seeded_texture(rng, "noise", (0.6, 0.42, 0.25), (0.35, 0.22, 0.1), 0.015)),
+        Box((-0.33, -0.06, 1.0), (0.15, 0.06, 0.11), seeded_texture(rng, "noise", (0.75, 0.2, 0.15), (0.3, 0.05, 0.05), 0.01),
             15.0),
-        Box((0.3, -0.15, 1.35), (0.1, 0.15, 0.04), _tex(rng, "bricks", (0.9, 0.8, 0.2), (0.6, 0.3, 0.1), 0.05),
+        Box((0.3, -0.15, 1.35), (0.1, 0.15, 0.04), seeded_texture(rng, "bricks", (0.9, 0.8, 0.2), (0.6, 0.3, 0.1), 0.05),
             -25.0),
-        Cylinder(0.02, 0.85, (-0.12, 0.0), 0.045, _tex(rng, "noise", (0.2, 0.35, 0.75), (0.9, 0.9, 0.95), 0.008)),
-        Cylinder(-0.12, 1.5, (-0.32, 0.0), 0.04, _tex(rng, "flat", (0.2, 0.55, 0.3))),  # plain bottle
-        Sphere((0.22, -0.07, 0.8), 0.07, _tex(rng, "noise", (0.95, 0.55, 0.1), (0.5, 0.2, 0.05), 0.01)),
+        Cylinder(0.02, 0.85, (-0.12, 0.0), 0.045, seeded_texture(rng, "noise", (0.2, 0.35, 0.75), (0.9, 0.9, 0.95), 0.008)),
+        Cylinder(-0.12, 1.5, (-0.32, 0.0), 0.04, seeded_texture(rng, "flat", (0.2, 0.55, 0.3))),  # plain bottle
+        Sphere((0.22, -0.07, 0.8), 0.07, seeded_texture(rng, "noise", (0.95, 0.55, 0.1), (0.5, 0.2, 0.05), 0.01)),
     ]
     return prims, dict(eye=(0.0, -0.45, 0.0), target=(0.0, -0.1, 1.3), fov=60.0, baseline=0.08, sky=None)
 
 
 def _room(rng):
     prims = [
-        Plane((0, 0, 0), (0, -1, 0), (1, 0, 0), _tex(rng, "tiles", (0.8, 0.78, 0.72), (0.5, 0.45, 0.4), 0.4)),
-        Plane((0, -2.6, 0), (0, 1, 0), (1, 0, 0), _tex(rng, "flat", (0.95, 0.95, 0.93))),  # ceiling
-        Plane((0, 0, 6.0), (0, 0, -1), (1, 0, 0), _tex(rng, "flat", (0.85, 0.82, 0.75))),  # back wall
-        Plane((-2.5, 0, 0), (1, 0, 0), (0, 0, 1), _tex(rng, "planks", (0.7, 0.48, 0.3), (0.4, 0.25, 0.12), 0.25)),
-        Plane((2.5, 0, 0), (-1, 0, 0), (0, 0, -1), _tex(rng, "flat", (0.9, 0.85, 0.6))),  # right wall
-        Plane((2.49, -1.5, 3.5), (-1, 0, 0), (0, 0, -1), _tex(rng, "noise", (0.2, 0.4, 0.7), (0.9, 0.8, 0.5), 0.04),
+        Plane((0, 0, 0), (0, -1, 0), (1, 0, 0), seeded_texture(rng, "tiles", (0.8, 0.78, 0.72), (0.5, 0.45, 0.4), 0.4)),
+        Plane((0, -2.6, 0), (0, 1, 0), (1, 0, 0), seeded_texture(rng, "flat", (0.95, 0.95, 0.93))),  # ceiling
+        Plane((0, 0, 6.0), (0, 0, -1), (1, 0, 0), seeded_texture(rng, "flat", (0.85, 0.82, 0.75))),  # back wall
+        Plane((-2.5, 0, 0), (1, 0, 0), (0, 0, 1), seeded_texture(rng, "planks", (0.7, 0.48, 0.3), (0.4, 0.25, 0.12), 0.25)),
+        Plane((2.5, 0, 0), (-1, 0, 0), (0, 0, -1), seeded_texture(rng, "flat", (0.9, 0.85, 0.6))),  # right wall
+        Plane((2.49, -1.5, 3.5), (-1, 0, 0), (0, 0, -1), seeded_texture(rng, "noise", (0.2, 0.4, 0.7), (0.9, 0.8, 0.5), 0.04),
               (0.6, 0.4)),  # painting
-        Box((-1.2, -0.4, 3.5), (0.9, 0.4, 0.45), _tex(rng, "noise", (0.55, 0.3, 0.35), (0.25, 0.1, 0.15), 0.03)),
-        Box((1.6, -0.9, 4.6), (0.5, 0.9, 0.3), _tex(rng, "noise", (0.5, 0.35, 0.2), (0.25, 0.15, 0.08), 0.05), -10.0),
-        Box((0.8, -0.25, 1.4), (0.25, 0.25, 0.25), _tex(rng, "noise", (0.3, 0.3, 0.35), (0.7, 0.7, 0.75), 0.02),
+        Box((-1.2, -0.4, 3.5), (0.9, 0.4, 0.45), seeded_texture(rng, "noise", (0.55, 0.3, 0.35), (0.25, 0.1, 0.15), 0.03)),
+        Box((1.6, -0.9, 4.6), (0.5, 0.9, 0.3), seeded_texture(rng, "noise", (0.5, 0.35, 0.2), (0.25, 0.15, 0.08), 0.05), -10.0),
+        Box((0.8, -0.25, 1.4), (0.25, 0.25, 0.25), seeded_texture(rng, "noise", (0.3, 0.3, 0.35), (0.7, 0.7, 0.75), 0.02),
             30.0),
-        Cylinder(0.4, 2.6, (-1.6, 0.0), 0.12, _tex(rng, "flat", (0.3, 0.3, 0.3))),  # lamp stand
-        Sphere((-0.3, -0.25, 1.9), 0.25, _tex(rng, "noise", (0.9, 0.3, 0.2), (0.95, 0.9, 0.8), 0.03)),
+        Cylinder(0.4, 2.6, (-1.6, 0.0), 0.12, seeded_texture(rng, "flat", (0.3, 0.3, 0.3))),  # lamp stand
+        Sphere((-0.3, -0.25, 1.9), 0.25, seeded_texture(rng, "noise", (0.9, 0.3, 0.2), (0.95, 0.9, 0.8), 0.03)),
     ]
     return prims, dict(eye=(0.0, -1.3, 0.0), target=(0.0, -0.9, 4.0), fov=58.0, baseline=0.2, sky=None)
 
 
 def _street(rng):
     prims = [
-        _sky(rng, 150.0, 60.0),
-        Plane((0, 0, 0), (0, -1, 0), (1, 0, 0), _tex(rng, "noise", (0.5, 0.5, 0.52), (0.15, 0.15, 0.17), 0.2)),
-        Plane((0, -7.0, 45.0), (0, 0, -1), (1, 0, 0), _tex(rng, "bricks", (0.7, 0.4, 0.3), (0.5, 0.25, 0.2), 0.6),
+        sky_plane(rng, 150.0, 60.0),
+        Plane((0, 0, 0), (0, -1, 0), (1, 0, 0), seeded_texture(rng, "noise", (0.5, 0.5, 0.52), (0.15, 0.15, 0.17), 0.2)),
+        Plane((0, -7.0, 45.0), (0, 0, -1), (1, 0, 0), seeded_texture(rng, "bricks", (0.7, 0.4, 0.3), (0.5, 0.25, 0.2), 0.6),
               (30.0, 7.0)),  # far buildings
-        Plane((-7.0, -5.0, 25.0), (1, 0, 0), (0, 0, 1), _tex(rng, "bricks", (0.75, 0.65, 0.5), (0.5, 0.4, 0.3), 0.5),
+        Plane((-7.0, -5.0, 25.0), (1, 0, 0), (0, 0, 1), seeded_texture(rng, "bricks", (0.75, 0.65, 0.5), (0.5, 0.4, 0.3), 0.5),
               (20.0, 5.0)),  # left facade
-        Plane((8.0, -3.0, 20.0), (-1, 0, 0), (0, 0, -1), _tex(rng, "flat", (0.7, 0.7, 0.68)), (10.0, 3.0)),  # concrete
-        Box((-3.0, -0.75, 12.0), (0.9, 0.75, 2.1), _tex(rng, "noise", (0.75, 0.15, 0.12), (0.3, 0.05, 0.05), 0.08)),
-        Box((2.5, -0.75, 18.0), (0.9, 0.75, 2.1), _tex(rng, "noise", (0.2, 0.3, 0.7), (0.05, 0.1, 0.3), 0.08), 5.0),
-        Cylinder(-5.0, 8.0, (-5.0, 0.0), 0.12, _tex(rng, "flat", (0.35, 0.35, 0.35))),
-        Cylinder(4.5, 11.0, (-5.0, 0.0), 0.12, _tex(rng, "flat", (0.35, 0.35, 0.35))),
-        Sphere((5.5, -0.6, 9.0), 0.6, _tex(rng, "noise", (0.25, 0.5, 0.15), (0.05, 0.2, 0.05), 0.06)),
+        Plane((8.0, -3.0, 20.0), (-1, 0, 0), (0, 0, -1), seeded_texture(rng, "flat", (0.7, 0.7, 0.68)), (10.0, 3.0)),  # concrete
+        Box((-3.0, -0.75, 12.0), (0.9, 0.75, 2.1), seeded_texture(rng, "noise", (0.75, 0.15, 0.12), (0.3, 0.05, 0.05), 0.08)),
+        Box((2.5, -0.75, 18.0), (0.9, 0.75, 2.1), seeded_texture(rng, "noise", (0.2, 0.3, 0.7), (0.05, 0.1, 0.3), 0.08), 5.0),
+        Cylinder(-5.0, 8.0, (-5.0, 0.0), 0.12, seeded_texture(rng, "flat", (0.35, 0.35, 0.35))),
+        Cylinder(4.5, 11.0, (-5.0, 0.0), 0.12, seeded_texture(rng, "flat", (0.35, 0.35, 0.35))),
+        Sphere((5.5, -0.6, 9.0), 0.6, seeded_texture(rng, "noise", (0.25, 0.5, 0.15), (0.05, 0.2, 0.05), 0.06)),
     ]
     return prims, dict(eye=(0.0, -1.65, 0.0), target=(0.0, -1.5, 20.0), fov=80.0, baseline=0.54, sky=150.0)
 
