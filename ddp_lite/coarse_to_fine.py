@@ -14,7 +14,7 @@ from .camera import Camera
 from .config import FitConfig
 from .disparity import DisparityTransform
 from .fit import DepthResult, _check_fit_inputs, _fit_one
-from .nets import make_noise
+from .nets import make_input
 
 __all__ = ["complete_depth_coarse_to_fine"]
 
@@ -105,7 +105,7 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
     h, w = small.shape
     coarse_config = config.replace(iterations=n_coarse, auto_stop=False,
                                    lr_milestones=tuple(m for m in config.lr_milestones if m < n_coarse))
-    coarse_noise = make_noise(config.noise_channels, h, w, seed=config.seed)
+    coarse_noise = make_input(config.net_input, config.noise_channels, h, w, seed=config.seed)
     coarse = _fit_one(
         _downsample_image(rgb, scale) if rgb is not None else None, small,
         _downsample_camera(camera, scale) if camera is not None else None,

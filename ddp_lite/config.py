@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import torch
 
 from .checks import check_bool, check_choice, check_int, check_int_tuple, check_real
-from .nets import DOWNSAMPLINGS, NETS, PADDINGS, UPSAMPLINGS
+from .nets import DOWNSAMPLINGS, NET_INPUTS, NETS, PADDINGS, UPSAMPLINGS
 from .profiles import Profile, get_profile
 from .variants import get_variant
 
@@ -35,7 +35,8 @@ class FitConfig:
     down: str = "stride"  # UNet down-sampling: "stride" (DIP) or "pool" (Ronneberger)
     up: str = "bilinear"  # UNet up-sampling: "bilinear" or "nearest"
     pad: str = "reflect"  # UNet conv padding: "reflect" (DIP) or "zeros"
-    noise_channels: int = 16
+    noise_channels: int = 16  # channels of the fixed network input
+    net_input: str = "noise"  # "noise" (the paper) or "meshgrid" (x, y in the first two channels; nets.make_input)
     lr: float = 5e-5
     schedule: str = "step"  # "step" (lr × lr_gamma at each milestone) or "cosine" (to 0 at the last iteration)
     iterations: int | None = None
@@ -100,11 +101,14 @@ class FitConfig:
         if self.channels is not None:
             check_int_tuple(self.channels, "config.channels", minimum=1, min_length=2 if self.net == "unet" else 1)
         for name, choices in (("down", DOWNSAMPLINGS), ("up", UPSAMPLINGS), ("pad", PADDINGS),
-                              ("schedule", ("step", "cosine")), ("holdout", HOLDOUTS)):
+                              ("schedule", ("step", "cosine")), ("holdout", HOLDOUTS), ("net_input", NET_INPUTS)):
             check_choice(getattr(self, name), f"config.{name}", choices)
         for name, minimum in (("noise_channels", 1), ("ensemble", 1), ("patience", 1), ("plateau_decays", 0),
                               ("eval_every", 1), ("seed", 0), ("callback_every", 0)):
             check_int(getattr(self, name), f"config.{name}", minimum=minimum)
+        if self.net_input == "meshgrid" and self.noise_channels < 2:
+            raise ValueError(f"config.noise_channels must be at least 2 with net_input='meshgrid' (x and y), "
+                             f"got {self.noise_channels}")
         if self.iterations is not None:
             check_int(self.iterations, "config.iterations", minimum=1)
         check_int_tuple(self.lr_milestones, "config.lr_milestones", minimum=1)

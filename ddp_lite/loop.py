@@ -21,7 +21,7 @@ import torch
 from scipy import ndimage
 
 from .config import FitConfig, use_bf16
-from .nets import SKIP_CHANNELS, UNET_CHANNELS, build_net, count_parameters, make_noise
+from .nets import SKIP_CHANNELS, UNET_CHANNELS, build_net, count_parameters, make_input
 from .progress import progress as tqdm
 
 __all__ = ["PlateauStopper", "run", "build", "holdout_mask", "estimate_peak_memory_gb", "check_memory",
@@ -157,7 +157,7 @@ def build(config: FitConfig, out_channels: int, height: int, width: int, device,
         except RuntimeError as error:
             raise ValueError(f"init: its weights do not fit this config's network ({error.args[0].splitlines()[0]})")
     if noise is None:
-        noise = make_noise(config.noise_channels, height, width, seed=config.seed)
+        noise = make_input(config.net_input, config.noise_channels, height, width, seed=config.seed)
     elif tuple(noise.shape) != (1, config.noise_channels, height, width):
         raise ValueError(f"noise must be (1, {config.noise_channels}, {height}, {width}), got {tuple(noise.shape)}")
     return net.to(device), noise.to(device)

@@ -1,6 +1,7 @@
 """The generators: a UNet (the paper's choice) and Deep Image Prior's SkipNet.
 
-Both map a fixed noise tensor (B, 16, H, W) to an output (B, C_out, H, W) in [0, 1] (sigmoid).
+Both map a fixed input tensor (B, 16, H, W) to an output (B, C_out, H, W) in [0, 1] (sigmoid): uniform
+noise, as in the paper, or the pixel coordinates plus noise (``make_input``, DIP's input for large holes).
 Nothing is pretrained: the architecture itself is the prior. Each network pads its input to a
 multiple of its total down-sampling factor (reflection padding) and crops the output back, so
 any image size works.
@@ -11,7 +12,7 @@ import torch
 import torch.nn as nn
 import torch.nn.functional as F
 
-__all__ = ["UNet", "SkipNet", "make_noise", "build_net", "count_parameters"]
+__all__ = ["UNet", "SkipNet", "make_noise", "make_input", "build_net", "count_parameters"]
 
 UNET_CHANNELS = (32, 64, 128, 256, 512)  # the paper's encoder
 SKIP_CHANNELS = (128, 128, 128, 128, 128)  # DIP's inpainting "skip" net
@@ -22,6 +23,36 @@ def make_noise(channels: int, height: int, width: int, seed: int = 0, scale: flo
     """The fixed network input (1, channels, H, W): uniform noise in [0, scale), as DIP uses."""
     generator = torch.Generator().manual_seed(seed)
     return torch.rand(1, channels, height, width, generator=generator) * scale
+
+
+NET_INPUTS = ("noise", "meshgrid")
+
+
+def make_input(kind: str, channels: int, height: int, width: int, seed: int = 0) -> torch.Tensor:
+    """The fixed network input (1, channels, H, W) of a fit.
+
+    - ``"noise"`` (the paper's): :func:`make_noise`, uniform noise in [0, 0.1);
+    - ``"meshgrid"``: channel 0 is the column x / (W − 1) and channel 1 the row y / (H − 1), both in
+      [0, 1] with pixel (0, 0) at the top left, and the other ``channels − 2`` are
+      ``make_noise(channels − 2, ...)``. DIP feeds such a coordinate grid for large holes: the net
+      starts out as a smooth function of position, so a hole far from valid pixels, above all one
+      at the image border, is continued smoothly instead of from the noise under it.
+
+    Example:
+        >>> grid = make_input("meshgrid", 3, 2, 5)
+        >>> grid[0, 0, 0].tolist(), grid[0, 1, :, 0].tolist()
+        ([0.0, 0.25, 0.5, 0.75, 1.0], [0.0, 1.0])
+    """
+    if kind == "noise":
+        return make_noise(channels, height, width, seed=seed)
+    if kind != "meshgrid":
+        raise ValueError(f"kind must be one of {NET_INPUTS}, got {kind!r}")
+    if channels < 2:
+        raise ValueError(f"a meshgrid input needs at least 2 channels, got {channels}")
+    y = torch.linspace(0.0, 1.0, height) if height > 1 else torch.zeros(1)
+    x = torch.linspace(0.0, 1.0, width) if width > 1 else torch.zeros(1)
+    grid = torch.stack(torch.meshgrid(x, y, indexing="xy"))[None]  # (1, 2, H, W): x, then y
+    return torch.cat([grid, make_noise(channels - 2, height, width, seed=seed)], dim=1)
 
 
 PADDINGS = ("reflect", "zeros")

@@ -77,6 +77,7 @@ class Profile:
     smoothness: float = 0.0  # FitConfig.smoothness: curvature penalty in the holes (0 = the paper's losses only)
     smoothness_edge: float = 10.0  # FitConfig.smoothness_edge
     flatness: float = 0.0  # FitConfig.flatness: first-order smoothness in the holes (0 = off)
+    net_input: str = "noise"  # FitConfig.net_input: the fixed network input ("noise" or "meshgrid")
     bf16: bool | None = False  # FitConfig.bf16 (None: bfloat16 where the hardware computes it natively)
     ensemble: int = 1  # FitConfig.ensemble: the mean disparity of this many seeds' fits
 

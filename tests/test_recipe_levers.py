@@ -244,3 +244,30 @@ def test_holdout_blobs_are_patches_not_scattered_pixels():
 def test_bad_holdout_names_the_argument():
     with pytest.raises(ValueError, match="config.holdout"):
         FitConfig(holdout="rings").validate()
+
+
+def test_meshgrid_input_is_the_pixel_coordinates_then_seeded_noise():
+    from ddp_lite.nets import make_input
+    H, W = 5, 9
+    a, b = make_input("meshgrid", 6, H, W, seed=0), make_input("meshgrid", 6, H, W, seed=1)
+    assert a.shape == (1, 6, H, W)
+    rows, cols = np.mgrid[0:H, 0:W]
+    assert np.allclose(a[0, 0].numpy(), cols / (W - 1)) and np.allclose(a[0, 1].numpy(), rows / (H - 1))
+    assert torch.equal(a[:, :2], b[:, :2])  # the grid does not depend on the seed ...
+    assert not torch.equal(a[:, 2:], b[:, 2:])  # ... the noise channels do
+    assert 0.0 <= float(a[:, 2:].min()) and float(a[:, 2:].max()) < 0.1  # DIP's noise range
+    assert make_input("meshgrid", 2, 1, 1).tolist() == [[[[0.0]], [[0.0]]]]  # one pixel: no division by zero
+
+
+def test_meshgrid_input_runs_a_fit_and_bad_values_name_the_argument():
+    from ddp_lite.nets import make_input
+    depth = tilted_plane(12, 16)
+    depth[4:8, 5:11] = np.nan
+    result = complete_depth(None, depth, variant="d", config=FitConfig(**TINY, iterations=3, net_input="meshgrid"))
+    assert np.isfinite(result.depth).all()
+    with pytest.raises(ValueError, match="net_input"):
+        FitConfig(net_input="grid").validate()
+    with pytest.raises(ValueError, match="noise_channels.*meshgrid"):
+        FitConfig(net_input="meshgrid", noise_channels=1).validate()
+    with pytest.raises(ValueError, match="at least 2 channels"):
+        make_input("meshgrid", 1, 4, 4)
