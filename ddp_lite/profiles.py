@@ -78,6 +78,7 @@ class Profile:
     smoothness_edge: float = 10.0  # FitConfig.smoothness_edge
     flatness: float = 0.0  # FitConfig.flatness: first-order smoothness in the holes (0 = off)
     net_input: str = "noise"  # FitConfig.net_input: the fixed network input ("noise" or "meshgrid")
+    noise_channels: int = 16  # FitConfig.noise_channels: its channel count
     bf16: bool | None = False  # FitConfig.bf16 (None: bfloat16 where the hardware computes it natively)
     ensemble: int = 1  # FitConfig.ensemble: the mean disparity of this many seeds' fits
 
@@ -97,6 +98,8 @@ class Profile:
                 f"lr {self.lr:g}, auto-stop {'on' if self.auto_stop else 'off'}"
                 + (f", hole curvature weight {self.smoothness:g}" if self.smoothness else "")
                 + (f", hole flatness weight {self.flatness:g}" if self.flatness else "")
+                + (", input: the pixel coordinates" + (" + noise" if self.noise_channels > 2 else "")
+                   if self.net_input == "meshgrid" else "")
                 + (f", mean of {self.ensemble} fits" if self.ensemble > 1 else ""))
 
 
@@ -108,7 +111,7 @@ PROFILES = {
     "class": Profile("class", size=(96, 128), channels=(16, 32, 64, 128, 256), skip_channels=(128,) * 5,
                      iterations=600, iterations_depth_only=600, lr=1e-2, lr_milestones=(),
                      lr_gamma=0.3, auto_stop=True, patience=50, plateau_decays=1, eval_every=10, n_views=6, seeds=(0, 1),
-                     image_iterations=300, smoothness=1.0, flatness=0.6, bf16=None),
+                     image_iterations=300, smoothness=1.0, flatness=0.6, net_input="meshgrid", noise_channels=2, bf16=None),
     "paper": Profile("paper", size=(512, 960), channels=(32, 64, 128, 256, 512), skip_channels=(128,) * 5,
                      iterations=16000, iterations_depth_only=6000, lr=5e-5, lr_milestones=(12000, 15000),
                      lr_gamma=0.01, auto_stop=False, patience=2000, plateau_decays=0, eval_every=100, n_views=8,
