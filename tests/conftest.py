@@ -6,7 +6,8 @@ import torch
 
 matplotlib.use("Agg")
 os.environ.setdefault("DDP_PROFILE", "ci")
-torch.set_num_threads(max(1, min(2, os.cpu_count() or 1)))
+# under pytest-xdist (`make test`) each worker gets one thread: the workers share the cores
+torch.set_num_threads(1 if os.environ.get("PYTEST_XDIST_WORKER") else max(1, min(2, os.cpu_count() or 1)))
 
 
 # What several test files share; they import it with ``from conftest import ...`` (tests/ is on sys.path).
