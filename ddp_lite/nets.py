@@ -1,7 +1,8 @@
 """The generators: a UNet (the paper's choice) and Deep Image Prior's SkipNet.
 
-Both map a fixed input tensor (B, 16, H, W) to an output (B, C_out, H, W) in [0, 1] (sigmoid): uniform
-noise, as in the paper, or the pixel coordinates plus noise (``make_input``, DIP's input for large holes).
+Both map a fixed input tensor (B, C_in, H, W) to an output (B, C_out, H, W) in [0, 1] (sigmoid):
+16 channels of uniform noise, as in the paper, or the pixel coordinates, alone or followed by
+noise channels (``make_input``; Deep Image Prior's input for large holes).
 Nothing is pretrained: the architecture itself is the prior. Each network pads its input to a
 multiple of its total down-sampling factor (reflection padding) and crops the output back, so
 any image size works.
