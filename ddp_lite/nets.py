@@ -50,8 +50,7 @@ def make_input(kind: str, channels: int, height: int, width: int, seed: int = 0)
         raise ValueError(f"kind must be one of {NET_INPUTS}, got {kind!r}")
     if channels < 2:
         raise ValueError(f"a meshgrid input needs at least 2 channels, got {channels}")
-    y = torch.linspace(0.0, 1.0, height) if height > 1 else torch.zeros(1)
-    x = torch.linspace(0.0, 1.0, width) if width > 1 else torch.zeros(1)
+    x, y = torch.linspace(0.0, 1.0, width), torch.linspace(0.0, 1.0, height)  # one pixel: [0.]
     grid = torch.stack(torch.meshgrid(x, y, indexing="xy"))[None]  # (1, 2, H, W): x, then y
     return torch.cat([grid, make_noise(channels - 2, height, width, seed=seed)], dim=1)
 
