@@ -61,6 +61,10 @@ RECIPES = {
     "edge1000": dict(smoothness_edge=1000.0),
     "warp-w10": dict(gammas=(0.88, 0.02), **EDGE10),  # rgbd+warp with the warp term at 0.10 instead of 0.02
     "warp-w25": dict(gammas=(0.73, 0.02), **EDGE10),  # ... at 0.25
+    "e100-flat0.3": dict(flatness=0.3),  # the sixth pass's class with other hole-term weights
+    "e100-flat1": dict(flatness=1.0),
+    "e100-smooth0.5": dict(smoothness=0.5),
+    "e100-smooth2": dict(smoothness=2.0),
     "paper-losses": dict(smoothness=0.0, flatness=0.0, bf16=False, channels=(32, 64, 128, 256, 512), **NOISE),  # class before issue 12
     "paper-net": dict(channels=(32, 64, 128, 256, 512), flatness=0.0, **NOISE),  # class before the third pass (one 32-512 fit)
     "curvature-ens3": dict(flatness=0.0, ensemble=3, **NOISE),  # class before the fourth pass: the mean of three, no flatness
