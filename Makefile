@@ -31,14 +31,18 @@ $(PY):
 	$(PYTHON) -m venv $(VENV)
 
 # torch goes first and pinned: anything that pulls a newer torch downloads a multi-GB CUDA build.
-# --no-compile: pip would byte-compile every module of the 2.6 GB stack, about half of the install's
-# time; Python compiles the modules a run imports on first use and caches them in the venv.
+# Byte-compiling the 2.6 GB stack is about half of the install; pip does it on one core, so it is
+# skipped there and done on all cores afterwards. It must be done: with PYTHONDONTWRITEBYTECODE set
+# (as on our machines) nothing imported would ever be cached, and every test process and notebook
+# kernel would compile torch again. A few files written for newer Pythons do not compile; pip
+# skips them silently, hence the `|| true`.
 PIP := $(PY) -m pip install --disable-pip-version-check -q --no-compile
 
 $(STAMP): $(PY) environment.txt pyproject.toml
 	$(PIP) "$$(grep -E '^torch==' environment.txt)"
 	$(PIP) -r environment.txt
 	$(PIP) --no-deps -e .
+	$(PY) -m compileall -qq -j 0 "$$($(PY) -c 'import sysconfig; print(sysconfig.get_path("purelib"))')" || true
 	touch $(STAMP)
 
 lab: $(STAMP)
