@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import torch
 
 from .checks import check_bool, check_choice, check_int, check_int_tuple, check_real
+from .losses import EDGE_GUIDES
 from .nets import DOWNSAMPLINGS, NET_INPUTS, NETS, PADDINGS, UPSAMPLINGS
 from .profiles import Profile, get_profile
 from .variants import get_variant
@@ -50,7 +51,8 @@ class FitConfig:
     average_outputs: float = 0.0  # DIP output averaging: EMA weight (0.99 in DIP), 0 = off
     ensemble: int = 1  # fits with seeds seed, seed+1, ...; their disparities are averaged
     smoothness: float = 0.0  # weight of an edge-aware second-order smoothness of disparity in the holes (0: the paper)
-    smoothness_edge: float = 10.0  # how strongly colour edges relax it: exp(-edge · |∇grey|)
+    smoothness_edge: float = 10.0  # how strongly colour edges relax both hole terms: exp(-edge · |∇I|)
+    edge_guide: str = "grey"  # |∇I| of the grey image, or "rgb": the largest over the three channels
     flatness: float = 0.0  # weight of an edge-aware first-order smoothness in the holes (0: off)
     disparity_margin: float = 1.25  # transform=None: d_min / margin … d_max × margin around the valid depth
     auto_stop: bool = False
@@ -101,7 +103,8 @@ class FitConfig:
         if self.channels is not None:
             check_int_tuple(self.channels, "config.channels", minimum=1, min_length=2 if self.net == "unet" else 1)
         for name, choices in (("down", DOWNSAMPLINGS), ("up", UPSAMPLINGS), ("pad", PADDINGS),
-                              ("schedule", ("step", "cosine")), ("holdout", HOLDOUTS), ("net_input", NET_INPUTS)):
+                              ("schedule", ("step", "cosine")), ("holdout", HOLDOUTS), ("net_input", NET_INPUTS),
+                              ("edge_guide", EDGE_GUIDES)):
             check_choice(getattr(self, name), f"config.{name}", choices)
         for name, minimum in (("noise_channels", 1), ("ensemble", 1), ("patience", 1), ("plateau_decays", 0),
                               ("eval_every", 1), ("seed", 0), ("callback_every", 0)):

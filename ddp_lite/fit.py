@@ -254,7 +254,8 @@ def _fit_one(rgb, depth, camera, neighbors, variant, config, *, gt_depth=None, t
     if config.smoothness > 0 or config.flatness > 0:
         guide = rgb_t if rgb_t is not None else torch.zeros(1, 3, H, W, device=device)
         # the unconstrained pixels: holes, and the held-out pixels, which must behave like holes
-        smooth_weights = smoothness_weights(guide, to_tensor(~(valid & ~heldout), device).bool(), config.smoothness_edge)
+        smooth_weights = smoothness_weights(guide, to_tensor(~(valid & ~heldout), device).bool(), config.smoothness_edge,
+                                            config.edge_guide)
 
     def loss_fn(output):
         disparity = output[:, :1]  # (1, 1, H, W)

@@ -33,7 +33,7 @@ import torch
 import torch.nn.functional as F
 
 __all__ = ["ssim", "masked_l1", "disparity_loss", "rgb_loss", "warp_loss", "smoothness_weights", "smoothness_loss", "flatness_loss",
-           "ConstantTarget"]
+           "ConstantTarget", "EDGE_GUIDES"]
 
 C1_FACTOR, C2_FACTOR = 0.01, 0.03  # k1, k2 of Wang et al. 2004
 
@@ -196,18 +196,35 @@ def warp_loss(reference: torch.Tensor, warped: list, valid: list, lambda_w: floa
     return torch.stack(losses).mean()
 
 
-def smoothness_weights(image, region, edge: float = 10.0) -> torch.Tensor:
-    """Per-pixel weights (1, 2, H, W) of :func:`smoothness_loss`: ``exp(-edge · |∇I|)`` of the grey
-    image (B, 3, H, W) along x (channel 0) and y (channel 1), zero outside ``region`` (1, 1, H, W)
-    bool and on the one-pixel border where a second difference does not exist. Constant during a
-    fit, so it is computed once."""
-    grey = image.mean(dim=1, keepdim=True)  # (B, 1, H, W)
-    gx = torch.zeros_like(grey)
-    gy = torch.zeros_like(grey)
+EDGE_GUIDES = ("grey", "rgb")
+
+
+def smoothness_weights(image, region, edge: float = 10.0, guide: str = "grey") -> torch.Tensor:
+    """Per-pixel weights (1, 2, H, W) of :func:`smoothness_loss` and :func:`flatness_loss`:
+    ``exp(-edge · g)`` along x (channel 0) and y (channel 1), zero outside ``region`` (1, 1, H, W)
+    bool and on the one-pixel border where a second difference does not exist. ``g`` is the
+    colour change across the pixel (half its central difference) of ``image`` (B, 3, H, W) in
+    [0, 1]: of the grey image (``guide="grey"``), or the largest over the three channels
+    (``"rgb"``), which also sees edges between colours of equal brightness. Constant during a
+    fit, so it is computed once.
+
+    Example:
+        >>> image = torch.zeros(1, 3, 1, 4); image[0, 0, 0, 2:] = 1.0  # black | red: grey steps by 1/3
+        >>> region = torch.ones(1, 1, 1, 4, dtype=torch.bool)
+        >>> [round(v, 3) for v in smoothness_weights(image, region, 3.0, "grey")[0, 0, 0].tolist()]
+        [0.0, 0.607, 0.607, 0.0]
+        >>> [round(v, 3) for v in smoothness_weights(image, region, 3.0, "rgb")[0, 0, 0].tolist()]
+        [0.0, 0.223, 0.223, 0.0]
+    """
+    if guide not in EDGE_GUIDES:
+        raise ValueError(f"guide must be one of {EDGE_GUIDES}, got {guide!r}")
+    source = image.mean(dim=1, keepdim=True) if guide == "grey" else image  # (B, 1 or 3, H, W)
+    gx = torch.zeros_like(source[:, :1])  # (B, 1, H, W)
+    gy = torch.zeros_like(source[:, :1])
     # central differences: the colour change across the pixel whose curvature is penalised
-    gx[..., 1:-1] = (grey[..., 2:] - grey[..., :-2]).abs() / 2
-    gy[..., 1:-1, :] = (grey[..., 2:, :] - grey[..., :-2, :]).abs() / 2
-    weights = torch.cat([torch.exp(-edge * gx), torch.exp(-edge * gy)], dim=1) * region.to(grey.dtype)
+    gx[..., 1:-1] = ((source[..., 2:] - source[..., :-2]).abs() / 2).amax(dim=1, keepdim=True)
+    gy[..., 1:-1, :] = ((source[..., 2:, :] - source[..., :-2, :]).abs() / 2).amax(dim=1, keepdim=True)
+    weights = torch.cat([torch.exp(-edge * gx), torch.exp(-edge * gy)], dim=1) * region.to(source.dtype)
     weights[:, 0, :, [0, -1]] = 0.0
     weights[:, 1, [0, -1], :] = 0.0
     return weights

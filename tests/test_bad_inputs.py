@@ -116,7 +116,7 @@ CONFIG_BAD = {
     "seed": [-1, 1.5, "0"], "callback_every": [-1, 0.5],
     "auto_stop": ["yes", 1], "bf16": ["no", 0], "channels_last": [1], "progress": ["false"],
     "net": ["resnet", 3, None], "down": ["avg"], "up": ["cubic"], "pad": ["circular"],
-    "schedule": ["linear", None], "net_input": ["grid", None, 2],
+    "schedule": ["linear", None], "net_input": ["grid", None, 2], "edge_guide": ["colour", None, 3],
     "device": ["tpu", "cuda", "cuda:7", 3, "gpu"],
     "max_memory_gb": [0.0, -1.0, float("nan"), "8"],
 }

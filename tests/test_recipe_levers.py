@@ -159,6 +159,23 @@ def test_smoothness_weights_relax_at_colour_edges_and_vanish_outside_the_region(
     assert torch.all(w[0, 0, :, [0, -1]] == 0) and torch.all(w[0, 1, [0, -1], :] == 0)  # no second difference
 
 
+def test_rgb_edge_guide_sees_an_edge_between_colours_of_equal_brightness_that_grey_misses():
+    from ddp_lite.losses import smoothness_weights
+    image = torch.zeros(1, 3, 5, 8)
+    image[0, 0, :, :4] = 0.9  # red left half, green right half: grey 0.3 on both sides
+    image[0, 1, :, 4:] = 0.9
+    region = torch.ones(1, 1, 5, 8, dtype=torch.bool)
+    grey = smoothness_weights(image, region, edge=10.0, guide="grey")
+    rgb = smoothness_weights(image, region, edge=10.0, guide="rgb")
+    assert torch.allclose(grey[0, 0, :, 1:-1], torch.ones(5, 6))  # no grey edge anywhere
+    # columns 3 and 4 straddle the edge: each channel changes by 0.9, half of it per pixel
+    assert torch.allclose(rgb[0, 0, :, 3:5], torch.full((5, 2), math.exp(-10.0 * 0.45)))
+    assert torch.allclose(rgb[0, 0, :, [1, 2, 5, 6]], torch.ones(5, 4))
+    assert torch.allclose(rgb[0, 1, 1:-1], torch.ones(3, 8))  # nothing changes along y
+    with pytest.raises(ValueError, match="guide"):
+        smoothness_weights(image, region, guide="colour")
+
+
 def test_flatness_is_zero_on_a_constant_and_hand_computed_on_a_ramp():
     from ddp_lite.losses import flatness_loss, smoothness_weights
     H, W = 12, 16
