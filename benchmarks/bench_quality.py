@@ -49,22 +49,24 @@ HOLES = ("sgm-dense", "sgm-sparse", "blobs")
 QUICK = ("desk/sgm-dense", "house/blobs", "fixture/sgm-dense")
 
 # name → FitConfig overrides on top of the profile's config. The recipes of earlier passes pin what
-# `class` has changed since (the colour-edge strength 10: EDGE10; the noise input and edge 10: NOISE)
-# so that they still mean what their recorded rows ran.
-EDGE10 = dict(smoothness_edge=10.0)
+# `class` has changed since (colour edges on grey: GREY; and at strength 10: EDGE10; the noise input
+# too: NOISE) so that they still mean what their recorded rows ran.
+GREY = dict(edge_guide="grey")
+EDGE10 = dict(smoothness_edge=10.0, **GREY)
 NOISE = dict(net_input="noise", noise_channels=16, **EDGE10)
 RECIPES = {
     "default": {},
     "edge10": EDGE10,  # class before the sixth pass
-    "edge30": dict(smoothness_edge=30.0),
-    "edge300": dict(smoothness_edge=300.0),
-    "edge1000": dict(smoothness_edge=1000.0),
+    "edge30": dict(smoothness_edge=30.0, **GREY),
+    "e100-grey": GREY,  # edge 100 on the grey image
+    "edge300": dict(smoothness_edge=300.0, **GREY),
+    "edge1000": dict(smoothness_edge=1000.0, **GREY),
     "warp-w10": dict(gammas=(0.88, 0.02), **EDGE10),  # rgbd+warp with the warp term at 0.10 instead of 0.02
     "warp-w25": dict(gammas=(0.73, 0.02), **EDGE10),  # ... at 0.25
-    "e100-flat0.3": dict(flatness=0.3),  # the sixth pass's class with other hole-term weights
-    "e100-flat1": dict(flatness=1.0),
-    "e100-smooth0.5": dict(smoothness=0.5),
-    "e100-smooth2": dict(smoothness=2.0),
+    "e100-flat0.3": dict(flatness=0.3, **GREY),  # edge 100 on grey with other hole-term weights
+    "e100-flat1": dict(flatness=1.0, **GREY),
+    "e100-smooth0.5": dict(smoothness=0.5, **GREY),
+    "e100-smooth2": dict(smoothness=2.0, **GREY),
     "paper-losses": dict(smoothness=0.0, flatness=0.0, bf16=False, channels=(32, 64, 128, 256, 512), **NOISE),  # class before issue 12
     "paper-net": dict(channels=(32, 64, 128, 256, 512), flatness=0.0, **NOISE),  # class before the third pass (one 32-512 fit)
     "curvature-ens3": dict(flatness=0.0, ensemble=3, **NOISE),  # class before the fourth pass: the mean of three, no flatness
