@@ -49,8 +49,8 @@ HOLES = ("sgm-dense", "sgm-sparse", "blobs")
 QUICK = ("desk/sgm-dense", "house/blobs", "fixture/sgm-dense")
 
 # name → FitConfig overrides on top of the profile's config. The recipes of earlier passes pin what
-# `class` has changed since (colour edges on grey: GREY; and at strength 10: EDGE10; the noise input
-# too: NOISE) so that they still mean what their recorded rows ran.
+# they ran where `class` has changed since, or might (colour edges on grey: GREY; at strength 10:
+# EDGE10; the noise input too: NOISE).
 GREY = dict(edge_guide="grey")
 EDGE10 = dict(smoothness_edge=10.0, **GREY)
 NOISE = dict(net_input="noise", noise_channels=16, **EDGE10)
@@ -58,7 +58,7 @@ RECIPES = {
     "default": {},
     "edge10": EDGE10,  # class before the sixth pass
     "edge30": dict(smoothness_edge=30.0, **GREY),
-    "e100-grey": GREY,  # edge 100 on the grey image
+    "e100-rgb": dict(edge_guide="rgb"),  # colour edges measured on R, G, B (tried, not kept)
     "edge300": dict(smoothness_edge=300.0, **GREY),
     "edge1000": dict(smoothness_edge=1000.0, **GREY),
     "warp-w10": dict(gammas=(0.88, 0.02), **EDGE10),  # rgbd+warp with the warp term at 0.10 instead of 0.02
