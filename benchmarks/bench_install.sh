@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# The install's time, two ways, in fresh venvs: pip byte-compiling as it installs (one core) vs
-# pip --no-compile then `compileall -j 0` (all cores; what the Makefile does). Prints seconds and
-# the .pyc count of each. Alternates the two ROUNDS times; run it with nothing else on the machine.
+# The install's time, two ways, in fresh venvs: the Makefile's own `make install` (pip --no-compile,
+# then `compileall -j 0` on all cores) vs pip byte-compiling as it installs (one core; the install
+# before issue 13's fourth session). Prints seconds and the .pyc count of each. Alternates the two
+# ROUNDS times; run it with nothing else on the machine.
 #     bash benchmarks/bench_install.sh [ROUNDS]
 set -uo pipefail
 cd "$(dirname "$0")/.."
@@ -9,16 +10,16 @@ rounds=${1:-2}
 venv=$(mktemp -d)/venv
 for ((i = 0; i < rounds; i++)); do
   for mode in compile-after pip-compiles; do
-    rm -rf "$venv" && python3 -m venv "$venv"
+    rm -rf "$venv"
     py="$venv/bin/python"
     start=$(date +%s.%N)
     if [ "$mode" = pip-compiles ]; then
+      python3 -m venv "$venv"
       "$py" -m pip install --disable-pip-version-check -q "$(grep -E '^torch==' environment.txt)" 2>/dev/null
       "$py" -m pip install --disable-pip-version-check -q -r environment.txt 2>/dev/null
+      "$py" -m pip install --disable-pip-version-check -q --no-deps -e . 2>/dev/null
     else
-      "$py" -m pip install --disable-pip-version-check -q --no-compile "$(grep -E '^torch==' environment.txt)" 2>/dev/null
-      "$py" -m pip install --disable-pip-version-check -q --no-compile -r environment.txt 2>/dev/null
-      "$py" -m compileall -qq -j 0 "$("$py" -c 'import sysconfig; print(sysconfig.get_path("purelib"))')"
+      make -s install VENV="$venv" > /dev/null 2>&1
     fi
     end=$(date +%s.%N)
     printf '%-14s %6.1f s  %d .pyc  load %s\n' "$mode" "$(echo "$end - $start" | bc)" \
