@@ -49,16 +49,21 @@ HOLES = ("sgm-dense", "sgm-sparse", "blobs")
 QUICK = ("desk/sgm-dense", "house/blobs", "fixture/sgm-dense")
 
 # name → FitConfig overrides on top of the profile's config. The recipes of earlier passes pin what
-# they ran where `class` has changed since, or might (colour edges on grey: GREY; at strength 10:
-# EDGE10; the noise input too: NOISE).
-GREY = dict(edge_guide="grey")
+# they ran where `class` has changed since, or might (no colour image in the net's input: NO_IMAGE;
+# colour edges on grey: GREY; at strength 10: EDGE10; the noise input too: NOISE).
+NO_IMAGE = dict(image_input=0.0)
+GREY = dict(edge_guide="grey", **NO_IMAGE)
 EDGE10 = dict(smoothness_edge=10.0, **GREY)
 NOISE = dict(net_input="noise", noise_channels=16, **EDGE10)
 RECIPES = {
     "default": {},
+    "edge100": GREY,  # class before the seventh pass: the coordinates alone as input
+    "image-sharp": dict(image_input=1.0, image_blur=0.0),  # the seventh pass: the colour image unblurred ...
+    "image-blur2": dict(image_input=1.0, image_blur=2.0),  # ... blurred more
+    "image0.3": dict(image_input=0.3, image_blur=1.0),  # ... at a third of the coordinates' scale
     "edge10": EDGE10,  # class before the sixth pass
     "edge30": dict(smoothness_edge=30.0, **GREY),
-    "e100-rgb": dict(edge_guide="rgb"),  # colour edges measured on R, G, B (tried, not kept)
+    "e100-rgb": dict(edge_guide="rgb", **NO_IMAGE),  # colour edges measured on R, G, B (tried, not kept)
     "edge300": dict(smoothness_edge=300.0, **GREY),
     "edge1000": dict(smoothness_edge=1000.0, **GREY),
     "warp-w10": dict(gammas=(0.88, 0.02), **EDGE10),  # rgbd+warp with the warp term at 0.10 instead of 0.02

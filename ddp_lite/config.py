@@ -38,6 +38,8 @@ class FitConfig:
     pad: str = "reflect"  # UNet conv padding: "reflect" (DIP) or "zeros"
     noise_channels: int = 16  # channels of the fixed network input
     net_input: str = "noise"  # "noise" (the paper) or "meshgrid" (x, y in the first two channels; nets.make_input)
+    image_input: float = 0.0  # > 0: the colour image × this joins the net input (variants with colour; nets.image_channels)
+    image_blur: float = 1.0  # σ in px of the Gaussian blur on that image (0: none)
     lr: float = 5e-5
     schedule: str = "step"  # "step" (lr × lr_gamma at each milestone) or "cosine" (to 0 at the last iteration)
     iterations: int | None = None
@@ -120,7 +122,8 @@ class FitConfig:
                 ("lambda_z", 0.0, 1.0, False, False), ("lambda_i", 0.0, 1.0, False, False),
                 ("lambda_w", 0.0, 1.0, False, False), ("reg_noise_std", 0.0, None, False, False),
                 ("average_outputs", 0.0, 1.0, False, True), ("smoothness", 0.0, None, False, False),
-                ("flatness", 0.0, None, False, False),
+                ("flatness", 0.0, None, False, False), ("image_input", 0.0, None, False, False),
+                ("image_blur", 0.0, None, False, False),
                 ("smoothness_edge", 0.0, None, False, False), ("disparity_margin", 1.0, None, False, False),
                 ("holdout_fraction", 0.0, 0.5, True, True)):
             check_real(getattr(self, name), f"config.{name}", low, high, low_open, high_open)

@@ -29,6 +29,7 @@ from .loop import (PlateauStopper, check_finite_output, check_memory, estimate_p
                    to_tensor)
 from .losses import (ConstantTarget, disparity_loss, flatness_loss, rgb_loss, smoothness_loss, smoothness_weights,
                      warp_loss)
+from .nets import image_channels
 from .variants import VARIANTS, get_variant
 from .warp import Warper
 
@@ -308,8 +309,10 @@ def _fit_one(rgb, depth, camera, neighbors, variant, config, *, gt_depth=None, t
     if init is not None and not isinstance(init, DepthResult):
         raise TypeError(f"init must be a DepthResult, got {type(init).__name__}")
     check_memory(config, spec.out_channels, H, W, len(warpers), device)
+    # the view's colours as input channels, for the variants that see them (rgb_t is None otherwise)
+    image = image_channels(rgb_t, config.image_input, config.image_blur) if config.image_input > 0 and rgb_t is not None else None
     net, noise = loop.build(config, spec.out_channels, H, W, device, init.state if init is not None else None,
-                        noise)
+                            noise, image)
     start = time.perf_counter()
     output, history, ran, best = loop.run(net, noise, loss_fn, config, iterations, heldout_error, evaluate,
                                           user_callback, description=f"DDP {variant}")

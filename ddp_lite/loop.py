@@ -146,11 +146,15 @@ def run(net, noise, loss_fn, config: FitConfig, iterations: int, heldout_error=N
 _INIT_LOCK = threading.Lock()
 
 
-def build(config: FitConfig, out_channels: int, height: int, width: int, device, init_state=None, noise=None):
+def build(config: FitConfig, out_channels: int, height: int, width: int, device, init_state=None, noise=None,
+          image=None):
+    """The net and its fixed input (1, C, H, W): ``noise`` (made from the config when None), followed
+    by ``image`` (1, 3, H, W) when given (``nets.image_channels``)."""
+    in_channels = config.noise_channels + (0 if image is None else image.shape[1])
     with _INIT_LOCK, torch.random.fork_rng(devices=[]):  # deterministic init without touching the caller's RNG
         torch.manual_seed(config.seed)
         options = dict(down=config.down, up=config.up, pad=config.pad) if config.net == "unet" else {}
-        net = build_net(config.net, config.noise_channels, out_channels, config.channels, **options)
+        net = build_net(config.net, in_channels, out_channels, config.channels, **options)
     if init_state is not None:
         try:
             net.load_state_dict(init_state)
@@ -160,6 +164,8 @@ def build(config: FitConfig, out_channels: int, height: int, width: int, device,
         noise = make_input(config.net_input, config.noise_channels, height, width, seed=config.seed)
     elif tuple(noise.shape) != (1, config.noise_channels, height, width):
         raise ValueError(f"noise must be (1, {config.noise_channels}, {height}, {width}), got {tuple(noise.shape)}")
+    if image is not None:
+        noise = torch.cat([noise.to(device), image.to(device)], dim=1)  # (1, noise_channels + 3, H, W)
     return net.to(device), noise.to(device)
 
 
@@ -182,9 +188,10 @@ def estimate_peak_memory_gb(config: FitConfig, out_channels: int, height: int, w
     factor = 2 ** levels
     pixels = (-(-height // factor) * factor) * (-(-width // factor) * factor)
     first = 0 if config.net == "unet" else 1  # SkipNet's widest level already runs at half size
-    units = config.noise_channels + sum(c / 4 ** (k + first) for k, c in enumerate(channels))
+    in_channels = config.noise_channels + (3 if config.image_input > 0 else 0)
+    units = in_channels + sum(c / 4 ** (k + first) for k, c in enumerate(channels))
     with torch.device("meta"):
-        parameters = count_parameters(build_net(config.net, config.noise_channels, out_channels, config.channels))
+        parameters = count_parameters(build_net(config.net, in_channels, out_channels, config.channels))
     activations = 4.0 * pixels * (FLOATS_PER_UNIT * units + FLOATS_PER_NEIGHBOR_PIXEL * n_neighbors)
     return MEMORY_BASE_GB + (activations + BYTES_PER_PARAMETER * parameters) / 2 ** 30
 

@@ -2,7 +2,8 @@
 
 Both map a fixed input tensor (B, C_in, H, W) to an output (B, C_out, H, W) in [0, 1] (sigmoid):
 16 channels of uniform noise, as in the paper, or the pixel coordinates, alone or followed by
-noise channels (``make_input``; Deep Image Prior's input for large holes).
+noise channels (``make_input``; Deep Image Prior's input for large holes); optionally followed by
+the (blurred) colour image of the view (``image_channels``).
 Nothing is pretrained: the architecture itself is the prior. Each network pads its input to a
 multiple of its total down-sampling factor (reflection padding) and crops the output back, so
 any image size works.
@@ -13,7 +14,7 @@ import torch
 import torch.nn as nn
 import torch.nn.functional as F
 
-__all__ = ["UNet", "SkipNet", "make_noise", "make_input", "build_net", "count_parameters"]
+__all__ = ["UNet", "SkipNet", "make_noise", "make_input", "image_channels", "build_net", "count_parameters"]
 
 UNET_CHANNELS = (32, 64, 128, 256, 512)  # the paper's encoder
 SKIP_CHANNELS = (128, 128, 128, 128, 128)  # DIP's inpainting "skip" net
@@ -53,6 +54,33 @@ def make_input(kind: str, channels: int, height: int, width: int, seed: int = 0)
     x, y = torch.linspace(0.0, 1.0, width), torch.linspace(0.0, 1.0, height)  # one pixel: [0.]
     grid = torch.stack(torch.meshgrid(x, y, indexing="xy"))[None]  # (1, 2, H, W): x, then y
     return torch.cat([grid, make_noise(channels - 2, height, width, seed=seed)], dim=1)
+
+
+def image_channels(image: torch.Tensor, scale: float = 1.0, blur: float = 1.0) -> torch.Tensor:
+    """The colour image as extra input channels: ``scale ×`` ``image`` (1, 3, H, W) in [0, 1],
+    Gaussian-blurred with σ = ``blur`` px (kernel radius round(3σ); the border pixel repeated;
+    ``blur=0``: not blurred). Same shape as ``image``.
+
+    With the view's colours in its input the net can put depth edges exactly where the colour
+    edges are, which a function of the coordinates alone draws blurred. The blur keeps fine
+    texture (grass, bark) out: inside a hole, whatever the input varies with, the output can too.
+
+    Example:
+        >>> step = torch.zeros(1, 3, 1, 6); step[..., 3:] = 1.0  # a colour edge between pixels 2 and 3
+        >>> [round(v, 3) for v in image_channels(step, 1.0, 1.0)[0, 0, 0].tolist()]
+        [0.004, 0.058, 0.3, 0.7, 0.942, 0.996]
+    """
+    if blur > 0:
+        radius = int(3 * blur + 0.5)
+        offsets = torch.arange(-radius, radius + 1, dtype=torch.float64)
+        kernel = torch.exp(-offsets ** 2 / (2 * blur ** 2))
+        kernel = (kernel / kernel.sum()).to(image)  # (2r + 1,)
+        C, k = image.shape[1], kernel.numel()
+        image = F.conv2d(F.pad(image, (radius, radius, 0, 0), mode="replicate"), kernel.reshape(1, 1, 1, k).expand(C, 1, 1, k),
+                         groups=C)
+        image = F.conv2d(F.pad(image, (0, 0, radius, radius), mode="replicate"), kernel.reshape(1, 1, k, 1).expand(C, 1, k, 1),
+                         groups=C)
+    return scale * image
 
 
 PADDINGS = ("reflect", "zeros")

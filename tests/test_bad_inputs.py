@@ -110,6 +110,7 @@ CONFIG_BAD = {
     "smoothness": [-1.0, float("inf"), float("nan")],
     "smoothness_edge": [-1.0, float("inf")],
     "flatness": [-0.5, float("inf"), float("nan")],
+    "image_input": [-1.0, float("nan"), "1"], "image_blur": [-0.5, float("inf")],
     "disparity_margin": [0.5, float("inf"), float("nan")],
     "holdout_fraction": [0.0, 0.5, float("nan")],
     "patience": [0, 2.5], "plateau_decays": [-1, 1.5], "eval_every": [0, True],

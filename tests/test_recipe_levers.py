@@ -288,3 +288,45 @@ def test_meshgrid_input_runs_a_fit_and_bad_values_name_the_argument():
         FitConfig(net_input="meshgrid", noise_channels=1).validate()
     with pytest.raises(ValueError, match="at least 2 channels"):
         make_input("meshgrid", 1, 4, 4)
+
+
+def test_image_channels_are_the_image_blurred_like_scipys_gaussian_filter_then_scaled():
+    from scipy.ndimage import gaussian_filter
+    from ddp_lite.nets import image_channels
+    image = np.random.default_rng(0).random((1, 3, 9, 13)).astype(np.float32)
+    for blur in (1.0, 2.0):
+        reference = gaussian_filter(image, sigma=(0, 0, blur, blur), mode="nearest", truncate=3.0)
+        got = image_channels(torch.from_numpy(image), 0.5, blur).numpy()
+        assert np.allclose(got, 0.5 * reference, atol=1e-6)
+    assert torch.equal(image_channels(torch.from_numpy(image), 2.0, 0.0), 2.0 * torch.from_numpy(image))
+
+
+def test_image_input_feeds_the_colour_image_to_variants_that_see_it_and_not_to_depth_only():
+    from ddp_lite import loop
+    from ddp_lite.nets import image_channels
+    depth = tilted_plane(12, 16)
+    depth[4:8, 5:11] = np.nan
+    rgb = np.random.default_rng(1).random((12, 16, 3)).astype(np.float32)
+    seen = []
+    build = loop.build
+
+    def spy(config, out_channels, height, width, device, init_state=None, noise=None, image=None):
+        net, net_input = build(config, out_channels, height, width, device, init_state, noise, image)
+        seen.append((net, net_input))
+        return net, net_input
+
+    loop.build = spy
+    try:
+        config = FitConfig(**TINY, iterations=2, net_input="meshgrid", noise_channels=2, image_input=0.5, image_blur=1.0)
+        complete_depth(rgb, depth.copy(), variant="rgbd", config=config)
+        complete_depth(rgb, depth.copy(), variant="d", config=config)
+    finally:
+        loop.build = build
+    (net_rgbd, input_rgbd), (net_d, input_d) = seen
+    first_conv = [next(m for m in net.modules() if isinstance(m, torch.nn.Conv2d)) for net in (net_rgbd, net_d)]
+    assert input_rgbd.shape == (1, 5, 12, 16) and [c.in_channels for c in first_conv] == [5, 2]
+    # channels 2-4: the view's colours, blurred and scaled; 0-1: the coordinates as without it
+    expected = image_channels(torch.from_numpy(rgb).permute(2, 0, 1)[None], 0.5, 1.0)
+    assert torch.allclose(input_rgbd[:, 2:], expected, atol=1e-6)
+    assert torch.equal(input_rgbd[:, :2], input_d)
+    assert input_d.shape == (1, 2, 12, 16)  # depth-only sees no colour, not even as input
