@@ -57,9 +57,11 @@ EDGE10 = dict(smoothness_edge=10.0, **GREY)
 NOISE = dict(net_input="noise", noise_channels=16, **EDGE10)
 RECIPES = {
     "default": {},
-    "edge100": GREY,  # class before the seventh pass: the coordinates alone as input
+    "no-image": GREY,  # each profile before the seventh pass: no colour image in the net's input
     "image-sharp": dict(image_input=1.0, image_blur=0.0),  # the seventh pass: the colour image unblurred ...
-    "image-blur2": dict(image_input=1.0, image_blur=2.0),  # ... blurred more
+    "image-blur0.5": dict(image_input=1.0, image_blur=0.5),  # ... blurred, σ in px (ci's)
+    "image-blur1": dict(image_input=1.0, image_blur=1.0),  # (class's)
+    "image-blur2": dict(image_input=1.0, image_blur=2.0),
     "image0.3": dict(image_input=0.3, image_blur=1.0),  # ... at a third of the coordinates' scale
     "edge10": EDGE10,  # class before the sixth pass
     "edge30": dict(smoothness_edge=30.0, **GREY),
