@@ -63,7 +63,8 @@ paired spread (±0.025), and was worse on the notebooks' own cases (notebook 06:
 0.287), so ``class`` stays on grey.
 ``class`` also gives the net the view's colour image, blurred with σ = 1 px, as three more input
 channels (``FitConfig(image_input=1, image_blur=1)``, ``nets.image_channels``; only variants that
-see the colour image, so depth-only stays depth-only). From the coordinates alone the net draws a
+see the colour image, so depth-only stays depth-only); ``ci`` too, blurred with σ = 0.5 px (the
+same blur relative to its 48×64 image). From the coordinates alone the net draws a
 depth edge inside a hole as a blurred ramp; with the colours in its input it can put the edge where
 the colour edge is. Over the 22 cases (seeds 0 and 1, issue 12, seventh pass) one fit scores 0.875×
 the best classical fill (geometric mean 0.851; 18 of 22 better; worst 1.32×) against 0.904× (0.878;
@@ -71,7 +72,9 @@ the best classical fill (geometric mean 0.851; 18 of 22 better; worst 1.32×) ag
 curved-scene and fixture cases. The mean's gain (0.029) is about one standard error of the paired
 fits: two cases lose (a blob over textured grass, where the colour says "far" and the slope says
 "near"; a large hole on an untextured wall), most gain a little. Unblurred colours scored 0.880×
-(seed 0; the grass case twice as bad), σ = 2 px 0.873×, the grey image alone 0.918×.
+(seed 0, where σ = 1 px scored 0.869×; the grass case 1.47× against 1.15×), σ = 2 px 0.873×, the grey
+image alone 0.918×. At ``ci`` (22 cases, two seeds) it cut the mean from 2.24× to 1.53× (geometric
+mean 1.57× → 1.32×; worst 16.5× → 5.6×), with σ = 1 px 1.73×, unblurred 1.93×.
 ``paper`` keeps the paper's net, input and losses. ``class`` runs the net in bfloat16 where the
 CPU computes it natively (``FitConfig(bf16=None)``).
 """
