@@ -14,6 +14,8 @@ import torch
 import torch.nn as nn
 import torch.nn.functional as F
 
+from .losses import _blur, _gaussian_1d  # SSIM's separable Gaussian, reused for the image input
+
 __all__ = ["UNet", "SkipNet", "make_noise", "make_input", "image_channels", "build_net", "count_parameters"]
 
 UNET_CHANNELS = (32, 64, 128, 256, 512)  # the paper's encoder
@@ -72,14 +74,8 @@ def image_channels(image: torch.Tensor, scale: float = 1.0, blur: float = 1.0) -
     """
     if blur > 0:
         radius = int(3 * blur + 0.5)
-        offsets = torch.arange(-radius, radius + 1, dtype=torch.float64)
-        kernel = torch.exp(-offsets ** 2 / (2 * blur ** 2))
-        kernel = (kernel / kernel.sum()).to(image)  # (2r + 1,)
-        C, k = image.shape[1], kernel.numel()
-        image = F.conv2d(F.pad(image, (radius, radius, 0, 0), mode="replicate"), kernel.reshape(1, 1, 1, k).expand(C, 1, 1, k),
-                         groups=C)
-        image = F.conv2d(F.pad(image, (0, 0, radius, radius), mode="replicate"), kernel.reshape(1, 1, k, 1).expand(C, 1, k, 1),
-                         groups=C)
+        kernel = _gaussian_1d(2 * radius + 1, float(blur), image.dtype, str(image.device))  # (2r + 1,)
+        image = _blur(F.pad(image, (radius,) * 4, mode="replicate"), kernel)  # (1, 3, H, W)
     return scale * image
 
 
