@@ -50,30 +50,38 @@ QUICK = ("desk/sgm-dense", "house/blobs", "fixture/sgm-dense")
 
 # name → FitConfig overrides on top of the profile's config. The recipes of earlier passes pin what
 # they ran where `class` has changed since, or might (no colour image in the net's input: NO_IMAGE;
-# colour edges on grey: GREY; at strength 10: EDGE10; the noise input too: NOISE).
+# colour edges on grey: GREY; at the sixth pass's strength 100: E100; at 10: EDGE10; the noise
+# input too: NOISE). The `ci-` recipes are `ci`'s own, at its strength 10.
 NO_IMAGE = dict(image_input=0.0)
 GREY = dict(edge_guide="grey", **NO_IMAGE)
+E100 = dict(smoothness_edge=100.0)
 EDGE10 = dict(smoothness_edge=10.0, **GREY)
 NOISE = dict(net_input="noise", noise_channels=16, **EDGE10)
+IMAGE = dict(image_input=1.0, image_blur=1.0)  # class's colour image in the input (seventh pass)
 RECIPES = {
     "default": {},
-    "no-image": GREY,  # each profile before the seventh pass: no colour image in the net's input
-    "image-sharp": dict(image_input=1.0, image_blur=0.0),  # the seventh pass: the colour image unblurred ...
-    "image-blur0.5": dict(image_input=1.0, image_blur=0.5),  # ... blurred, σ in px (ci's)
-    "image-blur1": dict(image_input=1.0, image_blur=1.0),  # (class's)
-    "image-blur2": dict(image_input=1.0, image_blur=2.0),
-    "image0.3": dict(image_input=0.3, image_blur=1.0),  # ... at a third of the coordinates' scale
+    "no-image": dict(**GREY, **E100),  # class before the seventh pass: no colour image in the net's input
+    "image-e100": dict(**IMAGE, **E100),  # the seventh pass: the colour image in the input, at strength 100 ...
+    "image-sharp": dict(image_input=1.0, image_blur=0.0, **E100),  # ... unblurred
+    "image-blur2": dict(image_input=1.0, image_blur=2.0, **E100),  # ... blurred more
+    "image0.3": dict(image_input=0.3, image_blur=1.0, **E100),  # ... at a third of the coordinates' scale
+    "image-patience100": dict(patience=100, **IMAGE, **E100),  # ... with a longer plateau
+    "image-dip1200": dict(auto_stop=False, iterations=1200, lr_milestones=(), **IMAGE, **E100),  # ... DIP's schedule
+    "image-e1000": dict(smoothness_edge=1000.0, **IMAGE),  # the image at other strengths (the new class: 300)
+    "ci-no-image": GREY,  # ci before the seventh pass
+    "ci-image-sharp": dict(image_input=1.0, image_blur=0.0),  # ci with the colour image unblurred, ...
+    "ci-image-blur1": dict(image_input=1.0, image_blur=1.0),  # ... blurred by 1 px (ci keeps 0.5)
     "edge10": EDGE10,  # class before the sixth pass
     "edge30": dict(smoothness_edge=30.0, **GREY),
-    "e100-rgb": dict(edge_guide="rgb", **NO_IMAGE),  # colour edges measured on R, G, B (tried, not kept)
+    "e100-rgb": dict(edge_guide="rgb", **NO_IMAGE, **E100),  # colour edges measured on R, G, B (tried, not kept)
     "edge300": dict(smoothness_edge=300.0, **GREY),
     "edge1000": dict(smoothness_edge=1000.0, **GREY),
     "warp-w10": dict(gammas=(0.88, 0.02), **EDGE10),  # rgbd+warp with the warp term at 0.10 instead of 0.02
     "warp-w25": dict(gammas=(0.73, 0.02), **EDGE10),  # ... at 0.25
-    "e100-flat0.3": dict(flatness=0.3, **GREY),  # edge 100 on grey with other hole-term weights
-    "e100-flat1": dict(flatness=1.0, **GREY),
-    "e100-smooth0.5": dict(smoothness=0.5, **GREY),
-    "e100-smooth2": dict(smoothness=2.0, **GREY),
+    "e100-flat0.3": dict(flatness=0.3, **GREY, **E100),  # edge 100 on grey with other hole-term weights
+    "e100-flat1": dict(flatness=1.0, **GREY, **E100),
+    "e100-smooth0.5": dict(smoothness=0.5, **GREY, **E100),
+    "e100-smooth2": dict(smoothness=2.0, **GREY, **E100),
     "paper-losses": dict(smoothness=0.0, flatness=0.0, bf16=False, channels=(32, 64, 128, 256, 512), **NOISE),  # class before issue 12
     "paper-net": dict(channels=(32, 64, 128, 256, 512), flatness=0.0, **NOISE),  # class before the third pass (one 32-512 fit)
     "curvature-ens3": dict(flatness=0.0, ensemble=3, **NOISE),  # class before the fourth pass: the mean of three, no flatness
