@@ -310,7 +310,9 @@ def _fit_one(rgb, depth, camera, neighbors, variant, config, *, gt_depth=None, t
         raise TypeError(f"init must be a DepthResult, got {type(init).__name__}")
     check_memory(config, spec.out_channels, H, W, len(warpers), device)
     # the view's colours as input channels, for the variants that see them (rgb_t is None otherwise)
-    image = image_channels(rgb_t, config.image_input, config.image_blur) if config.image_input > 0 and rgb_t is not None else None
+    image = None
+    if config.image_input > 0 and rgb_t is not None:
+        image = image_channels(rgb_t, config.image_input, config.image_blur)  # (1, 3, H, W)
     net, noise = loop.build(config, spec.out_channels, H, W, device, init.state if init is not None else None,
                             noise, image)
     start = time.perf_counter()

@@ -50,10 +50,10 @@ coordinates helped the geometric mean (1.57× → 1.46×) and the curved cases (
 doubled two blob cases on planes (house/blobs 2.3× → 4.7×).
 Both hole terms are relaxed at colour edges by ``exp(-edge · |∇I|)`` of the grey image
 (``FitConfig.smoothness_edge``). Each term is divided by the sum of its weights, so only their
-ratio matters: ``class`` used edge 100 (300 since the seventh pass, below), where the terms act almost only where the colour is flat
-and leave textured regions to the net; ``ci`` keeps 10. Over the 22 cases (seeds 0 and 1, issue
-12, sixth pass) one ``class`` fit scores 0.90× the best classical fill (geometric mean 0.88; 16 of
-22 better; worst 1.46×) against 0.99× (0.94; worst 2.26×) at 10; with seed 0 only, 30 gave 0.97×,
+ratio matters: ``class`` used edge 100 (300 since the seventh pass, below), where the terms act
+almost only where the colour is flat and leave textured regions to the net; ``ci`` keeps 10.
+Over the 22 cases (seeds 0 and 1, issue 12, sixth pass) one ``class`` fit scored 0.90× the best
+classical fill (geometric mean 0.88; 16 of 22 better; worst 1.46×) against 0.99× (0.94; worst 2.26×) at 10; with seed 0 only, 30 gave 0.97×,
 300 0.92× and 1000 0.95×. The largest gain is a blob hole over a textured ground plane at the
 border (house/blobs: 2.3× → 0.7×): at 10 the flatness term levelled the grass off, at 100 the
 net carries the ground's slope on. At ``ci`` (48×64, noise input, no flatness term) edge 100
@@ -67,9 +67,8 @@ see the colour image, so depth-only stays depth-only); ``ci`` too, blurred with 
 same blur relative to its 48×64 image). From the coordinates alone the net draws a
 depth edge inside a hole as a blurred ramp; with the colours in its input it can put the edge where
 the colour edge is. Over the 22 cases (seeds 0 and 1, issue 12, seventh pass), at colour-edge
-strength 100, one fit scored 0.875×
-the best classical fill (geometric mean 0.851; 18 of 22 better; worst 1.32×) against 0.904× (0.878;
-16; 1.46×) without it, better in 30 of 44 (case, seed) fits, and 0.910× against 0.968× on the
+strength 100, one fit scored 0.875× the best classical fill (geometric mean 0.851; 18 of 22
+better; worst 1.32×) against 0.904× (0.878; 16; 1.46×) without it, better in 30 of 44 (case, seed) fits, and 0.910× against 0.968× on the
 curved-scene and fixture cases. The mean's gain (0.029) is about one standard error of the paired
 fits: two cases lose (a blob over textured grass, where the colour says "far" and the slope says
 "near"; a large hole on an untextured wall), most gain a little. Unblurred colours scored 0.880×
