@@ -166,25 +166,39 @@ def test_grade_refuses_a_folder_without_students(tmp_path):
 
 # --- the real notebooks at ci: minutes ------------------------------------------------------------
 
-def test_untouched_student_copies_run_to_the_end_fail_every_check_cleanly_and_score_zero(tmp_path):
-    classroom.build_student(NOTEBOOKS, tmp_path / "submissions" / "untouched")
-    scores = classroom.grade(tmp_path / "submissions", NOTEBOOKS, executed_dir=tmp_path / "executed", log=print)
+# One test per notebook, each its own xdist group (tests/conftest.py): the ten runs spread over both
+# `make test` workers instead of queueing on one.
+@pytest.mark.parametrize("source", [pytest.param(p, id=p.stem[:2], marks=pytest.mark.xdist_group(f"student copy {p.stem[:2]}"))
+                                    for p in SOURCES])
+def test_untouched_student_copy_runs_to_the_end_fails_every_check_cleanly_and_scores_zero(source, tmp_path):
+    handed_in = tmp_path / "untouched" / source.name
+    handed_in.parent.mkdir()
+    nbformat.write(classroom.student_copy(nbformat.read(source, as_version=4)), handed_in)
+    executed = tmp_path / "executed.ipynb"
+    scores = classroom.grade_notebook(handed_in, source, "untouched", workdir=handed_in.parent, executed=executed)
+    checks = [c for c in nbformat.read(source, as_version=4).cells if _meta(c).get("grade") and not _meta(c).get("solution")]
     auto = [s for s in scores if s.kind == "auto"]
-    assert len(auto) == 13 and all(s.points == 0 and s.status == "fail" for s in auto)
+    assert len(auto) == len(checks) and all(s.points == 0 and s.status == "fail" for s in auto)
     assert all(s.status == "blank" for s in scores if s.kind == "manual")
-    for path in sorted((tmp_path / "executed" / "untouched").glob("*.ipynb")):
-        nb = nbformat.read(path, as_version=4)
-        for cell in (c for c in nb.cells if c.cell_type == "code"):
-            errors = [o for o in cell.outputs if o.output_type == "error"]
-            assert cell.execution_count is not None, f"{path.name}: a cell did not run"
-            if _meta(cell).get("grade"):  # the check printed why, then its assert failed
-                printed = "".join(o.get("text", "") for o in cell.outputs if o.output_type == "stream")
-                assert printed.startswith("FAIL") and "NotImplementedError" in printed, (path.name, printed)
-                assert [e.ename for e in errors] == ["AssertionError"], (path.name, errors)
-            else:
-                assert not errors, (path.name, cell.source[:80], errors)
+    nb = nbformat.read(executed, as_version=4)
+    for cell in (c for c in nb.cells if c.cell_type == "code"):
+        errors = [o for o in cell.outputs if o.output_type == "error"]
+        assert cell.execution_count is not None, f"{source.name}: a cell did not run"
+        if _meta(cell).get("grade"):  # the check printed why, then its assert failed
+            printed = "".join(o.get("text", "") for o in cell.outputs if o.output_type == "stream")
+            assert printed.startswith("FAIL") and "NotImplementedError" in printed, (source.name, printed)
+            assert [e.ename for e in errors] == ["AssertionError"], (source.name, errors)
+        else:
+            assert not errors, (source.name, cell.source[:80], errors)
 
 
+def test_the_notebooks_have_thirteen_autograded_checks():
+    checks = [c for p in SOURCES for c in nbformat.read(p, as_version=4).cells
+              if _meta(c).get("grade") and not _meta(c).get("solution")]
+    assert len(checks) == 13
+
+
+@pytest.mark.xdist_group("solutions 01 08")
 def test_solutions_get_full_marks(tmp_path):
     chosen = SOURCES if os.environ.get("DDP_GRADE_ALL") else [p for p in SOURCES if p.stem[:2] in ("01", "08")]
     source_dir = tmp_path / "source"
