@@ -236,6 +236,10 @@ def _fit_one(rgb, depth, camera, neighbors, variant, config, *, gt_depth=None, t
     iterations = config.resolved_iterations(variant)
     spec = get_variant(variant)
     w_disp, w_rgb, w_warp = spec.loss_weights(config.gammas)
+    if init is not None and not isinstance(init, DepthResult):
+        raise TypeError(f"init must be a DepthResult, got {type(init).__name__}")
+    # before any per-fit work: at 12 MP, the SSIM moments alone take seconds (and gigabytes)
+    check_memory(config, spec.out_channels, H, W, len(neighbors) if w_warp > 0 else 0, device)
     valid = np.isfinite(depth)
     heldout = (holdout_mask(valid, config.holdout_fraction, config.seed, config.holdout) if config.auto_stop
                else np.zeros_like(valid))
@@ -306,9 +310,6 @@ def _fit_one(rgb, depth, camera, neighbors, variant, config, *, gt_depth=None, t
             callback(iteration, {"disparity": disparity, "depth": transform.to_depth(disparity),
                                  "rgb": output[0, 1:4].permute(1, 2, 0).cpu().numpy() if output.shape[1] >= 4 else None})
 
-    if init is not None and not isinstance(init, DepthResult):
-        raise TypeError(f"init must be a DepthResult, got {type(init).__name__}")
-    check_memory(config, spec.out_channels, H, W, len(warpers), device)
     # the view's colours as input channels, for the variants that see them (rgb_t is None otherwise)
     image = None
     if config.image_input > 0 and rgb_t is not None:
