@@ -58,6 +58,7 @@ E100 = dict(smoothness_edge=100.0)
 EDGE10 = dict(smoothness_edge=10.0, **GREY)
 NOISE = dict(net_input="noise", noise_channels=16, **EDGE10)
 IMAGE = dict(image_input=1.0, image_blur=1.0)  # class's colour image in the input (seventh pass)
+CI7 = dict(smoothness_edge=10.0, flatness=0.0)  # ci until the eighth pass: strength 10, no flatness term
 RECIPES = {
     "default": {},
     "no-image": dict(**GREY, **E100),  # class before the seventh pass: no colour image in the net's input
@@ -68,9 +69,20 @@ RECIPES = {
     "image-patience100": dict(patience=100, **IMAGE, **E100),  # ... with a longer plateau
     "image-dip1200": dict(auto_stop=False, iterations=1200, lr_milestones=(), **IMAGE, **E100),  # ... DIP's schedule
     "image-e1000": dict(smoothness_edge=1000.0, **IMAGE),  # the image at other strengths (the new class: 300)
-    "ci-no-image": GREY,  # ci before the seventh pass
-    "ci-image-sharp": dict(image_input=1.0, image_blur=0.0),  # ci with the colour image unblurred, ...
-    "ci-image-blur1": dict(image_input=1.0, image_blur=1.0),  # ... blurred by 1 px (ci keeps 0.5)
+    "ci-no-image": dict(**GREY, **CI7),  # ci before the seventh pass
+    "ci-image-sharp": dict(image_input=1.0, image_blur=0.0, **CI7),  # ci with the colour image unblurred, ...
+    "ci-image-blur1": dict(image_input=1.0, image_blur=1.0, **CI7),  # ... blurred by 1 px (ci keeps 0.5)
+    "ci-seventh": CI7,  # ci after the seventh pass (the colour image, σ 0.5 px); then, the eighth pass:
+    "ci-e3": dict(smoothness_edge=3.0, flatness=0.0),  # its colour-edge strength, without the flatness term
+    "ci-e30": dict(smoothness_edge=30.0, flatness=0.0),
+    "ci-e100": dict(smoothness_edge=100.0, flatness=0.0),
+    "ci-e300": dict(smoothness_edge=300.0, flatness=0.0),
+    "ci-e1000": dict(smoothness_edge=1000.0, flatness=0.0),
+    "ci-e100-meshgrid": dict(smoothness_edge=100.0, flatness=0.0, net_input="meshgrid", noise_channels=2),
+    "ci-e100-smooth2": dict(smoothness_edge=100.0, flatness=0.0, smoothness=2.0),
+    "ci-flat0.3": dict(flatness=0.3),  # strength 100 with the flatness term at 0.3 (ci now: 0.6)
+    "fp32": dict(bf16=False),  # class in float32 (it runs the net in bfloat16 where the CPU has it)
+    "image-warp-w10": dict(gammas=(0.88, 0.02)),  # rgbd+warp with the warp term at 0.10 (class's recipe)
     "edge10": EDGE10,  # class before the sixth pass
     "edge30": dict(smoothness_edge=30.0, **GREY),
     "e100-rgb": dict(edge_guide="rgb", **NO_IMAGE, **E100),  # colour edges measured on R, G, B (tried, not kept)
