@@ -92,7 +92,9 @@ on a plane that biharmonic fills almost exactly, rose from 5.6× to 6.4×. Stren
 scored 1.41× (30: 1.41×, 300: 1.67×); with flatness 0.3 1.43×, with curvature weight 2 1.52×,
 from the coordinates 1.71×.
 ``paper`` keeps the paper's net, input and losses. ``class`` runs the net in bfloat16 where the
-CPU computes it natively (``FitConfig(bf16=None)``).
+CPU computes it natively (``FitConfig(bf16=None)``): over the 22 cases (seeds 0 and 1, eighth
+pass) float32 scored 0.857× the best classical fill against bfloat16's 0.825× (paired +0.032 ±
+0.016; 16 of 44 fits better in float32), at 23.0 against 20.4 s per fit.
 """
 from __future__ import annotations
 
