@@ -83,6 +83,10 @@ RECIPES = {
     "ci-flat0.3": dict(flatness=0.3),  # strength 100 with the flatness term at 0.3 (ci now: 0.6)
     "fp32": dict(bf16=False),  # class in float32 (it runs the net in bfloat16 where the CPU has it)
     "image-warp-w10": dict(gammas=(0.88, 0.02)),  # rgbd+warp with the warp term at 0.10 (class's recipe)
+    "image-flat0.3": dict(flatness=0.3),  # class's recipe with the flatness term at 0.3, ...
+    "image2": dict(image_input=2.0),  # ... the colour image at twice the coordinates' scale,
+    "image-wide": dict(channels=(32, 64, 128, 256, 512)),  # ... the paper's widths,
+    "image-smooth2": dict(smoothness=2.0),  # ... curvature weight 2
     "edge10": EDGE10,  # class before the sixth pass
     "edge30": dict(smoothness_edge=30.0, **GREY),
     "e100-rgb": dict(edge_guide="rgb", **NO_IMAGE, **E100),  # colour edges measured on R, G, B (tried, not kept)
