@@ -2,7 +2,6 @@ import os
 
 import matplotlib
 import numpy as np
-import pytest
 import torch
 
 matplotlib.use("Agg")
@@ -11,17 +10,11 @@ os.environ.setdefault("DDP_PROFILE", "ci")
 torch.set_num_threads(1 if os.environ.get("PYTEST_XDIST_WORKER") else max(1, min(2, os.cpu_count() or 1)))
 
 
-@pytest.hookimpl(tryfirst=True)  # before xdist reads the groups
 def pytest_collection_modifyitems(config, items):
-    """`make test` spreads the tests over workers with ``--dist loadgroup``: a group runs whole, in
-    order, on one worker. Each file is one group (a notebook's cells share one kernel; a module's
-    fixtures are built once) unless a test names its own (the student-copy runs, one per notebook).
-    Groups that execute whole notebooks go first, so the short unit-test files fill the tails."""
-    for item in items:
-        if item.get_closest_marker("xdist_group") is None:
-            item.add_marker(pytest.mark.xdist_group(item.nodeid.split("::")[0]))
-    items.sort(key=lambda item: not (item.path.suffix == ".ipynb"
-                                     or item.get_closest_marker("xdist_group").args[0].startswith("student copy")))
+    """`make test` spreads whole files over its workers (``--dist loadfile``: a notebook's cells share
+    one kernel; a module's fixtures are built once), in collection order. The slow files, the
+    notebooks and the student copies (a few minutes), go first, so the short ones fill the tails."""
+    items.sort(key=lambda item: not (item.path.suffix == ".ipynb" or item.path.name == "test_student_copies.py"))
 
 
 # What several test files share; they import it with ``from conftest import ...`` (tests/ is on sys.path).

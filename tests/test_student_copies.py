@@ -1,0 +1,35 @@
+"""Every untouched student copy runs to the end at `ci`: each check fails cleanly (it prints FAIL and the
+stub's NotImplementedError, then its assert fails) and no other cell errors, so a student who has
+done nothing yet can still run the whole notebook, and the grader scores it 0 (issue 15).
+
+Ten notebook runs, a few minutes: kept out of test_classroom.py so that `make test` (pytest-xdist,
+one file per worker) runs them beside the other tests instead of after them.
+"""
+import nbformat
+import pytest
+from test_classroom import SOURCES, _meta  # tests/ is on sys.path (see conftest.py)
+
+from ddp_lite import classroom
+
+
+@pytest.mark.parametrize("source", SOURCES, ids=lambda p: p.stem[:2])
+def test_untouched_student_copy_runs_to_the_end_fails_every_check_cleanly_and_scores_zero(source, tmp_path):
+    handed_in = tmp_path / "untouched" / source.name
+    handed_in.parent.mkdir()
+    nbformat.write(classroom.student_copy(nbformat.read(source, as_version=4)), handed_in)
+    executed = tmp_path / "executed.ipynb"
+    scores = classroom.grade_notebook(handed_in, source, "untouched", workdir=handed_in.parent, executed=executed)
+    checks = [c for c in nbformat.read(source, as_version=4).cells if _meta(c).get("grade") and not _meta(c).get("solution")]
+    auto = [s for s in scores if s.kind == "auto"]
+    assert len(auto) == len(checks) and all(s.points == 0 and s.status == "fail" for s in auto)
+    assert all(s.status == "blank" for s in scores if s.kind == "manual")
+    nb = nbformat.read(executed, as_version=4)
+    for cell in (c for c in nb.cells if c.cell_type == "code"):
+        errors = [o for o in cell.outputs if o.output_type == "error"]
+        assert cell.execution_count is not None, f"{source.name}: a cell did not run"
+        if _meta(cell).get("grade"):  # the check printed why, then its assert failed
+            printed = "".join(o.get("text", "") for o in cell.outputs if o.output_type == "stream")
+            assert printed.startswith("FAIL") and "NotImplementedError" in printed, (source.name, printed)
+            assert [e.ename for e in errors] == ["AssertionError"], (source.name, errors)
+        else:
+            assert not errors, (source.name, cell.source[:80], errors)
