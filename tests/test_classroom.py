@@ -2,8 +2,9 @@
 
 The grader tests on tiny hand-made notebooks run in seconds; the solutions of two real notebooks (01
 and 08; set DDP_GRADE_ALL=1 to grade all ten) run at `ci`; every untouched student copy runs in
-test_student_copies.py (a few minutes: its own file, so `make test` gives it a worker of its own). nbval already runs every source notebook, where each check
-cell is an ``assert``, so the solutions of all nine pass their checks in every `make test`.
+test_student_copies.py (a few minutes: its own file, so `make test` gives it a worker of its own).
+nbval already runs every source notebook, where each check cell is an ``assert``, so the solutions
+of all ten pass their checks in every `make test`.
 """
 import csv
 import json
