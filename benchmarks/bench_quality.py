@@ -87,6 +87,7 @@ RECIPES = {
     "image2": dict(image_input=2.0),  # ... the colour image at twice the coordinates' scale,
     "image-wide": dict(channels=(32, 64, 128, 256, 512)),  # ... the paper's widths,
     "image-smooth2": dict(smoothness=2.0),  # ... curvature weight 2
+    "warp-patience100": dict(patience=100),  # ... a longer plateau (run with rgbd+warp)
     "edge10": EDGE10,  # class before the sixth pass
     "edge30": dict(smoothness_edge=30.0, **GREY),
     "e100-rgb": dict(edge_guide="rgb", **NO_IMAGE, **E100),  # colour edges measured on R, G, B (tried, not kept)
