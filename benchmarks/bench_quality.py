@@ -51,7 +51,8 @@ QUICK = ("desk/sgm-dense", "house/blobs", "fixture/sgm-dense")
 # name → FitConfig overrides on top of the profile's config. The recipes of earlier passes pin what
 # they ran where `class` has changed since, or might (no colour image in the net's input: NO_IMAGE;
 # colour edges on grey: GREY; at the sixth pass's strength 100: E100; at 10: EDGE10; the noise
-# input too: NOISE). The `ci-` recipes are `ci`'s own, at its strength 10.
+# input too: NOISE). The `ci-` recipes are `ci`'s own; those of the seventh pass pin its recipe then
+# (strength 10, no flatness term: CI7).
 NO_IMAGE = dict(image_input=0.0)
 GREY = dict(edge_guide="grey", **NO_IMAGE)
 E100 = dict(smoothness_edge=100.0)

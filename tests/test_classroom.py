@@ -26,6 +26,11 @@ def _meta(cell):
     return cell.metadata.get("nbgrader", {})
 
 
+def _checks(nb) -> list:
+    """The autograded check cells of a notebook (graded, not a solution)."""
+    return [c for c in nb.cells if _meta(c).get("grade") and not _meta(c).get("solution")]
+
+
 def _exercise_list(nb) -> list[str]:
     """Numbers of the exercises listed under the notebook's '## Exercises' heading."""
     text = next(c.source for c in nb.cells if c.cell_type == "markdown" and "## Exercises" in c.source)
@@ -168,9 +173,7 @@ def test_grade_refuses_a_folder_without_students(tmp_path):
 # --- the real notebooks at ci: minutes ------------------------------------------------------------
 
 def test_the_notebooks_have_thirteen_autograded_checks():
-    checks = [c for p in SOURCES for c in nbformat.read(p, as_version=4).cells
-              if _meta(c).get("grade") and not _meta(c).get("solution")]
-    assert len(checks) == 13
+    assert sum(len(_checks(nbformat.read(p, as_version=4))) for p in SOURCES) == 13
 
 
 def test_solutions_get_full_marks(tmp_path):

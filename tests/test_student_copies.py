@@ -7,7 +7,7 @@ one file per worker) runs them beside the other tests instead of after them.
 """
 import nbformat
 import pytest
-from test_classroom import SOURCES, _meta  # tests/ is on sys.path (see conftest.py)
+from test_classroom import SOURCES, _checks, _meta  # tests/ is on sys.path (see conftest.py)
 
 from ddp_lite import classroom
 
@@ -19,9 +19,8 @@ def test_untouched_student_copy_runs_to_the_end_fails_every_check_cleanly_and_sc
     nbformat.write(classroom.student_copy(nbformat.read(source, as_version=4)), handed_in)
     executed = tmp_path / "executed.ipynb"
     scores = classroom.grade_notebook(handed_in, source, "untouched", workdir=handed_in.parent, executed=executed)
-    checks = [c for c in nbformat.read(source, as_version=4).cells if _meta(c).get("grade") and not _meta(c).get("solution")]
     auto = [s for s in scores if s.kind == "auto"]
-    assert len(auto) == len(checks) and all(s.points == 0 and s.status == "fail" for s in auto)
+    assert len(auto) == len(_checks(nbformat.read(source, as_version=4))) and all(s.points == 0 and s.status == "fail" for s in auto)
     assert all(s.status == "blank" for s in scores if s.kind == "manual")
     nb = nbformat.read(executed, as_version=4)
     for cell in (c for c in nb.cells if c.cell_type == "code"):
