@@ -10,6 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import loop
+from .cache import cached
 from .checks import MIN_VALID_PIXELS, check_image
 from .config import FitConfig, resolve_device
 from .loop import check_finite_output, check_memory, holdout_mask, to_tensor
@@ -28,6 +29,7 @@ class ImageResult:
     seconds: float
 
 
+@cached
 def fit_image(image, mask=None, config: FitConfig | None = None, clean=None, callback=None) -> ImageResult:
     """Deep Image Prior on an image: fit ``image`` (H, W, 3) float [0, 1] where ``mask`` (H, W) bool
     is True (default: everywhere) with a masked MSE; ``clean`` (H, W, 3), if given, is tracked as PSNR.

@@ -20,6 +20,7 @@ import numpy as np
 import torch
 
 from . import loop
+from .cache import cached
 from .camera import Camera, view_overlap
 from .checks import MIN_VALID_PIXELS, check_depth, check_image
 from .config import FitConfig, resolve_device, use_bf16
@@ -104,6 +105,7 @@ def _check_overlap(camera: Camera, depth: np.ndarray, neighbors) -> None:
 
 # --------------------------------------------------------------------------- the fit
 
+@cached
 def complete_depth(rgb, depth, camera: Camera | None = None, neighbors=(), variant: str = "rgbd+warp",
                    config: FitConfig | None = None, gt_depth=None, transform: DisparityTransform | None = None,
                    callback=None, init: DepthResult | None = None) -> DepthResult:

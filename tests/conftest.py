@@ -1,7 +1,10 @@
 import os
+import shutil
+import tempfile
 
 import matplotlib
 import numpy as np
+import pytest
 import torch
 
 matplotlib.use("Agg")
@@ -10,11 +13,44 @@ os.environ.setdefault("DDP_PROFILE", "ci")
 torch.set_num_threads(1 if os.environ.get("PYTEST_XDIST_WORKER") else max(1, min(2, os.cpu_count() or 1)))
 
 
+def pytest_configure(config):
+    """One fresh fit cache (``ddp_lite.cache``) per test session, shared by its xdist workers (they start
+    after this hook and inherit the environment) and the notebook kernels they start. The notebooks
+    run first and fill it; the student copies and graded solutions run the same notebooks again and
+    read their fits back (they test the notebooks' flow and checks, not the fits). Python tests run
+    without it (``_fit_cache_only_where_marked``): a test of a fit must compute it."""
+    config.addinivalue_line("markers", "fit_cache: run with the session's DDP_CACHE (notebook re-runs)")
+    if not hasattr(config, "workerinput"):  # the controller, or a run without xdist
+        config._ddp_cache_saved = os.environ.get("DDP_CACHE")
+        config._ddp_cache = tempfile.mkdtemp(prefix="ddp-lite-test-cache-")
+        os.environ["DDP_CACHE"] = config._ddp_cache
+
+
+def pytest_unconfigure(config):
+    folder = getattr(config, "_ddp_cache", None)
+    if folder is not None:
+        shutil.rmtree(folder, ignore_errors=True)
+        if config._ddp_cache_saved is None:
+            os.environ.pop("DDP_CACHE", None)
+        else:
+            os.environ["DDP_CACHE"] = config._ddp_cache_saved
+
+
+@pytest.fixture(autouse=True)
+def _fit_cache_only_where_marked(request, monkeypatch):
+    if request.node.get_closest_marker("fit_cache") is None:
+        monkeypatch.delenv("DDP_CACHE", raising=False)
+
+
 def pytest_collection_modifyitems(config, items):
     """`make test` spreads whole files over its workers (``--dist loadfile``: a notebook's cells share
-    one kernel; a module's fixtures are built once), in collection order. The slow files, the
-    notebooks and the student copies (a few minutes), go first, so the short ones fill the tails."""
-    items.sort(key=lambda item: not (item.path.suffix == ".ipynb" or item.path.name == "test_student_copies.py"))
+    one kernel; a module's fixtures are built once), in collection order. The slow files go first,
+    so the short ones fill the tails: the notebooks, then the student copies (which read the
+    notebooks' fits from the session's cache, so they come after them), then the rest."""
+    def rank(item):
+        return 0 if item.path.suffix == ".ipynb" else 1 if item.path.name == "test_student_copies.py" else 2
+
+    items.sort(key=rank)
 
 
 # What several test files share; they import it with ``from conftest import ...`` (tests/ is on sys.path).

@@ -2,14 +2,19 @@
 stub's NotImplementedError, then its assert fails) and no other cell errors, so a student who has
 done nothing yet can still run the whole notebook, and the grader scores it 0 (issue 15).
 
-Ten notebook runs, a few minutes: kept out of test_classroom.py so that `make test` (pytest-xdist,
-one file per worker) runs them beside the other tests instead of after them.
+Ten notebook runs: kept out of test_classroom.py so that `make test` (pytest-xdist, one file per
+worker) runs them beside the other tests. They read their fits back from the session's fit cache
+(``fit_cache``, see conftest.py), which the notebooks' own nbval runs fill: what is tested here is
+the flow of a student copy and its checks; the fits themselves are the notebooks' (same inputs,
+same numbers).
 """
 import nbformat
 import pytest
 from test_classroom import SOURCES, _checks, _meta  # tests/ is on sys.path (see conftest.py)
 
 from ddp_lite import classroom
+
+pytestmark = pytest.mark.fit_cache
 
 
 @pytest.mark.parametrize("source", SOURCES, ids=lambda p: p.stem[:2])
