@@ -9,7 +9,8 @@ Re-running a notebook re-does every fit in it, minutes at ``class``. With the en
 - the source code of ``ddp_lite`` itself, and the torch and NumPy versions: an edited library
   never reads an old result;
 - torch's thread count and whether a GPU is there: CPU reductions may round differently with more
-  threads, and ``device=None`` means the GPU when there is one.
+  threads, and ``device=None`` means the GPU when there is one;
+- the profile ``DDP_PROFILE`` names: ``config=None`` means its config.
 
 So a cached result is the result the same call would compute now (fits are deterministic on a
 CPU, see ``tests/test_determinism.py``), only without the wait; ``seconds`` is the time the fit took
@@ -32,6 +33,8 @@ import numpy as np
 import torch
 
 from .atomic import write_bytes_atomic
+from .config import FitConfig
+from .profiles import current_profile_name
 
 __all__ = ["ENV_VAR", "cache_folder", "cached"]
 
@@ -60,7 +63,7 @@ def _plain(value):
         return value.detach().cpu().numpy()
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
         fields = {f.name: _plain(getattr(value, f.name)) for f in dataclasses.fields(value)}
-        if type(value).__name__ == "FitConfig":
+        if isinstance(value, FitConfig):
             fields.pop("progress")
         return (type(value).__qualname__, fields)
     if isinstance(value, dict):
@@ -74,7 +77,7 @@ def _key(function, arguments: dict) -> str | None:
     import joblib  # only when the cache is on
 
     environment = (_library_digest(), torch.__version__, np.__version__, torch.get_num_threads(),
-                   torch.cuda.is_available())
+                   torch.cuda.is_available(), current_profile_name())  # config=None: the profile's config
     try:
         return joblib.hash((function.__module__, function.__qualname__, _plain(arguments), environment))
     except Exception:  # an argument that does not pickle (the fit itself will say what is wrong with it)

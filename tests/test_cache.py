@@ -75,6 +75,14 @@ def test_each_input_that_decides_a_fit_gets_its_own_entry(folder, monkeypatch):
     assert len(list(folder.iterdir())) == 5
 
 
+def test_the_profile_decides_a_call_without_a_config(monkeypatch):
+    keys = []
+    for profile in ("ci", "class", "ci"):
+        monkeypatch.setenv("DDP_PROFILE", profile)
+        keys.append(cache._key(ddp.complete_depth, {"config": None}))
+    assert keys[0] == keys[2] != keys[1]
+
+
 def test_what_does_not_decide_a_fit_shares_the_entry(folder):
     rgb, depth = _inputs()
     _fit(rgb, depth)
