@@ -8,8 +8,9 @@ Re-running a notebook re-does every fit in it, minutes at ``class``. With the en
   ``progress`` flag aside: a progress bar changes no number), a warm start's weights;
 - the source code of ``ddp_lite`` itself, and the torch and NumPy versions: an edited library
   never reads an old result;
-- torch's thread count and whether a GPU is there: CPU reductions may round differently with more
-  threads, and ``device=None`` means the GPU when there is one;
+- torch's thread count, the CPU's vector instructions and whether a GPU is there: CPU reductions
+  may round differently with more threads or wider vectors, ``bf16=None`` means bfloat16 only where
+  the CPU computes it natively, and ``device=None`` means the GPU when there is one;
 - the profile ``DDP_PROFILE`` names: ``config=None`` means its config.
 
 So a cached result is the result the same call would compute now (fits are deterministic on a
@@ -77,7 +78,8 @@ def _key(function, arguments: dict) -> str | None:
     import joblib  # only when the cache is on
 
     environment = (_library_digest(), torch.__version__, np.__version__, torch.get_num_threads(),
-                   torch.cuda.is_available(), current_profile_name())  # config=None: the profile's config
+                   torch.backends.cpu.get_cpu_capability(), torch.cuda.is_available(),
+                   current_profile_name())  # config=None: the profile's config
     try:
         return joblib.hash((function.__module__, function.__qualname__, _plain(arguments), environment))
     except Exception:  # an argument that does not pickle (the fit itself will say what is wrong with it)
