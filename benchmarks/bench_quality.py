@@ -89,6 +89,10 @@ RECIPES = {
     "image-wide": dict(channels=(32, 64, 128, 256, 512)),  # ... the paper's widths,
     "image-smooth2": dict(smoothness=2.0),  # ... curvature weight 2
     "warp-patience100": dict(patience=100),  # ... a longer plateau (run with rgbd+warp)
+    "lr5e-3": dict(lr=5e-3),  # the ninth pass, on class's recipe: Adam's rate halved, ...
+    "lr2e-2": dict(lr=2e-2),  # ... doubled,
+    "lz1": dict(lambda_z=1.0),  # ... L_disp all L1 (the paper: 0.8 L1 + 0.2 SSIM),
+    "reach4": dict(flatness_reach=4.0),  # ... the flatness term only at the border and 4 px into enclosed holes
     "edge10": EDGE10,  # class before the sixth pass
     "edge30": dict(smoothness_edge=30.0, **GREY),
     "e100-rgb": dict(edge_guide="rgb", **NO_IMAGE, **E100),  # colour edges measured on R, G, B (tried, not kept)

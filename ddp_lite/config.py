@@ -56,6 +56,7 @@ class FitConfig:
     smoothness_edge: float = 10.0  # how strongly colour edges relax both hole terms: exp(-edge · |∇I|)
     edge_guide: str = "grey"  # |∇I| of the grey image, or "rgb": the largest over the three channels
     flatness: float = 0.0  # weight of an edge-aware first-order smoothness in the holes (0: off)
+    flatness_reach: float | None = None  # enclosed holes: that term only within this many px of valid depth (None: everywhere)
     disparity_margin: float = 1.25  # transform=None: d_min / margin … d_max × margin around the valid depth
     auto_stop: bool = False
     holdout_fraction: float = 0.05  # share of valid pixels held out when auto_stop is on
@@ -137,6 +138,8 @@ class FitConfig:
             g1, g2 = (check_real(g, f"config.gammas[{i}]", 0.0, 1.0) for i, g in enumerate(self.gammas))
             if g1 + g2 > 1.0:
                 raise ValueError(f"config.gammas must have γ1 + γ2 ≤ 1, got {self.gammas}")
+        if self.flatness_reach is not None:
+            check_real(self.flatness_reach, "config.flatness_reach", 0.0, None)
         if self.max_memory_gb is not None:
             check_real(self.max_memory_gb, "config.max_memory_gb", 0.0, None, low_open=True)
         if self.device is not None:

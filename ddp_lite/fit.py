@@ -28,8 +28,8 @@ from .dip import ImageResult, fit_image
 from .disparity import DisparityTransform
 from .loop import (PlateauStopper, check_finite_output, check_memory, estimate_peak_memory_gb, holdout_mask,
                    to_tensor)
-from .losses import (ConstantTarget, disparity_loss, flatness_loss, rgb_loss, smoothness_loss, smoothness_weights,
-                     warp_loss)
+from .losses import (ConstantTarget, disparity_loss, flatness_loss, flatness_region, rgb_loss, smoothness_loss,
+                     smoothness_weights, warp_loss)
 from .nets import image_channels
 from .variants import VARIANTS, get_variant
 from .warp import Warper
@@ -257,12 +257,17 @@ def _fit_one(rgb, depth, camera, neighbors, variant, config, *, gt_depth=None, t
     disp_target = ConstantTarget(target, fit_mask)
     rgb_target = ConstantTarget(rgb_t) if rgb_t is not None else None
 
-    smooth_weights = None
+    smooth_weights = flat_weights = flat_normaliser = None
     if config.smoothness > 0 or config.flatness > 0:
         guide = rgb_t if rgb_t is not None else torch.zeros(1, 3, H, W, device=device)
         # the unconstrained pixels: holes, and the held-out pixels, which must behave like holes
-        smooth_weights = smoothness_weights(guide, to_tensor(~(valid & ~heldout), device).bool(), config.smoothness_edge,
-                                            config.edge_guide)
+        free = ~(valid & ~heldout)  # (H, W)
+        smooth_weights = smoothness_weights(guide, to_tensor(free, device).bool(), config.smoothness_edge,
+                                            config.edge_guide)  # (1, 2, H, W)
+        flat_weights = smooth_weights
+        if config.flatness > 0 and config.flatness_reach is not None:
+            flat_weights = smooth_weights * to_tensor(flatness_region(free, config.flatness_reach), device)
+            flat_normaliser = smooth_weights.sum()
 
     def loss_fn(output):
         disparity = output[:, :1]  # (1, 1, H, W)
@@ -280,7 +285,7 @@ def _fit_one(rgb, depth, camera, neighbors, variant, config, *, gt_depth=None, t
             terms["smooth"] = smoothness_loss(disparity, smooth_weights)
             total = total + config.smoothness * terms["smooth"]
         if config.flatness > 0:
-            terms["flat"] = flatness_loss(disparity, smooth_weights)
+            terms["flat"] = flatness_loss(disparity, flat_weights, flat_normaliser)
             total = total + config.flatness * terms["flat"]
         return total, terms
 

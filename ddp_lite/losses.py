@@ -31,9 +31,10 @@ import functools
 import numpy as np
 import torch
 import torch.nn.functional as F
+from scipy import ndimage
 
 __all__ = ["ssim", "masked_l1", "disparity_loss", "rgb_loss", "warp_loss", "smoothness_weights", "smoothness_loss", "flatness_loss",
-           "ConstantTarget", "EDGE_GUIDES"]
+           "flatness_region", "ConstantTarget", "EDGE_GUIDES"]
 
 C1_FACTOR, C2_FACTOR = 0.01, 0.03  # k1, k2 of Wang et al. 2004
 
@@ -246,9 +247,12 @@ def smoothness_loss(disparity: torch.Tensor, weights: torch.Tensor) -> torch.Ten
     return weighted / weights.sum().clamp(min=1e-12) / disparity.shape[0]
 
 
-def flatness_loss(disparity: torch.Tensor, weights: torch.Tensor) -> torch.Tensor:
+def flatness_loss(disparity: torch.Tensor, weights: torch.Tensor, normaliser: torch.Tensor | None = None) -> torch.Tensor:
     """Edge-aware first-order smoothness of ``disparity`` (B, 1, H, W): the weighted mean of
     |∂z/∂x| and |∂z/∂y| (forward differences) with the ``weights`` of :func:`smoothness_weights`.
+    ``normaliser``: what the weighted sum is divided by (default ``weights.sum()``); with weights
+    cut to a part of the holes (:func:`flatness_region`) pass the sum of the uncut ones, so that a
+    pixel there pulls as hard as it would with the term everywhere.
 
     Where a hole lies between valid pixels a plane through them is among its minima (along a
     line, any monotone profile between two fixed ends has the same variation), but where a hole
@@ -264,4 +268,33 @@ def flatness_loss(disparity: torch.Tensor, weights: torch.Tensor) -> torch.Tenso
     dx = (disparity[..., 1:] - disparity[..., :-1]).abs()  # (B, 1, H, W - 1)
     dy = (disparity[..., 1:, :] - disparity[..., :-1, :]).abs()  # (B, 1, H - 1, W)
     weighted = (dx * weights[:, :1, :, :-1]).sum() + (dy * weights[:, 1:, :-1, :]).sum()
-    return weighted / weights.sum().clamp(min=1e-12) / disparity.shape[0]
+    total = weights.sum() if normaliser is None else normaliser
+    return weighted / total.clamp(min=1e-12) / disparity.shape[0]
+
+
+def flatness_region(holes: np.ndarray, reach: float) -> np.ndarray:
+    """Where :func:`flatness_loss` should act, (H, W) bool: every pixel of a hole (4-connected) that
+    touches the image border, and in the other, enclosed holes the pixels within ``reach`` px
+    (Euclidean) of a pixel outside the holes. ``holes``: (H, W) bool, True where the fit is free.
+
+    At the border nothing on the far side says where the surface goes, and levelling off is the
+    safe guess; in a thin hole the term keeps the fill from wandering. But the middle of a large
+    enclosed hole has valid depth all around it: there the curvature term alone continues a
+    curved surface smoothly, as biharmonic interpolation does, and a first-order term flattens it.
+
+    Example:
+        >>> holes = np.zeros((7, 9), bool); holes[2:5, 1:8] = True; holes[0:2, 0] = True
+        >>> flatness_region(holes, reach=1.0).astype(int)
+        array([[1, 0, 0, 0, 0, 0, 0, 0, 0],
+               [1, 0, 0, 0, 0, 0, 0, 0, 0],
+               [0, 1, 1, 1, 1, 1, 1, 1, 0],
+               [0, 1, 0, 0, 0, 0, 0, 1, 0],
+               [0, 1, 1, 1, 1, 1, 1, 1, 0],
+               [0, 0, 0, 0, 0, 0, 0, 0, 0],
+               [0, 0, 0, 0, 0, 0, 0, 0, 0]])
+    """
+    holes = np.asarray(holes, bool)
+    labels, _ = ndimage.label(holes)  # 4-connected components
+    at_border = np.union1d(np.union1d(labels[0], labels[-1]), np.union1d(labels[:, 0], labels[:, -1]))
+    touching = np.isin(labels, at_border[at_border > 0])
+    return touching | (holes & (ndimage.distance_transform_edt(holes) <= reach))

@@ -135,6 +135,7 @@ class Profile:
     smoothness_edge: float = 10.0  # FitConfig.smoothness_edge
     edge_guide: str = "grey"  # FitConfig.edge_guide: the colour change those edges are measured on
     flatness: float = 0.0  # FitConfig.flatness: first-order smoothness in the holes (0 = off)
+    flatness_reach: float | None = None  # FitConfig.flatness_reach: its reach into enclosed holes (None: all of them)
     net_input: str = "noise"  # FitConfig.net_input: the fixed network input ("noise" or "meshgrid")
     noise_channels: int = 16  # FitConfig.noise_channels: its channel count
     image_input: float = 0.0  # FitConfig.image_input: the colour image's scale as extra input channels (0: off)
@@ -158,6 +159,8 @@ class Profile:
                 f"lr {self.lr:g}, auto-stop {'on' if self.auto_stop else 'off'}"
                 + (f", hole curvature weight {self.smoothness:g}" if self.smoothness else "")
                 + (f", hole flatness weight {self.flatness:g}" if self.flatness else "")
+                + (f" (in enclosed holes only within {self.flatness_reach:g} px of valid depth)"
+                   if self.flatness and self.flatness_reach is not None else "")
                 + (f" (relaxed at colour edges by exp(-{self.smoothness_edge:g}·"
                    + ("|∇grey|" if self.edge_guide == "grey" else "max over R, G, B of |∇I|") + "))"
                    if self.smoothness or self.flatness else "")

@@ -109,7 +109,7 @@ CONFIG_BAD = {
     "ensemble": [0, 1.5, True],
     "smoothness": [-1.0, float("inf"), float("nan")],
     "smoothness_edge": [-1.0, float("inf")],
-    "flatness": [-0.5, float("inf"), float("nan")],
+    "flatness": [-0.5, float("inf"), float("nan")], "flatness_reach": [-1.0, float("inf"), "4"],
     "image_input": [-1.0, float("nan"), "1"], "image_blur": [-0.5, float("inf")],
     "disparity_margin": [0.5, float("inf"), float("nan")],
     "holdout_fraction": [0.0, 0.5, float("nan")],

@@ -207,6 +207,53 @@ def test_flatness_continues_a_border_hole_flat_where_curvature_alone_carries_the
     assert abs(border_mean(smoothness=1.0, flatness=1.0) - last_valid) < abs(border_mean(smoothness=1.0) - last_valid)
 
 
+def test_flatness_region_is_the_border_holes_and_a_rim_of_the_enclosed_ones_by_brute_force():
+    from ddp_lite.losses import flatness_region
+    rng = np.random.default_rng(3)
+    holes = np.zeros((20, 24), bool)
+    holes[5:14, 6:17] = True  # enclosed
+    holes[0:4, 18:24] = True  # at the border
+    holes |= rng.random(holes.shape) < 0.03  # scattered pixels, some at the border
+    holes[5:14, 6:17] = True
+    reach = 2.5
+    # the reference: for each hole pixel the distance to the nearest non-hole pixel by brute force,
+    # and its component by a flood fill over 4-neighbours
+    valid_yx = np.argwhere(~holes)
+    expected = np.zeros_like(holes)
+    seen = np.zeros_like(holes)
+    for start in map(tuple, np.argwhere(holes)):
+        if seen[start]:
+            continue
+        component, stack = [], [start]
+        seen[start] = True
+        while stack:
+            y, x = stack.pop()
+            component.append((y, x))
+            for ny, nx in ((y - 1, x), (y + 1, x), (y, x - 1), (y, x + 1)):
+                if 0 <= ny < 20 and 0 <= nx < 24 and holes[ny, nx] and not seen[ny, nx]:
+                    seen[ny, nx] = True
+                    stack.append((ny, nx))
+        border = any(y in (0, 19) or x in (0, 23) for y, x in component)
+        for y, x in component:
+            nearest = np.sqrt(((valid_yx - (y, x)) ** 2).sum(1)).min()
+            expected[y, x] = border or nearest <= reach
+    region = flatness_region(holes, reach)
+    np.testing.assert_array_equal(region, expected)
+    assert region[0:4, 18:24].all() and not region[9, 11] and region[5, 11]  # border hole; centre; rim
+
+
+def test_flatness_reach_zero_leaves_an_enclosed_hole_to_the_curvature_term_alone():
+    # every hole pixel is ≥ 1 px from valid depth, so reach 0 takes the first-order term out of an
+    # enclosed hole: the fit is the one without the term, to the bit; the full term changes it
+    gt, depth = plane_with_hole()
+    transform = DisparityTransform.from_depth(depth)
+    fit = lambda **c: complete_depth(None, depth, variant="d", transform=transform,
+                                     config=FitConfig(**TINY, iterations=30, smoothness=1.0, **c)).disparity
+    without = fit()
+    np.testing.assert_array_equal(fit(flatness=0.6, flatness_reach=0.0), without)
+    assert not np.array_equal(fit(flatness=0.6), without)
+
+
 def test_smoothness_fills_a_hole_in_a_plane_better_than_without():
     gt, depth = plane_with_hole()
     base = FitConfig(**TINY, iterations=60)
