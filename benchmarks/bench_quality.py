@@ -92,7 +92,9 @@ RECIPES = {
     "lr5e-3": dict(lr=5e-3),  # the ninth pass, on class's recipe: Adam's rate halved, ...
     "lr2e-2": dict(lr=2e-2),  # ... doubled,
     "lz1": dict(lambda_z=1.0),  # ... L_disp all L1 (the paper: 0.8 L1 + 0.2 SSIM),
-    "reach4": dict(flatness_reach=4.0),  # ... the flatness term only at the border and 4 px into enclosed holes
+    "reach4": dict(flatness_reach=4.0),  # ... the flatness term only at the border and 4 px into enclosed holes,
+    "rgb0.05": dict(gammas=(0.95, 0.05)),  # ... the colour term at 0.05 (the paper's rgbd: 0.01),
+    "reach4-rgb0.05": dict(flatness_reach=4.0, gammas=(0.95, 0.05)),  # ... both
     "edge10": EDGE10,  # class before the sixth pass
     "edge30": dict(smoothness_edge=30.0, **GREY),
     "e100-rgb": dict(edge_guide="rgb", **NO_IMAGE, **E100),  # colour edges measured on R, G, B (tried, not kept)
