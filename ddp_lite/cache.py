@@ -14,7 +14,7 @@ Re-running a notebook re-does every fit in it, minutes at ``class``. With the en
 - the profile ``DDP_PROFILE`` names: ``config=None`` means its config.
 
 So a cached result is the result the same call would compute now (fits are deterministic on a
-CPU, see ``tests/test_determinism.py``), only without the wait; ``seconds`` is the time the fit took
+CPU: ``tests/test_fit.py::test_same_seed_same_numbers_and_inputs_untouched``), only without the wait; ``seconds`` is the time the fit took
 when it ran. A fit with a ``callback`` is never cached (the callback is what the caller wants to
 see), nor is a call whose arguments cannot be hashed, nor one that raises. Files are written
 atomically, so notebooks run side by side can share one folder. Unset (the default): no cache.
@@ -108,9 +108,7 @@ def cached(function):
         path = folder / f"{function.__name__}-{key}.pkl"
         try:
             return pickle.loads(path.read_bytes())
-        except FileNotFoundError:
-            pass
-        except Exception:  # an unreadable file (e.g. written by another version of a dependency): fit again
+        except Exception:  # not there yet, or unreadable (say, pickled by another version of a dependency)
             pass
         result = function(*args, **kwargs)
         write_bytes_atomic(path, pickle.dumps(result, protocol=pickle.HIGHEST_PROTOCOL))
