@@ -1,7 +1,8 @@
 """What the fit cache (``DDP_CACHE``, ``ddp_lite/cache.py``) saves: each notebook run twice at a profile,
 in a fresh kernel each time, first with an empty cache folder, then with the folder the first run
 filled. Prints the wall seconds of both runs, the cache entries, and whether the second run printed
-the same text (lines that report a time are left out of that comparison).
+the same text (lines that report a time are left out of that comparison, temporary folders' names
+masked).
 
     OMP_NUM_THREADS=1 python benchmarks/bench_cache.py                 # every notebook at ci
     OMP_NUM_THREADS=1 python benchmarks/bench_cache.py --only 03 05 --profile class
@@ -21,13 +22,15 @@ from ddp_lite.classroom import _environment
 
 NOTEBOOKS = Path(__file__).resolve().parent.parent / "notebooks"
 TIMING = re.compile(r"\d\s*(s|min|seconds?)\b|s/it|it/s")
+TEMPORARY = re.compile(r"tmp[\w-]{6,}")  # tempfile's folder names differ from run to run
 
 
 def _printed(nb) -> list[str]:
     lines = []
     for cell in nb.cells:
         for output in cell.get("outputs", []):
-            lines += [line for line in output.get("text", "").splitlines() if not TIMING.search(line)]
+            lines += [TEMPORARY.sub("tmp…", line) for line in output.get("text", "").splitlines()
+                      if not TIMING.search(line)]
     return lines
 
 
