@@ -94,7 +94,8 @@ RECIPES = {
     "lz1": dict(lambda_z=1.0),  # ... L_disp all L1 (the paper: 0.8 L1 + 0.2 SSIM),
     "reach4": dict(flatness_reach=4.0),  # ... the flatness term only at the border and 4 px into enclosed holes,
     "rgb0.05": dict(gammas=(0.95, 0.05)),  # ... the colour term at 0.05 (the paper's rgbd: 0.01),
-    "reach4-rgb0.05": dict(flatness_reach=4.0, gammas=(0.95, 0.05)),  # ... both
+    "reach4-rgb0.05": dict(flatness_reach=4.0, gammas=(0.95, 0.05)),  # ... both,
+    "margin1.1": dict(disparity_margin=1.1),  # ... the disparity range 1.1× around the valid depth's (default 1.25)
     "edge10": EDGE10,  # class before the sixth pass
     "edge30": dict(smoothness_edge=30.0, **GREY),
     "e100-rgb": dict(edge_guide="rgb", **NO_IMAGE, **E100),  # colour edges measured on R, G, B (tried, not kept)
