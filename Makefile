@@ -52,8 +52,9 @@ lab-command:
 	@echo '$(LAB_CMD)'
 
 # The tests and notebooks run in $(TEST_WORKERS) processes (pytest-xdist; each file stays in one, so a
-# notebook's cells run in order in one kernel; tests/conftest.py puts the notebooks and the student
-# copies first), each with one torch thread: on 2 cores, two 1-thread processes finish sooner than
+# notebook's cells run in order in one kernel; tests/conftest.py puts the notebooks first and the
+# student copies right after them, which read the notebooks' fits from the session's fit cache),
+# each with one torch thread: on 2 cores, two 1-thread processes finish sooner than
 # one 2-thread process, because most of a test is Python, not arithmetic. TEST_WORKERS=0 runs
 # everything in one process (torch then takes 2 threads).
 TEST_WORKERS ?= 2
