@@ -33,8 +33,9 @@ cases 1.06× against 1.35× (linear interpolation: 1.30×). Weight 0.3 lost logs
 (street/blobs 2.9×), where the slope should go on. Confining it to holes that touch the border and a
 4 px rim of the enclosed ones (``FitConfig(flatness_reach=4)``, ninth pass), so that curvature alone
 fills the middle of a large enclosed hole as biharmonic interpolation does, scored 0.825× against
-0.840× over three seeds (blobs gain, two SGM and street cases lose), inside the spread. With the term the seeds agree (weight 1: one
-fit 1.18-1.22× by seed, the mean of three 1.19×), so ``class`` fits once. Its UNet has half the
+0.840× over three seeds (blobs gain, two SGM and street cases lose), inside the spread. With the
+term the seeds agree (weight 1: one fit 1.18-1.22× by seed, the mean of three 1.19×), so ``class``
+fits once. Its UNet has half the
 paper's widths (16–256, a quarter of its convolution work): at 96×128 one such fit scored 1.33×
 against 1.57× for the paper's 32–512 (both without the term), at a third of the time. ``ci``
 kept the curvature term only until the eighth pass (below): at 48×64, before the colour image

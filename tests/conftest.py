@@ -61,3 +61,12 @@ def tilted_plane(height: int, width: int, slope: float = 0.04):
     """Ground-truth depth (H, W) float32 metres of a plane tilted in x: 2 m + ``slope`` m per pixel column."""
     u = np.arange(width, dtype=np.float32)
     return np.broadcast_to(2.0 + slope * u, (height, width)).astype(np.float32).copy()
+
+
+def plane_with_hole(height: int = 24, width: int = 32):
+    """(ground truth, input) depth (H, W) metres: ``tilted_plane`` with slope 0.05 and an enclosed
+    8 × 10 hole (NaN) at rows 8–15, columns 10–19."""
+    gt = tilted_plane(height, width, slope=0.05)
+    depth = gt.copy()
+    depth[8:16, 10:20] = np.nan
+    return gt, depth

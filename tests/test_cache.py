@@ -6,7 +6,7 @@ import sys
 import numpy as np
 import pytest
 import torch
-from conftest import TINY, tilted_plane
+from conftest import TINY, plane_with_hole, tilted_plane
 
 import ddp_lite as ddp
 from ddp_lite import cache
@@ -21,8 +21,7 @@ def folder(tmp_path, monkeypatch):
 
 
 def _inputs():
-    depth = tilted_plane(H, W)
-    depth[8:16, 10:20] = np.nan
+    _, depth = plane_with_hole(H, W)
     rgb = np.random.default_rng(0).random((H, W, 3)).astype(np.float32)
     return rgb, depth
 

@@ -2,7 +2,7 @@
 
 The grader tests on tiny hand-made notebooks run in seconds; the solutions of two real notebooks (01
 and 08; set DDP_GRADE_ALL=1 to grade all ten) run at `ci`; every untouched student copy runs in
-test_student_copies.py (a few minutes: its own file, so `make test` gives it a worker of its own).
+test_student_copies.py. Both read the notebooks' fits from the session's fit cache (conftest.py).
 nbval already runs every source notebook, where each check cell is an ``assert``, so the solutions
 of all ten pass their checks in every `make test`.
 """

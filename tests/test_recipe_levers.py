@@ -10,14 +10,7 @@ import torch.nn.functional as F
 
 from ddp_lite import DisparityTransform, FitConfig, UNet, complete_depth
 from ddp_lite.nets import _conv
-from conftest import TINY, tilted_plane
-
-
-def plane_with_hole(height=24, width=32):
-    gt = tilted_plane(height, width, slope=0.05)
-    depth = gt.copy()
-    depth[8:16, 10:20] = np.nan
-    return gt, depth
+from conftest import TINY, plane_with_hole, tilted_plane
 
 
 @pytest.mark.parametrize("down", ["stride", "pool"])
@@ -210,11 +203,9 @@ def test_flatness_continues_a_border_hole_flat_where_curvature_alone_carries_the
 def test_flatness_region_is_the_border_holes_and_a_rim_of_the_enclosed_ones_by_brute_force():
     from ddp_lite.losses import flatness_region
     rng = np.random.default_rng(3)
-    holes = np.zeros((20, 24), bool)
+    holes = rng.random((20, 24)) < 0.03  # scattered pixels, some at the border
     holes[5:14, 6:17] = True  # enclosed
     holes[0:4, 18:24] = True  # at the border
-    holes |= rng.random(holes.shape) < 0.03  # scattered pixels, some at the border
-    holes[5:14, 6:17] = True
     reach = 2.5
     # the reference: for each hole pixel the distance to the nearest non-hole pixel by brute force,
     # and its component by a flood fill over 4-neighbours
