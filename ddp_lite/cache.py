@@ -15,8 +15,9 @@ Re-running a notebook re-does every fit in it, minutes at ``class``. With the en
 
 So a cached result is the result the same call would compute now (fits are deterministic on a
 CPU: ``tests/test_fit.py::test_same_seed_same_numbers_and_inputs_untouched``), only without the
-wait; ``seconds`` is the time the fit took when it ran. A fit with a ``callback`` is never cached (the callback is what the caller wants to
-see), nor is a call whose arguments cannot be hashed, nor one that raises. Files are written
+wait; ``seconds`` is the time the fit took when it ran. A fit with a ``callback`` is never cached
+(the callback is what the caller wants to see), nor is a call whose arguments cannot be hashed,
+nor one that raises. Files are written
 atomically, so notebooks run side by side can share one folder. Unset (the default): no cache.
 Hashing is ``joblib.hash`` (MD5 of a pickle, arrays by their bytes).
 """

@@ -257,17 +257,18 @@ def _fit_one(rgb, depth, camera, neighbors, variant, config, *, gt_depth=None, t
     disp_target = ConstantTarget(target, fit_mask)
     rgb_target = ConstantTarget(rgb_t) if rgb_t is not None else None
 
-    smooth_weights = flat_weights = flat_normaliser = None
+    smooth_weights = flat_weights = weight_total = None
     if config.smoothness > 0 or config.flatness > 0:
         guide = rgb_t if rgb_t is not None else torch.zeros(1, 3, H, W, device=device)
         # the unconstrained pixels: holes, and the held-out pixels, which must behave like holes
         free = ~(valid & ~heldout)  # (H, W)
         smooth_weights = smoothness_weights(guide, to_tensor(free, device).bool(), config.smoothness_edge,
                                             config.edge_guide)  # (1, 2, H, W)
+        # both terms divide by the full weights' sum, also where flatness acts on part of the holes
+        weight_total = smooth_weights.sum()
         flat_weights = smooth_weights
         if config.flatness > 0 and config.flatness_reach is not None:
             flat_weights = smooth_weights * to_tensor(flatness_region(free, config.flatness_reach), device)
-            flat_normaliser = smooth_weights.sum()
 
     def loss_fn(output):
         disparity = output[:, :1]  # (1, 1, H, W)
@@ -282,10 +283,10 @@ def _fit_one(rgb, depth, camera, neighbors, variant, config, *, gt_depth=None, t
             terms["warp"] = warp_loss(rgb_target, [p[0] for p in pairs], [p[1] for p in pairs], config.lambda_w)
             total = total + w_warp * terms["warp"]
         if config.smoothness > 0:
-            terms["smooth"] = smoothness_loss(disparity, smooth_weights)
+            terms["smooth"] = smoothness_loss(disparity, smooth_weights, weight_total)
             total = total + config.smoothness * terms["smooth"]
         if config.flatness > 0:
-            terms["flat"] = flatness_loss(disparity, flat_weights, flat_normaliser)
+            terms["flat"] = flatness_loss(disparity, flat_weights, weight_total)
             total = total + config.flatness * terms["flat"]
         return total, terms
 

@@ -231,9 +231,11 @@ def smoothness_weights(image, region, edge: float = 10.0, guide: str = "grey") -
     return weights
 
 
-def smoothness_loss(disparity: torch.Tensor, weights: torch.Tensor) -> torch.Tensor:
+def smoothness_loss(disparity: torch.Tensor, weights: torch.Tensor, normaliser: torch.Tensor | None = None) -> torch.Tensor:
     """Edge-aware second-order smoothness of ``disparity`` (B, 1, H, W): the weighted mean of
     |∂²z/∂x²| and |∂²z/∂y²| with ``weights`` (1, 2, H, W) from :func:`smoothness_weights`.
+    ``normaliser``: what the weighted sum is divided by (default ``weights.sum()``, which a fit
+    computes once and passes in, since the weights are constant).
 
     Second differences vanish on any plane (disparity is affine in the pixel coordinates on a
     plane), so the term costs nothing there; it only stops the output from bending where no
@@ -244,7 +246,8 @@ def smoothness_loss(disparity: torch.Tensor, weights: torch.Tensor) -> torch.Ten
     dxx = disparity[..., 2:] - 2 * disparity[..., 1:-1] + disparity[..., :-2]  # (B, 1, H, W - 2)
     dyy = disparity[..., 2:, :] - 2 * disparity[..., 1:-1, :] + disparity[..., :-2, :]  # (B, 1, H - 2, W)
     weighted = (dxx.abs() * weights[:, :1, :, 1:-1]).sum() + (dyy.abs() * weights[:, 1:, 1:-1, :]).sum()
-    return weighted / weights.sum().clamp(min=1e-12) / disparity.shape[0]
+    total = weights.sum() if normaliser is None else normaliser
+    return weighted / total.clamp(min=1e-12) / disparity.shape[0]
 
 
 def flatness_loss(disparity: torch.Tensor, weights: torch.Tensor, normaliser: torch.Tensor | None = None) -> torch.Tensor:
@@ -295,6 +298,6 @@ def flatness_region(holes: np.ndarray, reach: float) -> np.ndarray:
     """
     holes = np.asarray(holes, bool)
     labels, _ = ndimage.label(holes)  # 4-connected components
-    at_border = np.union1d(np.union1d(labels[0], labels[-1]), np.union1d(labels[:, 0], labels[:, -1]))
+    at_border = np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]]))
     touching = np.isin(labels, at_border[at_border > 0])
     return touching | (holes & (ndimage.distance_transform_edt(holes) <= reach))
