@@ -10,8 +10,13 @@ The suite is fixed (cases are never dropped because DDP loses on them):
   each with OpenCV SGM holes of both parameter sets and with large Depthcomp-like blob holes;
 - the curved, photo-textured scenes of ``ddp_lite.organic`` (when present), with the same holes;
 - notebook 09's Middlebury-format fixture: SGM holes on the left view, the right view as the
-  warp loss's neighbour.
+  warp loss's neighbour;
+- the real Middlebury Motorcycle pair (``ddp_lite.real_cases``) pooled to 125×185 (``motorcycle-4``)
+  and 250×370 (``motorcycle-2``): three blob patterns, real SGBM holes, left-right-check (occlusion)
+  holes; the right view as the warp loss's neighbour. These keep their own size whatever the profile.
 SGM runs at 3× the working size below 96 rows and keeps each block's centre (as the notebooks do).
+``--suite synthetic`` (the default), ``real`` (motorcycle-4), ``real-half`` (motorcycle-2), ``all``
+(synthetic and motorcycle-4). The report prints each size apart, then every recipe over all its cases.
 
 Every classical fill works on disparity in pixels (d = f·B/Z, where linear is exact on planes).
 DDP's transform is the default one a user gets (from the input depth). A recipe is a set of
@@ -40,6 +45,7 @@ from ddp_lite import baselines  # noqa: E402
 from ddp_lite.experiments import Case, make_case, sgm_depth_at_scale  # noqa: E402
 from ddp_lite.holes import random_holes  # noqa: E402
 from ddp_lite.middlebury import load_middlebury, make_middlebury_fixture  # noqa: E402
+from ddp_lite.real_cases import REAL_HOLES, make_real_case  # noqa: E402
 from ddp_lite.resample import resize_scene  # noqa: E402
 from ddp_lite.scenes import SCENES  # noqa: E402
 from _common import add_profile_args, profile_from_args  # noqa: E402
@@ -60,8 +66,16 @@ EDGE10 = dict(smoothness_edge=10.0, **GREY)
 NOISE = dict(net_input="noise", noise_channels=16, **EDGE10)
 IMAGE = dict(image_input=1.0, image_blur=1.0)  # class's colour image in the input (seventh pass)
 CI7 = dict(smoothness_edge=10.0, flatness=0.0)  # ci until the eighth pass: strength 10, no flatness term
+PAPER = dict(smoothness=0.0, flatness=0.0, image_input=0.0, net_input="noise", noise_channels=16)
 RECIPES = {
     "default": {},
+    "paper": PAPER,  # the paper's losses and noise input at the profile's size, net and schedule: nothing added
+    "kit-ens2": dict(ensemble=2),  # real data first: the mean of two fits, ...
+    "kit-ens3": dict(ensemble=3),  # ... of three,
+    "patience100": dict(patience=100),  # ... a longer plateau before the rate cut and the stop,
+    "e100": dict(smoothness_edge=100.0),  # ... colour edges at strength 100 (textured photos),
+    "blur2": dict(image_blur=2.0),  # ... the colour image in the input blurred by 2 px,
+    "fillin": dict(fill_input=1.0),  # ... a colorization fill of the input disparity as one more input channel,
     "no-image": dict(**GREY, **E100),  # class before the seventh pass: no colour image in the net's input
     "image-e100": dict(**IMAGE, **E100),  # the seventh pass: the colour image in the input, at strength 100 ...
     "image-sharp": dict(image_input=1.0, image_blur=0.0, **E100),  # ... unblurred
@@ -157,18 +171,25 @@ def organic_scenes() -> tuple[str, ...]:
     return tuple(name for name in SCENES if name not in NAMED)
 
 
-def suite(quick: bool = False) -> list[str]:
+def suite(quick: bool = False, kind: str = "synthetic") -> list[str]:
+    """The case names of a suite: ``synthetic``, ``real`` (125×185), ``real-half`` (250×370) or ``all``."""
+    real = {factor: [f"motorcycle-{factor}/{holes}" for holes in REAL_HOLES] for factor in (4, 2)}
+    if kind in ("real", "real-half"):
+        return real[4 if kind == "real" else 2]
     names = [f"{scene}/{holes}" for scene in NAMED + organic_scenes() for holes in HOLES] + ["fixture/sgm-dense"]
     if quick:  # QUICK plus one curved scene with SGM holes
         chosen = set(QUICK) | {f"{scene}/sgm-dense" for scene in organic_scenes()[:1]}
         names = [n for n in names if n in chosen]
-    return names
+    return names + (real[4] if kind == "all" else [])
 
 
 def build_case(name: str, profile) -> tuple[Case, float]:
     """The case ``scene/holes`` at the profile's size and its f·B (px · m) for disparity in pixels."""
     scene_name, holes = name.split("/")
     H, W = profile.size
+    if scene_name.startswith("motorcycle-"):
+        case = make_real_case(holes, factor=int(scene_name.split("-")[1]))
+        return case, case.fb
     if scene_name == "fixture":
         with tempfile.TemporaryDirectory(prefix="ddp-quality-") as tmp:
             full = load_middlebury(make_middlebury_fixture(Path(tmp) / "Fixture-perfect", size=(3 * H, 3 * W), seed=0))
@@ -225,7 +246,7 @@ def _split_top(body: str) -> list[str]:
 
 def run(args) -> None:
     profile = profile_from_args(args)
-    names = args.cases or suite(args.quick)
+    names = args.cases or suite(args.quick, args.suite)
     lane, lanes = (int(v) for v in args.lane.split("/"))
     recipes = [parse_recipe(r) for r in args.recipes]
     out = open(args.out, "a") if args.out else None
@@ -234,19 +255,25 @@ def run(args) -> None:
         for line in Path(args.out).read_text().splitlines():
             row = json.loads(line)
             done.add((row["case"], row["method"], row.get("variant"), row.get("seed"), row["size"]))
-    size = f"{profile.size[0]}x{profile.size[1]}"
     for index, name in enumerate(names):
         if index % lanes != lane:
             continue
         case, fb = build_case(name, profile)
+        size = f"{case.depth.shape[0]}x{case.depth.shape[1]}"
         rows = []
-        if (name, "linear", None, None, size) not in done:
-            disparity_in = fb / case.depth
-            for method, fill in baselines.BASELINES.items():
+
+        def record(row):  # at once: a lane stopped part-way keeps what it finished
+            rows.append(row)
+            if out:
+                out.write(json.dumps(row) + "\n")
+                out.flush()
+        disparity_in = fb / case.depth
+        for method, fill in baselines.BASELINES.items():
+            if (name, method, None, None, size) not in done:  # a fill added since the file was written runs too
                 start = time.perf_counter()
                 filled = fill(disparity_in, case.rgb)
-                rows.append(dict(case=name, method=method, variant=None, seed=None, size=size,
-                                 px=rmse_px(fb / filled, case, fb), seconds=time.perf_counter() - start))
+                record(dict(case=name, method=method, variant=None, seed=None, size=size,
+                            px=rmse_px(fb / filled, case, fb), seconds=time.perf_counter() - start))
         for recipe, overrides in recipes:
             for variant in args.variants:
                 if variant == "rgbd+warp" and not case.neighbors:
@@ -260,16 +287,12 @@ def run(args) -> None:
                     start = time.perf_counter()
                     result = ddp.complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant,
                                                 config=config)
-                    rows.append(dict(case=name, method=recipe, variant=variant, seed=seed, size=size,
-                                     px=rmse_px(result.merged(case.depth), case, fb),
-                                     seconds=time.perf_counter() - start, iterations=result.iterations,
-                                     overrides=repr(overrides)))
+                    record(dict(case=name, method=recipe, variant=variant, seed=seed, size=size,
+                                px=rmse_px(result.merged(case.depth), case, fb),
+                                seconds=time.perf_counter() - start, iterations=result.iterations,
+                                overrides=repr(overrides)))
                     print(f"{name:<22} {recipe:<14} {variant:<10} seed {seed}: {rows[-1]['px']:.3f} px "
                           f"({rows[-1]['seconds']:.0f} s)", flush=True)
-        for row in rows:
-            if out:
-                out.write(json.dumps(row) + "\n")
-                out.flush()
     if out:
         out.close()
 
@@ -314,6 +337,43 @@ def print_paired(fits: dict, best: dict) -> None:
         print("\n" + header + "\n" + "-" * len(header) + "\n" + "\n".join(lines))
 
 
+def _ratios(rows: list[dict]) -> dict:
+    """{(recipe, variant): {case: mean ratio over the seeds every case has}} over ``rows`` of any sizes,
+    each case's ratio to its own best classical fill."""
+    classical, fits = {}, {}
+    for r in rows:
+        key = (r["case"], r["size"])
+        if r["variant"] is None:
+            classical.setdefault(key, {})[r["method"]] = r["px"]
+    for r in rows:
+        key = (r["case"], r["size"])
+        if r["variant"] is not None and key in classical:
+            fits.setdefault((r["method"], r["variant"]), {}).setdefault(key, {})[r["seed"]] = r["px"]
+    out = {}
+    for recipe_variant, per_case in fits.items():
+        seeds = set.intersection(*(set(v) for v in per_case.values()))
+        if seeds:
+            out[recipe_variant] = {c: np.mean([v[s] for s in seeds]) / min(classical[c].values())
+                                   for c, v in per_case.items()}
+    return out
+
+
+def report_together(rows: list[dict]) -> None:
+    """Every recipe over its synthetic and real cases together (each at its own size)."""
+    ratios = _ratios(rows)
+    if len({r["size"] for r in rows}) < 2 or not ratios:
+        return
+    header = f"{'recipe':<18}{'variant':<11}{'synthetic':>10}{'n':>4}{'real':>8}{'n':>4}{'real max':>9}{'all':>8}"
+    print("\n=== together: mean ratio to the best classical fill (each case at its own size) ===\n"
+          + header + "\n" + "-" * len(header))
+    for (recipe, variant), per_case in sorted(ratios.items()):
+        real = [v for (c, _), v in per_case.items() if c.startswith("motorcycle")]
+        synthetic = [v for (c, _), v in per_case.items() if not c.startswith("motorcycle")]
+        mean = lambda x: np.mean(x) if x else np.nan
+        print(f"{recipe:<18}{variant:<11}{mean(synthetic):>10.3f}{len(synthetic):>4}{mean(real):>8.3f}{len(real):>4}"
+              f"{(max(real) if real else np.nan):>9.3f}{mean(synthetic + real):>8.3f}")
+
+
 def report(path: str, size: str | None = None) -> None:
     rows = [json.loads(line) for line in Path(path).read_text().splitlines() if line.strip()]
     sizes = sorted({r["size"] for r in rows}) if size is None else [size]
@@ -336,7 +396,7 @@ def report(path: str, size: str | None = None) -> None:
             wins[winner[c]] = wins.get(winner[c], 0) + 1
         print("best classical fill per case: " + ", ".join(f"{k} {v}" for k, v in sorted(wins.items(), key=lambda x: -x[1])))
         header = f"{'recipe':<18}{'variant':<11}{'cases':>6}{'seeds':>6}{'mean':>7}{'worst':>7}{'mean/seed':>10}" \
-                 f"{'real mean':>10}{'real worst':>11}{'wins':>6}{'s/fit':>7}"
+                 f"{'curved':>10}{'curved max':>11}{'wins':>6}{'s/fit':>7}"
         print(header)
         print("-" * len(header))
         for (recipe, variant), per_case in sorted(fits.items()):
@@ -347,7 +407,7 @@ def report(path: str, size: str | None = None) -> None:
             mean_px = {c: np.mean([per_case[c][s]["px"] for s in seeds]) for c in common}
             ratios = np.array([mean_px[c] / best[c] for c in common])
             per_seed = [np.mean([per_case[c][s]["px"] / best[c] for c in common]) for s in seeds]
-            real = np.array([mean_px[c] / best[c] for c in common if c.split("/")[0] not in NAMED])
+            real = np.array([mean_px[c] / best[c] for c in common if c.split("/")[0] not in NAMED])  # curved + fixture
             seconds = np.mean([per_case[c][s]["seconds"] for c in common for s in seeds])
             print(f"{recipe:<18}{variant:<11}{len(common):>6}{len(seeds):>6}{ratios.mean():>7.3f}{ratios.max():>7.3f}"
                   f"{np.mean(per_seed):>10.3f}{(real.mean() if real.size else np.nan):>10.3f}"
@@ -360,6 +420,8 @@ def report(path: str, size: str | None = None) -> None:
                     vals = [per_case[c][s]["px"] for s in sorted(per_case[c])]
                     print(f"  {c:<24} best {winner[c]:<13} {best[c]:.3f}  ddp " + " ".join(f"{v:.3f}" for v in vals)
                           + f"  ratio {np.mean(vals) / best[c]:.2f}")
+    if size is None:
+        report_together(rows)
 
 
 def main() -> None:
@@ -367,6 +429,8 @@ def main() -> None:
     add_profile_args(parser)
     parser.add_argument("--quick", action="store_true", help="a small subset of the suite, for iterating")
     parser.add_argument("--cases", nargs="+", help="case names (scene/holes); default: the whole suite")
+    parser.add_argument("--suite", choices=("synthetic", "real", "real-half", "all"), default="synthetic",
+                        help="which cases (the real ones: the Middlebury Motorcycle pair at 125×185 or 250×370)")
     parser.add_argument("--recipes", nargs="+", default=["default"])
     parser.add_argument("--variants", nargs="+", default=["rgbd", "rgbd+warp"])
     parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1])

@@ -19,6 +19,14 @@ never modified.
   NYU Depth v2 toolbox's ``fill_depth_colorization.m`` uses it: each pixel's depth is a weighted
   average of its 3×3 neighbours', weights high where the grey levels are alike, so depth
   follows colour edges. One sparse linear system (scipy.sparse, spsolve).
+- ``guided-filter``: He, Sun & Tang's guided filter (2010) as a hole fill (the GIF row of the paper's
+  Table 6): in every window the depth is an affine function of the colour, fitted to the window's
+  valid pixels only; a hole pixel averages the affine models of the windows that cover it, weighted
+  by how much valid depth each saw. Holes beyond a window's reach take the next, doubled radius.
+- ``bilateral-solver``: Barron & Poole's fast bilateral solver (2016; the FBS row): the smoothest depth
+  in a bilateral grid over (x, y, luma, chroma), pulled to the input where it is valid; a sparse
+  system on the grid's vertices, solved by preconditioned conjugate gradients (scipy.sparse). OpenCV's
+  ``ximgproc`` has it only in the contrib build, which the kit does not install.
 """
 from __future__ import annotations
 
@@ -31,7 +39,7 @@ from scipy.spatial import QhullError
 from .checks import check_depth
 
 __all__ = ["fill_nearest", "fill_linear", "fill_cubic", "fill_telea", "fill_navier_stokes", "fill_biharmonic",
-           "fill_colorization", "BASELINES", "fill"]
+           "fill_colorization", "fill_guided_filter", "fill_bilateral_solver", "BASELINES", "fill"]
 
 
 def _check(depth, rgb=None, min_valid: int = 1, need_rgb: bool = False):
@@ -193,6 +201,160 @@ def fill_colorization(depth, rgb=None, alpha: float = 1.0) -> np.ndarray:
     return np.where(valid, depth, solution).astype(np.float32)
 
 
+def _box_mean(x: np.ndarray, radius: int) -> np.ndarray:
+    """The mean over the (2r+1)² window around each pixel of (H, W, ...) ``x``, reflecting at the border."""
+    size = (2 * radius + 1, 2 * radius + 1) + (1,) * (x.ndim - 2)
+    return ndimage.uniform_filter(x, size=size, mode="reflect")
+
+
+_MIN, _POW = 0.5, 1
+
+
+def _masked_guided_filter(guide: np.ndarray, target: np.ndarray, weight: np.ndarray, radius: int,
+                          eps: float) -> tuple[np.ndarray, np.ndarray]:
+    """One guided filter (He et al. 2010, colour guide) fitted to the pixels where ``weight`` > 0.
+
+    ``guide`` (H, W, C), ``target`` (H, W), ``weight`` (H, W) in [0, 1]. Per window k, (a_k, b_k) minimise
+    Σ_i w_i (a_k·I_i + b_k − p_i)² / Σ_i w_i + eps·|a_k|²; pixel i gets Σ_k ω_k (a_k·I_i + b_k) / Σ_k ω_k
+    over the windows k covering it, ω_k = the window's mean weight where that is ≥ 1/2 (else 0: too few
+    pixels to fit a model to). Returns that (H, W) and Σ_k ω_k.
+    """
+    C = guide.shape[2]
+    w = _box_mean(weight, radius)  # (H, W): each window's mean weight
+    safe = np.maximum(w, 1e-12)
+    mean_I = _box_mean(weight[..., None] * guide, radius) / safe[..., None]  # (H, W, C)
+    mean_p = _box_mean(weight * target, radius) / safe  # (H, W)
+    outer = guide[..., :, None] * guide[..., None, :]  # (H, W, C, C)
+    cov_II = _box_mean(weight[..., None, None] * outer, radius) / safe[..., None, None] \
+        - mean_I[..., :, None] * mean_I[..., None, :]
+    cov_Ip = _box_mean(weight[..., None] * guide * target[..., None], radius) / safe[..., None] \
+        - mean_I * mean_p[..., None]
+    a = np.linalg.solve(cov_II + eps * np.eye(C), cov_Ip[..., None])[..., 0]  # (H, W, C)
+    b = mean_p - np.einsum("hwc,hwc->hw", a, mean_I)
+    w = np.where(w >= _MIN, w, 0.0) ** _POW  # ω_k: a window less than half valid fits its model to too few pixels
+    a, b = a * w[..., None], b * w  # windows weighted by the valid depth they saw
+    total = _box_mean(w, radius)
+    q = (np.einsum("hwc,hwc->hw", _box_mean(a, radius), guide) + _box_mean(b, radius)) / np.maximum(total, 1e-12)
+    return q, total
+
+
+def fill_guided_filter(depth, rgb=None, radius: int = 2, eps: float = 1e-4) -> np.ndarray:
+    """Guided-filter fill: depth (H, W) with NaN holes, rgb (H, W, 3) in [0, 1] → (H, W) float32.
+
+    Each (2·radius+1)² window models depth as an affine function of the colour, fitted by ridge
+    regression (``eps`` on the colour's [0, 1] scale: a larger one follows colour less) to its valid
+    pixels where at least half the window is valid; a hole averages the models of such windows over it.
+    Holes that no such window of the current radius reaches are filled at twice the radius, and so on.
+    Valid pixels keep their input value.
+
+    Example:
+        >>> rgb = np.linspace(0, 1, 12).reshape(3, 4, 1).repeat(3, axis=2)
+        >>> depth = 1.0 + 2.0 * rgb[..., 0]; depth[1, 1] = np.nan      # depth affine in the colour
+        >>> round(float(fill_guided_filter(depth, rgb, radius=1, eps=1e-9)[1, 1]), 4), round(float(1 + 2 * rgb[1, 1, 0]), 4)
+        (1.9091, 1.9091)
+    """
+    depth, valid, image = _check(depth, rgb, need_rgb=True)
+    for name, value, low in (("radius", radius, 1), ("eps", eps, 0.0)):
+        if isinstance(value, bool) or not np.isscalar(value) or not np.isfinite(value) or value < low \
+                or (name == "radius" and int(value) != value) or (name == "eps" and value <= 0):
+            raise ValueError(f"{name} must be a {'positive integer' if name == 'radius' else 'positive number'}, "
+                             f"got {value!r}")
+    out = depth.copy()
+    todo = ~valid
+    weight = valid.astype(np.float64)
+    target = np.where(valid, depth, 0.0)
+    r = int(radius)
+    while todo.any():
+        q, reach = _masked_guided_filter(image, target, weight, r, float(eps))
+        reached = todo & (reach > 1e-9)
+        out[reached] = q[reached]
+        todo &= ~reached
+        if r > max(depth.shape):  # every window covers the image: nothing left can be reached
+            out[todo] = _nearest(depth, valid)[todo]
+            break
+        r *= 2
+    return out.astype(np.float32)
+
+
+def _bilateral_grid(image: np.ndarray, sigma_xy: float, sigma_luma: float, sigma_chroma: float):
+    """Barron & Poole's simplified bilateral grid of ``image`` (H, W, 3) in [0, 1]: every pixel falls on
+    the vertex at its rounded (x/σ_xy, y/σ_xy, Y/σ_l, U/σ_c, V/σ_c) (YUV on a 0–255 scale). Returns the
+    splat matrix S (vertices × pixels, one 1 per column) and the blur B = Σ over the five axes of the
+    ±1-vertex neighbours (a [1 2 1] blur without its centre, which ``_bistochastic`` adds back)."""
+    H, W = image.shape[:2]
+    yuv = cv2.cvtColor(image.astype(np.float32), cv2.COLOR_RGB2YUV).reshape(-1, 3) * 255.0  # (N, 3)
+    yy, xx = np.mgrid[0:H, 0:W]
+    coords = np.column_stack([xx.ravel() / sigma_xy, yy.ravel() / sigma_xy, yuv[:, 0] / sigma_luma,
+                              yuv[:, 1] / sigma_chroma, yuv[:, 2] / sigma_chroma])
+    coords = np.round(coords).astype(np.int64)
+    coords -= coords.min(axis=0)
+    vertices, pixel_vertex = np.unique(coords, axis=0, return_inverse=True)  # (M, 5), (N,)
+    M, N = len(vertices), H * W
+    S = sparse.csr_matrix((np.ones(N), (pixel_vertex.ravel(), np.arange(N))), shape=(M, N))
+    extent = vertices.max(axis=0) + 2
+    keys = np.ravel_multi_index(vertices.T, extent)  # sorted, as np.unique sorted the rows
+    blur = sparse.csr_matrix((M, M))
+    for axis in range(5):
+        for step in (-1, 1):
+            shifted = vertices.copy()
+            shifted[:, axis] += step
+            ok = shifted[:, axis] >= 0
+            shifted_keys = np.ravel_multi_index(shifted[ok].T, extent)
+            where = np.searchsorted(keys, shifted_keys)
+            found = (where < M) & (keys[np.minimum(where, M - 1)] == shifted_keys)
+            rows = np.flatnonzero(ok)[found]
+            blur = blur + sparse.csr_matrix((np.ones(len(rows)), (rows, where[found])), shape=(M, M))
+    return S, blur
+
+
+def _bistochastic(S, blur, iterations: int = 20):
+    """Diagonals (m, n) with diag(n)·B̄·diag(n) having row sums m = S·1, B̄ = B + 10·I (Barron & Poole)."""
+    m = np.asarray(S.sum(axis=1)).ravel()
+    n = np.ones_like(m)
+    for _ in range(iterations):
+        n = np.sqrt(n * m / (blur @ n + 10.0 * n))
+    return m, n
+
+
+def fill_bilateral_solver(depth, rgb=None, lam: float = 4.0, sigma_xy: float = 8.0, sigma_luma: float = 8.0,
+                          sigma_chroma: float = 8.0, tol: float = 1e-6) -> np.ndarray:
+    """Fast bilateral solver fill (Barron & Poole 2016): depth (H, W) NaN holes, rgb (H, W, 3) → (H, W) float32.
+
+    Minimises λ/2 · Σ_ij Ŵ_ij (x_i − x_j)² + Σ_i c_i (x_i − t_i)² with t the input, c = 1 where it is
+    valid and 0 in the holes, and Ŵ the bistochastised bilateral affinity of the colour image
+    (σ_xy px, σ_luma and σ_chroma on a 0–255 scale). In grid space: (λ(D_m − D_n B̄ D_n) + diag(S c)) y
+    = S(c·t), x = Sᵀ y; conjugate gradients, Jacobi-preconditioned, from the grid's mean of a
+    nearest-valid fill (which is also what a grid region with no valid depth keeps). Valid pixels
+    keep their input value.
+    """
+    from scipy.sparse.linalg import cg
+
+    depth, valid, image = _check(depth, rgb, need_rgb=True)
+    for name, value in (("lam", lam), ("sigma_xy", sigma_xy), ("sigma_luma", sigma_luma),
+                        ("sigma_chroma", sigma_chroma), ("tol", tol)):
+        if isinstance(value, bool) or not np.isscalar(value) or not np.isfinite(value) or value <= 0:
+            raise ValueError(f"{name} must be a positive number, got {value!r}")
+    if valid.all():
+        return depth.astype(np.float32)
+    S, blur = _bilateral_grid(np.clip(image, 0.0, 1.0), sigma_xy, sigma_luma, sigma_chroma)
+    _, n = _bistochastic(S, blur)
+    m = np.asarray(S.sum(axis=1)).ravel()
+    c = valid.ravel().astype(np.float64)
+    t = np.where(valid, depth, 0.0).ravel()
+    Dn = sparse.diags(n)
+    affinity = Dn @ blur @ Dn  # B̄'s centre 10·I cancels in the Laplacian below
+    # diag(affinity·1 + 10n²) is D_m once the bistochastisation has converged; taking it from the affinity
+    # itself keeps the smoothness term a graph Laplacian (positive semi-definite) when it has not
+    laplacian = sparse.diags(np.asarray(affinity.sum(axis=1)).ravel()) - affinity
+    A = lam * laplacian + sparse.diags(S @ c)
+    b = S @ (c * t)
+    start = (S @ _nearest(depth, valid).ravel()) / m
+    diagonal = np.maximum(A.diagonal(), 1e-10)
+    y, _ = cg(A.tocsr(), b, x0=start, rtol=tol, maxiter=500, M=sparse.diags(1.0 / diagonal))
+    solution = (S.T @ y).reshape(depth.shape)
+    return np.where(valid, depth, solution).astype(np.float32)
+
+
 BASELINES = {
     "nearest": fill_nearest,
     "linear": fill_linear,
@@ -201,6 +363,8 @@ BASELINES = {
     "navier-stokes": fill_navier_stokes,
     "biharmonic": fill_biharmonic,
     "colorization": fill_colorization,
+    "guided-filter": fill_guided_filter,
+    "bilateral-solver": fill_bilateral_solver,
 }
 
 

@@ -40,6 +40,7 @@ class FitConfig:
     net_input: str = "noise"  # "noise" (the paper) or "meshgrid" (x, y in the first two channels; nets.make_input)
     image_input: float = 0.0  # > 0: the colour image × this joins the net input (variants with colour; nets.image_channels)
     image_blur: float = 1.0  # σ in px of the Gaussian blur on that image (0: none)
+    fill_input: float = 0.0  # > 0: a classical fill of the input disparity × this joins the net input (nets.fill_channel)
     lr: float = 5e-5
     schedule: str = "step"  # "step" (lr × lr_gamma at each milestone) or "cosine" (to 0 at the last iteration)
     iterations: int | None = None
@@ -124,7 +125,7 @@ class FitConfig:
                 ("lambda_w", 0.0, 1.0, False, False), ("reg_noise_std", 0.0, None, False, False),
                 ("average_outputs", 0.0, 1.0, False, True), ("smoothness", 0.0, None, False, False),
                 ("flatness", 0.0, None, False, False), ("image_input", 0.0, None, False, False),
-                ("image_blur", 0.0, None, False, False),
+                ("image_blur", 0.0, None, False, False), ("fill_input", 0.0, None, False, False),
                 ("smoothness_edge", 0.0, None, False, False), ("disparity_margin", 1.0, None, False, False),
                 ("holdout_fraction", 0.0, 0.5, True, True)):
             check_real(getattr(self, name), f"config.{name}", low, high, low_open, high_open)

@@ -30,7 +30,7 @@ from .loop import (PlateauStopper, check_finite_output, check_memory, estimate_p
                    to_tensor)
 from .losses import (ConstantTarget, disparity_loss, flatness_loss, flatness_region, rgb_loss, smoothness_loss,
                      smoothness_weights, warp_loss)
-from .nets import image_channels
+from .nets import fill_channel, image_channels
 from .variants import VARIANTS, get_variant
 from .warp import Warper
 
@@ -322,6 +322,11 @@ def _fit_one(rgb, depth, camera, neighbors, variant, config, *, gt_depth=None, t
     image = None
     if config.image_input > 0 and rgb_t is not None:
         image = image_channels(rgb_t, config.image_input, config.image_blur)  # (1, 3, H, W)
+    if config.fill_input > 0:  # from the fitted pixels only: the held-out ones stay unseen
+        fill = fill_channel(transform.to_disparity(np.where(valid & ~heldout, depth, np.nan)),
+                            rgb if spec.uses_rgb else None, config.fill_input)
+        fill = to_tensor(fill, device)  # (1, 1, H, W)
+        image = fill if image is None else torch.cat([image, fill], dim=1)
     net, noise = loop.build(config, spec.out_channels, H, W, device, init.state if init is not None else None,
                             noise, image)
     start = time.perf_counter()

@@ -188,7 +188,7 @@ def estimate_peak_memory_gb(config: FitConfig, out_channels: int, height: int, w
     factor = 2 ** levels
     pixels = (-(-height // factor) * factor) * (-(-width // factor) * factor)
     first = 0 if config.net == "unet" else 1  # SkipNet's widest level already runs at half size
-    in_channels = config.noise_channels + (3 if config.image_input > 0 else 0)
+    in_channels = config.noise_channels + (3 if config.image_input > 0 else 0) + (1 if config.fill_input > 0 else 0)
     units = in_channels + sum(c / 4 ** (k + first) for k, c in enumerate(channels))
     with torch.device("meta"):
         parameters = count_parameters(build_net(config.net, in_channels, out_channels, config.channels))

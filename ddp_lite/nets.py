@@ -3,20 +3,23 @@
 Both map a fixed input tensor (B, C_in, H, W) to an output (B, C_out, H, W) in [0, 1] (sigmoid):
 16 channels of uniform noise, as in the paper, or the pixel coordinates, alone or followed by
 noise channels (``make_input``; Deep Image Prior's input for large holes); optionally followed by
-the (blurred) colour image of the view (``image_channels``).
+the (blurred) colour image of the view (``image_channels``) and a classical fill of the input
+(``fill_channel``).
 Nothing is pretrained: the architecture itself is the prior. Each network pads its input to a
 multiple of its total down-sampling factor (reflection padding) and crops the output back, so
 any image size works.
 """
 from __future__ import annotations
 
+import numpy as np
 import torch
 import torch.nn as nn
 import torch.nn.functional as F
 
+from .baselines import fill_colorization, fill_linear
 from .losses import _blur, _gaussian_1d  # SSIM's separable Gaussian, reused for the image input
 
-__all__ = ["UNet", "SkipNet", "make_noise", "make_input", "image_channels", "build_net", "count_parameters"]
+__all__ = ["UNet", "SkipNet", "make_noise", "make_input", "image_channels", "fill_channel", "build_net", "count_parameters"]
 
 UNET_CHANNELS = (32, 64, 128, 256, 512)  # the paper's encoder
 SKIP_CHANNELS = (128, 128, 128, 128, 128)  # DIP's inpainting "skip" net
@@ -77,6 +80,23 @@ def image_channels(image: torch.Tensor, scale: float = 1.0, blur: float = 1.0) -
         kernel = _gaussian_1d(2 * radius + 1, float(blur), image.dtype, str(image.device))  # (2r + 1,)
         image = _blur(F.pad(image, (radius,) * 4, mode="replicate"), kernel)  # (1, 3, H, W)
     return scale * image
+
+
+def fill_channel(disparity: np.ndarray, rgb: np.ndarray | None, scale: float = 1.0) -> np.ndarray:
+    """A classical fill of the input as one more input channel: ``disparity`` (H, W) in [0, 1] with NaN
+    holes → (H, W) float32, ``scale ×`` its colorization fill (``baselines.fill_colorization``, guided by
+    ``rgb`` (H, W, 3)), or its linear fill without colour.
+
+    From this input the net starts close to a fill that already follows the colour, and its prior
+    has to explain only what that fill gets wrong; from the coordinates and the image alone, a
+    hole's depth is whatever function of them fits the valid pixels best.
+
+    Example:
+        >>> fill_channel(np.array([[0.2, np.nan, 0.6], [0.2, 0.4, 0.6]]), None).round(3).tolist()
+        [[0.2, 0.4, 0.6], [0.2, 0.4, 0.6]]
+    """
+    filled = fill_colorization(disparity, rgb) if rgb is not None else fill_linear(disparity)
+    return (scale * filled).astype(np.float32)
 
 
 PADDINGS = ("reflect", "zeros")

@@ -34,7 +34,7 @@ import numpy as np
 
 from .views import Scene
 
-__all__ = ["SGM_PARAMS", "sgm_disparity", "sgm_depth", "sgm_depth_subsampled", "gt_disparity", "pixel_disparity",
+__all__ = ["SGM_PARAMS", "sgm_disparity", "sgm_left_right_failures", "sgm_depth", "sgm_depth_subsampled", "gt_disparity", "pixel_disparity",
            "disparity_to_depth"]
 
 # block: SAD window (px); uniqueness: % margin; speckle_window: fraction of the image area;
@@ -104,8 +104,9 @@ def _num_disparities(f: float, baseline: float, d_min: float, width: int) -> int
     return int(min(max(16, 16 * np.ceil(largest / 16.0)), 16 * max(1, width // 32)))
 
 
-def sgm_disparity(scene, ref: int, params="dense"):
-    """SGM on view ``ref``'s rectified pair → disparity (H, W) float32 px (NaN holes), mask (H, W) bool."""
+def _left_right(scene, ref: int, params):
+    """SGBM both ways on view ``ref``'s pair → left disparity (H, W) px (NaN: no answer) and (H, W) bool:
+    the left-right check passed (the right image's match points back within 1 px)."""
     left_view, right_view, baseline = _stereo_pair(scene, ref)
     p = _params(params)
     f = float(left_view.camera.K[0, 0])
@@ -121,9 +122,21 @@ def sgm_disparity(scene, ref: int, params="dense"):
     inside = (target >= 0) & (target < W)
     back = np.full((H, W), np.nan, np.float32)
     back[inside] = disp_right[rows[inside], target[inside]]
-    consistent = np.abs(disp_left - back) <= 1.0  # NaN on either side → False
+    return disp_left, np.abs(disp_left - back) <= 1.0  # NaN on either side → False
+
+
+def sgm_disparity(scene, ref: int, params="dense"):
+    """SGM on view ``ref``'s rectified pair → disparity (H, W) float32 px (NaN holes), mask (H, W) bool."""
+    disp_left, consistent = _left_right(scene, ref, params)
     disparity = np.where(consistent, disp_left, np.nan).astype(np.float32)
     return disparity, np.isfinite(disparity)
+
+
+def sgm_left_right_failures(scene, ref: int, params="dense") -> np.ndarray:
+    """(H, W) bool: pixels of view ``ref`` where SGBM answered but the left-right check failed, mostly
+    points the right view does not see (occlusions) and a few mismatches."""
+    disp_left, consistent = _left_right(scene, ref, params)
+    return np.isfinite(disp_left) & ~consistent
 
 
 def sgm_depth(scene, ref: int, params="dense"):

@@ -119,3 +119,104 @@ def test_bad_inputs_raise_clear_errors():
         fill(depth, method="colorization")
     with pytest.raises(ValueError, match="method must be one of"):
         fill(depth, method="bilateral")
+
+
+def _brute_force_guided_filter(guide, target, weight, r, eps):
+    """He et al.'s guided filter with per-pixel weights, one window at a time: a weighted ridge regression
+    per window (numpy lstsq), then each pixel averages the windows over it, weighted by their mean weight.
+    The border reflects as scipy's 'reflect' (numpy's 'symmetric')."""
+    Hs, Ws, C = guide.shape
+    pad = lambda x: np.pad(x, [(r, r), (r, r)] + [(0, 0)] * (x.ndim - 2), mode="symmetric")
+    G, P, M = pad(guide), pad(target), pad(weight)
+    a, b, w = np.zeros((Hs, Ws, C)), np.zeros((Hs, Ws)), np.zeros((Hs, Ws))
+    for y in range(Hs):
+        for x in range(Ws):
+            g = G[y:y + 2 * r + 1, x:x + 2 * r + 1].reshape(-1, C)
+            p = P[y:y + 2 * r + 1, x:x + 2 * r + 1].ravel()
+            m = M[y:y + 2 * r + 1, x:x + 2 * r + 1].ravel()
+            w[y, x] = m.mean() if m.mean() >= 0.5 else 0.0  # windows less than half valid do not count
+            if w[y, x] == 0:
+                continue
+            # minimise Σ m (a·g + b − p)² / Σ m + eps |a|²: rows scaled by sqrt(m / Σ m), plus the ridge rows
+            s = np.sqrt(m / m.sum())[:, None]
+            A = np.vstack([np.hstack([g, np.ones((len(p), 1))]) * s, np.hstack([np.sqrt(eps) * np.eye(C), np.zeros((C, 1))])])
+            coef = np.linalg.lstsq(A, np.concatenate([p * s[:, 0], np.zeros(C)]), rcond=None)[0]
+            a[y, x], b[y, x] = coef[:C], coef[C]
+    A_, B_, W_ = pad(a * w[..., None]), pad(b * w), pad(w)
+    out = np.zeros((Hs, Ws))
+    for y in range(Hs):
+        for x in range(Ws):
+            total = W_[y:y + 2 * r + 1, x:x + 2 * r + 1].sum()
+            out[y, x] = (A_[y:y + 2 * r + 1, x:x + 2 * r + 1].sum(axis=(0, 1)) @ guide[y, x]
+                         + B_[y:y + 2 * r + 1, x:x + 2 * r + 1].sum()) / total
+    return out
+
+
+def test_guided_filter_fill_matches_a_window_by_window_regression():
+    from ddp_lite.baselines import fill_guided_filter
+    rng = np.random.default_rng(3)
+    rgb = rng.random((9, 11, 3))
+    depth = 2.0 + rgb @ np.array([0.5, -0.3, 0.2]) + 0.05 * rng.standard_normal((9, 11))
+    holes = np.zeros((9, 11), bool)
+    holes[::3, 1::4] = True  # isolated holes: every one is reached at the first radius
+    depth[holes] = np.nan
+    out = fill_guided_filter(depth, rgb, radius=1, eps=1e-2)
+    expected = _brute_force_guided_filter(rgb, np.where(holes, 0.0, depth), (~holes).astype(float), 1, 1e-2)
+    np.testing.assert_allclose(out[holes], expected[holes], rtol=0, atol=1e-5)
+
+
+def test_guided_filter_fill_reproduces_depth_affine_in_colour_even_in_a_large_hole():
+    from ddp_lite.baselines import fill_guided_filter
+    v, u = np.mgrid[0:H, 0:W]
+    rgb = np.stack([u / W, v / H, 0.5 + 0.3 * np.sin(u / 5.0)], axis=2)
+    gt = 1.5 + 0.8 * rgb[..., 0] - 0.4 * rgb[..., 1] + 0.2 * rgb[..., 2]
+    depth = gt.copy()
+    depth[10:40, 15:50] = np.nan  # wider than the first radius: filled at doubled radii
+    out = fill_guided_filter(depth, rgb, radius=2, eps=1e-9)
+    np.testing.assert_allclose(out, gt, atol=1e-4)
+
+
+def _two_regions():
+    """A dark left half and a bright right half, depth 1 m and 3 m, holes on both sides of the edge."""
+    rgb = np.zeros((H, W, 3), np.float32)
+    rgb[:, W // 2:] = 0.9
+    gt = np.where(np.arange(W)[None, :] < W // 2, 1.0, 3.0) * np.ones((H, 1))
+    depth = gt.copy()
+    depth[12:36, W // 2 - 12:W // 2 + 12] = np.nan  # a hole straddling the colour (and depth) edge
+    return rgb, depth, gt
+
+
+def test_bilateral_solver_does_not_cross_a_colour_edge():
+    from ddp_lite.baselines import fill_bilateral_solver
+    rgb, depth, gt = _two_regions()
+    out = fill_bilateral_solver(depth, rgb)
+    np.testing.assert_allclose(out, gt, atol=1e-3)  # each side of the hole takes its own region's depth
+    assert np.abs(fill_linear(depth) - gt).max() > 0.5  # where a colour-blind fill blends the two
+
+
+def test_bilateral_solver_keeps_a_constant_and_goes_smoothly_between_two_values():
+    from ddp_lite.baselines import fill_bilateral_solver
+    depth = np.full((H, W), 2.5)
+    depth[10:30, 10:40] = np.nan
+    np.testing.assert_allclose(fill_bilateral_solver(depth, _grey()), 2.5, atol=1e-5)
+    # one colour everywhere: the fill between a 1 m left column and a 2 m right column is monotone in u,
+    # between the two (a smoothness prior, not a copy of either side)
+    ramp = np.full((H, W), np.nan)
+    ramp[:, 0], ramp[:, -1] = 1.0, 2.0
+    out = fill_bilateral_solver(ramp, _grey())
+    row = out[H // 2]
+    assert np.all(np.diff(row) >= -1e-6) and 1.3 < row[W // 2] < 1.7
+
+
+def test_guided_fills_refuse_bad_parameters_and_need_the_image():
+    from ddp_lite.baselines import fill_bilateral_solver, fill_guided_filter
+    depth, _, _ = _ramp()
+    for call, match in ((lambda: fill_guided_filter(depth, _grey(), radius=0), "radius must be a positive integer"),
+                        (lambda: fill_guided_filter(depth, _grey(), radius=1.5), "radius"),
+                        (lambda: fill_guided_filter(depth, _grey(), eps=0.0), "eps must be a positive number"),
+                        (lambda: fill_bilateral_solver(depth, _grey(), lam=-1.0), "lam must be a positive"),
+                        (lambda: fill_bilateral_solver(depth, _grey(), sigma_xy=np.nan), "sigma_xy"),
+                        (lambda: fill_bilateral_solver(depth), "rgb is required"),
+                        (lambda: fill_guided_filter(depth), "rgb is required")):
+        with pytest.raises(ValueError, match=match):
+            call()
