@@ -207,17 +207,13 @@ def _box_mean(x: np.ndarray, radius: int) -> np.ndarray:
     return ndimage.uniform_filter(x, size=size, mode="reflect")
 
 
-_MIN, _POW = 0.5, 1
-
-
 def _masked_guided_filter(guide: np.ndarray, target: np.ndarray, weight: np.ndarray, radius: int,
                           eps: float) -> tuple[np.ndarray, np.ndarray]:
     """One guided filter (He et al. 2010, colour guide) fitted to the pixels where ``weight`` > 0.
 
     ``guide`` (H, W, C), ``target`` (H, W), ``weight`` (H, W) in [0, 1]. Per window k, (a_k, b_k) minimise
     Σ_i w_i (a_k·I_i + b_k − p_i)² / Σ_i w_i + eps·|a_k|²; pixel i gets Σ_k ω_k (a_k·I_i + b_k) / Σ_k ω_k
-    over the windows k covering it, ω_k = the window's mean weight where that is ≥ 1/2 (else 0: too few
-    pixels to fit a model to). Returns that (H, W) and Σ_k ω_k.
+    over the windows k covering it, ω_k = the window's mean weight. Returns that (H, W) and Σ_k ω_k.
     """
     C = guide.shape[2]
     w = _box_mean(weight, radius)  # (H, W): each window's mean weight
@@ -231,7 +227,6 @@ def _masked_guided_filter(guide: np.ndarray, target: np.ndarray, weight: np.ndar
         - mean_I * mean_p[..., None]
     a = np.linalg.solve(cov_II + eps * np.eye(C), cov_Ip[..., None])[..., 0]  # (H, W, C)
     b = mean_p - np.einsum("hwc,hwc->hw", a, mean_I)
-    w = np.where(w >= _MIN, w, 0.0) ** _POW  # ω_k: a window less than half valid fits its model to too few pixels
     a, b = a * w[..., None], b * w  # windows weighted by the valid depth they saw
     total = _box_mean(w, radius)
     q = (np.einsum("hwc,hwc->hw", _box_mean(a, radius), guide) + _box_mean(b, radius)) / np.maximum(total, 1e-12)
@@ -243,9 +238,10 @@ def fill_guided_filter(depth, rgb=None, radius: int = 2, eps: float = 1e-4) -> n
 
     Each (2·radius+1)² window models depth as an affine function of the colour, fitted by ridge
     regression (``eps`` on the colour's [0, 1] scale: a larger one follows colour less) to its valid
-    pixels where at least half the window is valid; a hole averages the models of such windows over it.
-    Holes that no such window of the current radius reaches are filled at twice the radius, and so on.
-    Valid pixels keep their input value.
+    pixels; a hole averages the models of the windows over it, each weighted by its share of valid
+    pixels (requiring half of them valid was exact on depth affine in colour but worse on the real
+    Motorcycle cases: 1.44× against 1.26× the best other fill). Holes that no window of the current
+    radius reaches are filled at twice the radius, and so on. Valid pixels keep their input value.
 
     Example:
         >>> rgb = np.linspace(0, 1, 12).reshape(3, 4, 1).repeat(3, axis=2)

