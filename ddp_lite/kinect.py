@@ -79,7 +79,7 @@ def projector_shadow(depth, camera: Camera, projector_offset: float = 0.075, tol
 def grazing_mask(depth, camera: Camera, grazing_deg: float = 80.0) -> np.ndarray:
     """(H, W) bool, True where the surface normal of ``depth`` (H, W) metres (central differences of the
     back-projected points; one-sided at the image border) is more than ``grazing_deg`` from the viewing
-    ray, or cannot be computed (a NaN neighbour)."""
+    ray; False where it cannot be computed (a NaN neighbour: no evidence either way)."""
     depth, camera = _depth_and_camera(depth, camera)
     limit = check_real(grazing_deg, "grazing_deg", 0.0, 90.0)
     H, W = depth.shape
@@ -89,7 +89,7 @@ def grazing_mask(depth, camera: Camera, grazing_deg: float = 80.0) -> np.ndarray
     normal = np.cross(du, dv)
     with np.errstate(invalid="ignore", divide="ignore"):
         cosine = np.abs(np.sum(normal * points, -1)) / (np.linalg.norm(normal, axis=-1) * np.linalg.norm(points, axis=-1))
-        return ~(cosine >= np.cos(np.radians(limit)))  # NaN → grazing (no reading)
+        return cosine < np.cos(np.radians(limit))  # NaN (an unknown neighbour): no evidence, not grazing
 
 
 def quantise_depth(depth, sensor_focal: float = 580.0, baseline: float = 0.075, subpixel: int = 8,
