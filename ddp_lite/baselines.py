@@ -1,7 +1,7 @@
 """Classical depth completion: what DDP is compared against.
 
 Every method has one signature, ``fn(depth, rgb=None) -> depth``: ``depth`` (H, W) float metres
-with NaN holes, ``rgb`` (H, W, 3) in [0, 1] (used only by ``colorization``); the answer is a new
+with NaN holes, ``rgb`` (H, W, 3) in [0, 1] (used by the colour-guided fills below); the answer is a new
 float32 (H, W) map with no NaN, equal to the input wherever the input was valid. Inputs are
 never modified.
 
@@ -27,6 +27,8 @@ never modified.
   in a bilateral grid over (x, y, luma, chroma), pulled to the input where it is valid; a sparse
   system on the grid's vertices, solved by preconditioned conjugate gradients (scipy.sparse). OpenCV's
   ``ximgproc`` has it only in the contrib build, which the kit does not install.
+- ``cross-bilateral``: the NYU Depth v2 toolbox's ``fill_depth_cross_bf``: a joint bilateral filter of
+  the valid depth guided by the grey image, at three scales from coarse to fine.
 """
 from __future__ import annotations
 
@@ -39,7 +41,8 @@ from scipy.spatial import QhullError
 from .checks import check_depth
 
 __all__ = ["fill_nearest", "fill_linear", "fill_cubic", "fill_telea", "fill_navier_stokes", "fill_biharmonic",
-           "fill_colorization", "fill_guided_filter", "fill_bilateral_solver", "BASELINES", "fill"]
+           "fill_colorization", "fill_guided_filter", "fill_bilateral_solver", "joint_bilateral_fill",
+           "fill_cross_bilateral", "BASELINES", "fill"]
 
 
 def _check(depth, rgb=None, min_valid: int = 1, need_rgb: bool = False):
@@ -351,6 +354,74 @@ def fill_bilateral_solver(depth, rgb=None, lam: float = 4.0, sigma_xy: float = 8
     return np.where(valid, depth, solution).astype(np.float32)
 
 
+def joint_bilateral_fill(depth, guide, sigma_s: float, sigma_r: float, radius: int = 5) -> np.ndarray:
+    """One joint (cross) bilateral pass: (H, W) depth with NaN = unusable, (H, W) grey ``guide`` →
+    (H, W) float64, every pixel the weighted mean of the usable depths in its (2·radius + 1)² window,
+    weights exp(−|Δxy|² / 2σ_s²) · exp(−(g_q − g_p)² / 2σ_r²); NaN where the window holds none."""
+    H, W = depth.shape
+    usable = np.isfinite(depth)
+    values = np.pad(np.where(usable, depth, 0.0), radius)
+    weights_in = np.pad(usable.astype(np.float64), radius)
+    guide_pad = np.pad(guide, radius)
+    total, weight = np.zeros((H, W)), np.zeros((H, W))
+    for dy in range(-radius, radius + 1):
+        for dx in range(-radius, radius + 1):
+            window = np.s_[radius + dy:radius + dy + H, radius + dx:radius + dx + W]
+            w = (np.exp(-(dx * dx + dy * dy) / (2.0 * sigma_s ** 2))
+                 * np.exp(-(guide_pad[window] - guide) ** 2 / (2.0 * sigma_r ** 2)) * weights_in[window])
+            total += w * values[window]
+            weight += w
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(weight > 0, total / weight, np.nan)
+
+
+def fill_cross_bilateral(depth, rgb=None, space_sigmas=(12.0, 5.0, 8.0), range_sigmas=(0.2, 0.08, 0.02),
+                         radius: int = 5) -> np.ndarray:
+    """The NYU toolbox's ``fill_depth_cross_bf.m``: a multi-scale joint bilateral fill guided by the grey
+    image → (H, W) float32 metres. ``depth`` (H, W) metres with NaN holes, ``rgb`` (H, W, 3) (required).
+
+    Scale s (0 = full size) samples the images every 2^s px (nearest). From the coarsest scale to the
+    finest, each hole pixel becomes the ``joint_bilateral_fill`` mean (an 11×11 window, σ_s and σ_r
+    ``space_sigmas[s]`` px and ``range_sigmas[s]`` grey levels in [0, 1]) of the pixels usable at
+    that scale (valid, or filled by the coarser one); a hole pixel of a finer scale starts from its
+    coarse pixel's value. As the toolbox (its ``cbf`` mex file), but in float metres where the toolbox
+    quantises depth to 256 levels of its maximum, and with the nearest valid depth where no scale
+    reached a hole (the toolbox leaves 0 there). Valid pixels keep their value.
+    """
+    depth, valid, image = _check(depth, rgb, need_rgb=True)
+    space_sigmas, range_sigmas = tuple(space_sigmas), tuple(range_sigmas)
+    if len(space_sigmas) != len(range_sigmas) or not space_sigmas:
+        raise ValueError(f"space_sigmas and range_sigmas must be non-empty and the same length, got "
+                         f"{len(space_sigmas)} and {len(range_sigmas)}")
+    if not all(np.isfinite(s) and s > 0 for s in space_sigmas + range_sigmas):
+        raise ValueError(f"space_sigmas and range_sigmas must be positive, got {space_sigmas}, {range_sigmas}")
+    if isinstance(radius, bool) or int(radius) != radius or radius < 1:
+        raise ValueError(f"radius must be a positive integer (px), got {radius!r}")
+    if valid.all():
+        return depth.astype(np.float32)
+    grey = image @ np.array([0.2989, 0.5870, 0.1140])  # MATLAB's rgb2gray, as the toolbox
+    H, W = depth.shape
+    known = np.where(valid, depth, np.nan)
+    sizes = [(max(1, H >> s), max(1, W >> s)) for s in range(len(space_sigmas))]
+    coarse = None  # (values, filled) of the previous, coarser scale, NaN = not reached
+    for s in reversed(range(len(space_sigmas))):
+        h, w = sizes[s]
+        rows, cols = (np.arange(h) * H // h)[:, None], (np.arange(w) * W // w)[None, :]
+        level = known[rows, cols]  # the toolbox's nearest sampling: pixel floor(y·H/h)
+        if coarse is not None:
+            ch, cw = coarse.shape
+            start = coarse[np.arange(h)[:, None] * ch // h, np.arange(w)[None, :] * cw // w]
+            level = np.where(np.isfinite(level), level, start)
+        filtered = joint_bilateral_fill(level, grey[rows, cols], space_sigmas[s], range_sigmas[s], int(radius))
+        missing = ~np.isfinite(known[rows, cols])
+        coarse = np.where(missing, np.where(np.isfinite(filtered), filtered, level), level)
+    out = np.where(valid, depth, coarse)
+    unreached = ~np.isfinite(out)
+    if unreached.any():
+        out[unreached] = _nearest(depth, valid)[unreached]
+    return out.astype(np.float32)
+
+
 BASELINES = {
     "nearest": fill_nearest,
     "linear": fill_linear,
@@ -361,6 +432,7 @@ BASELINES = {
     "colorization": fill_colorization,
     "guided-filter": fill_guided_filter,
     "bilateral-solver": fill_bilateral_solver,
+    "cross-bilateral": fill_cross_bilateral,
 }
 
 
