@@ -1,0 +1,90 @@
+"""The real Middlebury pair and its completion cases: calibration against the docstring's formula, the
+right view warped through the truth onto the left, pooling against hand-computed blocks, and holes
+where SGBM really fails."""
+import numpy as np
+import pytest
+from skimage import data
+
+from ddp_lite.camera import Camera
+from ddp_lite.middlebury import load_motorcycle
+from ddp_lite.real_cases import REAL_HOLES, make_real_case, pool_scene
+from ddp_lite.views import Scene, View
+from ddp_lite.warp import warp_to_reference
+
+
+@pytest.fixture(scope="module")
+def motorcycle():
+    return load_motorcycle()
+
+
+def test_motorcycle_depth_follows_the_calibration_of_the_docstring(motorcycle):
+    _, _, disparity = data.stereo_motorcycle()
+    disparity = np.where(np.isfinite(disparity), disparity, np.nan)  # its unknown marker is inf
+    v, u = 300, 300
+    assert np.isfinite(disparity[v, u])
+    expected = 994.978 * 0.193001 / (disparity[v, u] + 31.086)  # Z = f·B / (d + doffs), metres
+    assert motorcycle[0].depth[v, u] == pytest.approx(expected, rel=1e-6)
+    assert np.isnan(motorcycle[0].depth[~np.isfinite(disparity)]).all()
+    K1 = motorcycle.right[0].camera.K
+    assert K1[0, 2] == pytest.approx(311.193 + 31.086) and motorcycle.meta["doffs"] == pytest.approx(31.086)
+
+
+def test_the_right_view_warped_through_the_true_depth_lands_on_the_left_view(motorcycle):
+    left, right = motorcycle[0], motorcycle.right[0]
+    warped, valid = warp_to_reference(right.rgb, left.depth, left.camera, right.camera)
+    error = np.abs(warped - left.rgb).mean(axis=2)[valid]
+    # the same warp with the principal points equal (doffs ignored) lands 31 px off
+    wrong = Camera(left.camera.K, right.camera.cam_from_world, right.camera.width, right.camera.height)
+    warped_wrong, valid_wrong = warp_to_reference(right.rgb, left.depth, left.camera, wrong)
+    error_wrong = np.abs(warped_wrong - left.rgb).mean(axis=2)[valid_wrong]
+    assert np.median(error) < 0.03 and np.median(error_wrong) > 2 * np.median(error)
+
+
+def test_pooling_takes_block_means_of_colour_and_of_inverse_depth():
+    K = np.array([[100.0, 0.0, 3.5], [0.0, 100.0, 3.5], [0.0, 0.0, 1.0]])
+    rng = np.random.default_rng(0)
+    depth = rng.uniform(1.0, 3.0, (8, 8)).astype(np.float32)
+    depth[0, 0] = np.nan  # 1 of 16 unknown: still pooled (≥ 3/4 known)
+    depth[4:6, 4:8] = np.nan  # 8 of 16 unknown: a hole
+    rgb = rng.random((8, 8, 3)).astype(np.float32)
+    view = View(rgb, depth, Camera(K, np.eye(4), 8, 8))
+    pooled = pool_scene(Scene("t", [view], [view], {"baseline": 0.1, "doffs": 8.0}), 4)
+    block = depth[:4, :4]
+    assert pooled[0].depth[0, 0] == pytest.approx(1.0 / np.nanmean(1.0 / block), rel=1e-6)
+    assert np.isnan(pooled[0].depth[1, 1])
+    np.testing.assert_allclose(pooled[0].rgb[0, 1], rgb[:4, 4:].mean(axis=(0, 1)), rtol=1e-6)
+    # the pooled pixel (0, 0) sees what the full-size image sees at the centre of its block, (1.5, 1.5)
+    K2 = pooled[0].camera.K
+    assert K2[0, 0] == pytest.approx(25.0) and (1.5 - K[0, 2]) / K[0, 0] == pytest.approx((0 - K2[0, 2]) / K2[0, 0])
+    assert pooled.meta["doffs"] == pytest.approx(2.0) and pooled.meta["baseline"] == 0.1
+
+
+@pytest.mark.parametrize("holes", REAL_HOLES)
+def test_real_cases_score_only_known_truth_and_keep_their_size(holes):
+    case = make_real_case(holes, factor=4)
+    assert case.depth.shape == case.gt.shape == (125, 185) and case.rgb.shape == (125, 185, 3)
+    assert not np.isfinite(case.gt[case.scored_holes]).sum() < case.scored_holes.sum()  # all scored truth known
+    assert 0.05 < case.scored_holes.mean() < 0.35
+    assert case.rmse_px(case.gt) == 0.0
+
+
+def test_sgbm_input_is_stereo_depth_close_to_the_truth_where_it_answered():
+    case = make_real_case("sgbm", factor=4)
+    both = np.isfinite(case.depth) & np.isfinite(case.gt)
+    error = np.abs(case.fb / case.depth[both] - case.fb / case.gt[both])  # disparity px at 125×185
+    assert np.median(error) < 0.25 and both.mean() > 0.7
+    assert case.rmse_px(np.where(np.isfinite(case.depth), case.depth, case.gt)) == 0.0
+
+
+def test_occlusion_holes_lie_beside_a_nearer_surface_on_their_right():
+    """A left-view pixel the right view cannot see is hidden by something nearer on its right: the
+    holes have such a surface within 5 px five times as often as the pixels kept (SGBM's left-right
+    check also drops some mismatches, so not every hole is an occlusion)."""
+    case = make_real_case("occlusion", factor=4)
+    disparity = case.fb / case.gt  # larger = nearer
+
+    def share_beside_a_nearer_surface(mask):
+        return np.mean([np.nanmax(np.r_[disparity[v, u + 1:u + 6], -1.0]) > disparity[v, u] + 1.0
+                        for v, u in np.argwhere(mask) if u + 6 < disparity.shape[1]])
+    kept = np.isfinite(case.gt) & np.isfinite(case.depth)
+    assert share_beside_a_nearer_surface(case.scored_holes) > 3 * share_beside_a_nearer_surface(kept)
