@@ -46,6 +46,7 @@ from ddp_lite.experiments import Case, make_case, sgm_depth_at_scale  # noqa: E4
 from ddp_lite.holes import random_holes  # noqa: E402
 from ddp_lite.middlebury import load_middlebury, make_middlebury_fixture  # noqa: E402
 from ddp_lite.real_cases import REAL_HOLES, make_real_case  # noqa: E402
+from ddp_lite.recipes import RECIPES as KIT_RECIPES  # noqa: E402
 from ddp_lite.resample import resize_scene  # noqa: E402
 from ddp_lite.scenes import SCENES  # noqa: E402
 from _common import add_profile_args, profile_from_args  # noqa: E402
@@ -66,10 +67,9 @@ EDGE10 = dict(smoothness_edge=10.0, **GREY)
 NOISE = dict(net_input="noise", noise_channels=16, **EDGE10)
 IMAGE = dict(image_input=1.0, image_blur=1.0)  # class's colour image in the input (seventh pass)
 CI7 = dict(smoothness_edge=10.0, flatness=0.0)  # ci until the eighth pass: strength 10, no flatness term
-PAPER = dict(smoothness=0.0, flatness=0.0, image_input=0.0, net_input="noise", noise_channels=16)
 RECIPES = {
     "default": {},
-    "paper": PAPER,  # the paper's losses and noise input at the profile's size, net and schedule: nothing added
+    "paper": KIT_RECIPES["paper"].overrides,  # the paper's method at the profile's size, net and schedule
     "kit-ens2": dict(ensemble=2),  # real data first: the mean of two fits, ...
     "kit-ens3": dict(ensemble=3),  # ... of three,
     "patience100": dict(patience=100),  # ... a longer plateau before the rate cut and the stop,

@@ -37,6 +37,7 @@ import torch
 from .atomic import write_bytes_atomic
 from .config import FitConfig
 from .profiles import current_profile_name
+from .recipes import current_recipe_name
 
 __all__ = ["ENV_VAR", "cache_folder", "cached"]
 
@@ -80,7 +81,7 @@ def _key(function, arguments: dict) -> str | None:
 
     environment = (_library_digest(), torch.__version__, np.__version__, torch.get_num_threads(),
                    torch.backends.cpu.get_cpu_capability(), torch.cuda.is_available(),
-                   current_profile_name())  # config=None: the profile's config
+                   current_profile_name(), current_recipe_name())  # config=None: the profile's config
     try:
         return joblib.hash((function.__module__, function.__qualname__, _plain(arguments), environment))
     except Exception:  # an argument that does not pickle (the fit itself will say what is wrong with it)

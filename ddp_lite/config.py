@@ -16,6 +16,7 @@ from .checks import check_bool, check_choice, check_int, check_int_tuple, check_
 from .losses import EDGE_GUIDES
 from .nets import DOWNSAMPLINGS, NET_INPUTS, NETS, PADDINGS, UPSAMPLINGS
 from .profiles import Profile, get_profile
+from .recipes import get_recipe
 from .variants import get_variant
 
 __all__ = ["FitConfig", "HOLDOUTS", "use_bf16", "resolve_device"]
@@ -74,12 +75,19 @@ class FitConfig:
     max_memory_gb: float | None = None  # refuse a fit whose estimated peak exceeds this; None → 75 % of RAM
 
     @classmethod
-    def for_profile(cls, profile=None, variant: str = "rgbd+warp", **overrides) -> "FitConfig":
-        """The config of a profile (name, :class:`Profile` or None for ``DDP_PROFILE``) for ``variant``.
+    def for_profile(cls, profile=None, variant: str = "rgbd+warp", recipe=None, **overrides) -> "FitConfig":
+        """The config of a profile (name, :class:`Profile` or None for ``DDP_PROFILE``) for ``variant``,
+        running ``recipe`` (name, :class:`~ddp_lite.recipes.Recipe` or None for ``DDP_RECIPE``; ``"kit"``,
+        the default, is the profile's own method, ``"paper"`` the paper's), then ``overrides``.
 
         Every :class:`Profile` field that is also a FitConfig field is copied, so a setting added to
         both flows through; three are derived: ``channels`` (the UNet's or the SkipNet's widths, by
         ``net``), ``iterations`` (the variant's count) and ``lr_milestones`` (those the variant's run reaches).
+
+        Example:
+            >>> config = FitConfig.for_profile("ci", variant="rgbd", recipe="paper")
+            >>> config.smoothness, config.net_input, config.image_input
+            (0.0, 'noise', 0.0)
         """
         profile = get_profile(profile)
         iterations = profile.iterations_for(get_variant(variant))
@@ -87,6 +95,7 @@ class FitConfig:
         values = {name: getattr(profile, name) for name in _COPIED_FROM_PROFILE}
         values.update(net=net, channels=profile.channels if net == "unet" else profile.skip_channels,
                       iterations=iterations, lr_milestones=profile.milestones(iterations))
+        values.update(get_recipe(recipe).overrides)
         values.update(overrides)
         return cls(**values)
 
