@@ -226,17 +226,42 @@ def make_middlebury_fixture(folder, size=(48, 64), seed: int = 0, scene: str = "
     disp0, disp1 = (pixel_disparity(v.depth, K[0, 0], baseline) for v in (left, right))  # doffs = 0
     rng = np.random.default_rng(seed)
     disp0[rng.random(disp0.shape) < hole_fraction] = np.inf
+    return _write_middlebury_folder(folder, left.rgb, right.rgb, disp0, disp1, K, right.camera.K, 0.0, baseline)
+
+
+def write_motorcycle_folder(folder) -> Path:
+    """Write the real pair of ``load_motorcycle`` (scikit-image's, 500×741) into ``folder`` in Middlebury
+    2014's own file format (im0.png, im1.png, disp0.pfm with ``inf`` = unknown, calib.txt with ``doffs``
+    and the baseline in mm), so that ``load_middlebury`` reads it like a fetched scene. Returns the folder."""
+    from skimage import data
+
+    left, right, disparity = data.stereo_motorcycle()
+    c = MOTORCYCLE_CALIB
+    K0 = np.array([[c["focal"], 0.0, c["cx"]], [0.0, c["focal"], c["cy"]], [0.0, 0.0, 1.0]])
+    K1 = K0.copy()
+    K1[0, 2] += c["doffs"]
+    disp0 = np.where(np.isfinite(disparity), disparity, np.inf).astype(np.float32)
+    disp1 = np.full_like(disp0, np.inf)  # the right view's truth is not shipped
+    return _write_middlebury_folder(folder, left.astype(np.float32) / 255.0, right.astype(np.float32) / 255.0,
+                                    disp0, disp1, K0, K1, c["doffs"], c["baseline_mm"] / 1000.0, ndisp=c["ndisp"])
+
+
+def _write_middlebury_folder(folder, rgb0, rgb1, disp0, disp1, K0, K1, doffs: float, baseline: float,
+                             ndisp: int | None = None) -> Path:
+    """im0.png, im1.png, disp0.pfm, disp1.pfm and calib.txt of a Middlebury 2014 scene, each written atomically."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
 
     def matrix(M):
         return "[" + "; ".join(" ".join(repr(float(v)) for v in row) for row in M) + "]"
     finite = disp0[np.isfinite(disp0)]
-    calib = (f"cam0={matrix(K)}\ncam1={matrix(right.camera.K)}\ndoffs=0\nbaseline={baseline * 1000.0!r}\n"
-             f"width={size[1]}\nheight={size[0]}\nndisp={int(np.ceil(finite.max())) + 1}\nisint=0\n"
+    H, W = disp0.shape
+    ndisp = int(np.ceil(finite.max())) + 1 if ndisp is None else int(ndisp)
+    calib = (f"cam0={matrix(K0)}\ncam1={matrix(K1)}\ndoffs={float(doffs)!r}\nbaseline={baseline * 1000.0!r}\n"
+             f"width={W}\nheight={H}\nndisp={ndisp}\nisint=0\n"
              f"vmin={int(np.floor(finite.min()))}\nvmax={int(np.ceil(finite.max()))}\n")
-    write_bytes_atomic(folder / "im0.png", _png_bytes(left.rgb))
-    write_bytes_atomic(folder / "im1.png", _png_bytes(right.rgb))
+    write_bytes_atomic(folder / "im0.png", _png_bytes(rgb0))
+    write_bytes_atomic(folder / "im1.png", _png_bytes(rgb1))
     write_pfm(folder / "disp0.pfm", disp0)
     write_pfm(folder / "disp1.pfm", disp1)
     write_bytes_atomic(folder / "calib.txt", calib.encode("ascii"))

@@ -4,7 +4,8 @@ The synthetic scenes flatter DDP: their colour edges are depth edges and their s
 A real photograph has texture everywhere, soft shading, and depth edges without colour edges. These
 cases put the real image, its real ground truth and real stereo failures in front of every fill.
 
-The pair is pooled from 500×740 (one column cropped) by an integer ``factor`` (4: 125×185, 2: 250×370):
+The pair is pooled from 500×740 (one column cropped) by an integer ``factor`` (8: 62×92, 4: 125×185,
+2: 250×370, 1: full size; ``factor_for_profile`` picks the one nearest a profile's size):
 colour by the block mean, depth by the block mean of *inverse* depth (so of disparity: the block's
 mean disparity), valid where at least 3/4 of the block is known. Pooling, not sub-sampling, keeps the
 colour and the depth of a pixel averaged over the same block. Hole kinds (``REAL_HOLES``):
@@ -23,16 +24,20 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from .baselines import BASELINES
 from .experiments import Case
+from .fit import FitConfig, complete_depth
 from .holes import random_holes
 from .middlebury import load_motorcycle
+from .profiles import get_profile
 from .stereo import sgm_disparity, sgm_left_right_failures
 from .views import Scene, View
 
-__all__ = ["REAL_HOLES", "REAL_FACTORS", "make_real_case", "pool_scene", "RealCase"]
+__all__ = ["REAL_HOLES", "REAL_FACTORS", "make_real_case", "pool_scene", "RealCase", "factor_for_profile",
+           "compare_fills"]
 
 REAL_HOLES = ("blobs-1", "blobs-2", "blobs-3", "sgbm", "occlusion")
-REAL_FACTORS = {4: "125x185", 2: "250x370"}
+REAL_FACTORS = {8: "62x92", 4: "125x185", 2: "250x370", 1: "500x740"}
 _CROP_WIDTH = 740  # 741 columns: one dropped so that 4 divides the width
 
 
@@ -117,6 +122,33 @@ def make_real_case(holes: str = "sgbm", factor: int = 4) -> RealCase:
     fb = float(view.camera.focal * scene.meta["baseline"])
     return RealCase(f"motorcycle/{holes}", view.rgb, depth, gt, view.camera, [scene.right[0]], None, scene, 0,
                     None, fb=fb)
+
+
+def factor_for_profile(profile=None) -> int:
+    """The pooling factor of the real cases for a profile: the smallest whose image has at most twice the
+    profile's pixels (``ci`` 48×64 → 8, ``class`` 96×128 → 4, ``paper`` → 1)."""
+    H, W = get_profile(profile).size
+    small_enough = [f for f in sorted(REAL_FACTORS) if (500 // f) * (_CROP_WIDTH // f) <= 2 * H * W]
+    return small_enough[0] if small_enough else max(REAL_FACTORS)
+
+
+def compare_fills(case: RealCase, profile=None, recipes=("paper", "kit"), variant: str = "rgbd", seed: int = 0,
+                  progress: bool = False) -> dict[str, np.ndarray]:
+    """Every classical fill (``baselines.BASELINES``) and DDP under each of ``recipes`` on ``case``
+    → {name: (H, W) disparity in px of the working size}, the input kept where it is valid.
+
+    The classical fills fill the disparity map (d = f·B/Z); DDP fits its own normalised disparity,
+    from the input depth's range, with the profile's size and budget (``rgbd+warp`` warps the right
+    view). Names: the fills' keys, then ``"DDP <recipe>"``.
+    """
+    disparity_in = case.fb / case.depth  # (H, W) px (plus doffs: a constant, it cancels in every error)
+    out = {name: fill(disparity_in, case.rgb) for name, fill in BASELINES.items()}
+    for recipe in recipes:
+        config = FitConfig.for_profile(profile, variant=variant, recipe=recipe, seed=seed, progress=progress)
+        neighbors = case.neighbors if variant == "rgbd+warp" else ()
+        result = complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant, config=config)
+        out[f"DDP {recipe}"] = case.fb / result.merged(case.depth)
+    return out
 
 
 def _cropped(scene: Scene) -> Scene:

@@ -88,3 +88,13 @@ def test_occlusion_holes_lie_beside_a_nearer_surface_on_their_right():
                         for v, u in np.argwhere(mask) if u + 6 < disparity.shape[1]])
     kept = np.isfinite(case.gt) & np.isfinite(case.depth)
     assert share_beside_a_nearer_surface(case.scored_holes) > 3 * share_beside_a_nearer_surface(kept)
+
+
+def test_the_pair_written_in_middlebury_format_reads_back_as_loaded(tmp_path, motorcycle):
+    from ddp_lite.middlebury import load_middlebury, write_motorcycle_folder
+    folder = write_motorcycle_folder(tmp_path / "Motorcycle")
+    assert "doffs=31.086" in (folder / "calib.txt").read_text() and "baseline=193.001" in (folder / "calib.txt").read_text()
+    read = load_middlebury(folder)
+    np.testing.assert_array_equal(read[0].rgb, motorcycle[0].rgb)
+    np.testing.assert_allclose(read[0].depth, motorcycle[0].depth, rtol=1e-6)  # NaN where unknown, in both
+    np.testing.assert_allclose(read.right[0].camera.K, motorcycle.right[0].camera.K)
