@@ -38,10 +38,10 @@ from scipy import interpolate, ndimage, sparse
 from scipy.sparse.linalg import spsolve
 from scipy.spatial import QhullError
 
-from .checks import check_depth
+from .checks import check_depth, check_image
 
 __all__ = ["fill_nearest", "fill_linear", "fill_cubic", "fill_telea", "fill_navier_stokes", "fill_biharmonic",
-           "fill_colorization", "fill_guided_filter", "fill_bilateral_solver", "joint_bilateral_fill",
+           "fill_colorization", "colorization_affinities", "NEIGHBOUR_OFFSETS", "fill_guided_filter", "fill_bilateral_solver", "joint_bilateral_fill",
            "fill_cross_bilateral", "BASELINES", "fill"]
 
 
@@ -160,6 +160,39 @@ def fill_biharmonic(depth, rgb=None) -> np.ndarray:
 
 # 3×3 window minus its centre, (dy, dx)
 _OFFSETS = [(dy, dx) for dy in (-1, 0, 1) for dx in (-1, 0, 1) if (dy, dx) != (0, 0)]
+NEIGHBOUR_OFFSETS = tuple(_OFFSETS)
+
+
+def _colorization_weights(image: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Levin et al.'s affinities of ``image`` (H, W, 3) in [0, 1]: weights (8, H, W) over the 3×3
+    neighbours in ``_OFFSETS`` order, summing to 1 per pixel (0 outside the image), and the flat
+    index (8, H, W) of each neighbour (-1 outside)."""
+    H, W = image.shape[:2]
+    gray = image @ np.array([0.2989, 0.5870, 0.1140])  # MATLAB's rgb2gray weights, (H, W)
+    index = np.arange(H * W).reshape(H, W)
+    gray_pad = np.pad(gray, 1, constant_values=np.nan)  # NaN: outside the image
+    index_pad = np.pad(index, 1, constant_values=-1)
+    nbr_gray = np.stack([gray_pad[1 + dy:1 + dy + H, 1 + dx:1 + dx + W] for dy, dx in _OFFSETS])  # (8, H, W)
+    nbr_index = np.stack([index_pad[1 + dy:1 + dy + H, 1 + dx:1 + dx + W] for dy, dx in _OFFSETS])  # (8, H, W)
+    inside = nbr_index >= 0
+
+    window = np.concatenate([nbr_gray, gray[None]])  # (9, H, W), the centre included as in the toolbox
+    variance = np.nanvar(window, axis=0)
+    diff2 = (nbr_gray - gray[None]) ** 2  # (8, H, W), NaN outside
+    sigma2 = np.maximum(0.6 * variance, -np.nanmin(diff2, axis=0) / np.log(0.01))
+    sigma2 = np.maximum(sigma2, 2e-6)  # a flat window: equal weights
+    weights = np.where(inside, np.exp(-np.nan_to_num(diff2) / sigma2[None]), 0.0)
+    return weights / weights.sum(axis=0, keepdims=True), nbr_index
+
+
+def colorization_affinities(rgb) -> np.ndarray:
+    """The affinities of the colorization fill, (8, H, W) float32 for ``rgb`` (H, W, 3) in [0, 1]: the
+    weight of each of a pixel's 3×3 neighbours (``NEIGHBOUR_OFFSETS`` (dy, dx) order; 0 outside the
+    image), high where the grey levels are alike *relative to the local variance*, so that texture
+    of one surface still links its pixels while an edge between two surfaces does not. Each pixel's
+    eight weights sum to 1."""
+    image = check_image(rgb, "rgb")
+    return _colorization_weights(image.astype(np.float64))[0].astype(np.float32)
 
 
 def fill_colorization(depth, rgb=None, alpha: float = 1.0) -> np.ndarray:
@@ -179,21 +212,9 @@ def fill_colorization(depth, rgb=None, alpha: float = 1.0) -> np.ndarray:
     if valid.all():
         return depth.astype(np.float32)
     H, W = depth.shape
-    gray = image @ np.array([0.2989, 0.5870, 0.1140])  # MATLAB's rgb2gray weights, (H, W)
-    index = np.arange(H * W).reshape(H, W)
-    gray_pad = np.pad(gray, 1, constant_values=np.nan)  # NaN: outside the image
-    index_pad = np.pad(index, 1, constant_values=-1)
-    nbr_gray = np.stack([gray_pad[1 + dy:1 + dy + H, 1 + dx:1 + dx + W] for dy, dx in _OFFSETS])  # (8, H, W)
-    nbr_index = np.stack([index_pad[1 + dy:1 + dy + H, 1 + dx:1 + dx + W] for dy, dx in _OFFSETS])  # (8, H, W)
+    weights, nbr_index = _colorization_weights(image)
     inside = nbr_index >= 0
-
-    window = np.concatenate([nbr_gray, gray[None]])  # (9, H, W), the centre included as in the toolbox
-    variance = np.nanvar(window, axis=0)
-    diff2 = (nbr_gray - gray[None]) ** 2  # (8, H, W), NaN outside
-    sigma2 = np.maximum(0.6 * variance, -np.nanmin(diff2, axis=0) / np.log(0.01))
-    sigma2 = np.maximum(sigma2, 2e-6)  # a flat window: equal weights
-    weights = np.where(inside, np.exp(-np.nan_to_num(diff2) / sigma2[None]), 0.0)
-    weights /= weights.sum(axis=0, keepdims=True)
+    index = np.arange(H * W).reshape(H, W)
 
     # A = I - W + α·diag(valid), b = α·valid·depth
     rows = np.broadcast_to(index, nbr_index.shape)[inside]

@@ -58,6 +58,7 @@ class FitConfig:
     smoothness_edge: float = 10.0  # how strongly colour edges relax both hole terms: exp(-edge · |∇I|)
     edge_guide: str = "grey"  # |∇I| of the grey image, or "rgb": the largest over the three channels
     flatness: float = 0.0  # weight of an edge-aware first-order smoothness in the holes (0: off)
+    affinity: float = 0.0  # weight of the colorization energy in the holes (losses.affinity_loss; 0: off)
     flatness_reach: float | None = None  # enclosed holes: that term only within this many px of valid depth (None: everywhere)
     disparity_margin: float = 1.25  # transform=None: d_min / margin … d_max × margin around the valid depth
     auto_stop: bool = False
@@ -133,7 +134,7 @@ class FitConfig:
                 ("lambda_z", 0.0, 1.0, False, False), ("lambda_i", 0.0, 1.0, False, False),
                 ("lambda_w", 0.0, 1.0, False, False), ("reg_noise_std", 0.0, None, False, False),
                 ("average_outputs", 0.0, 1.0, False, True), ("smoothness", 0.0, None, False, False),
-                ("flatness", 0.0, None, False, False), ("image_input", 0.0, None, False, False),
+                ("flatness", 0.0, None, False, False), ("affinity", 0.0, None, False, False), ("image_input", 0.0, None, False, False),
                 ("image_blur", 0.0, None, False, False), ("fill_input", 0.0, None, False, False),
                 ("smoothness_edge", 0.0, None, False, False), ("disparity_margin", 1.0, None, False, False),
                 ("holdout_fraction", 0.0, 0.5, True, True)):

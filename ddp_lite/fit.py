@@ -28,7 +28,8 @@ from .dip import ImageResult, fit_image
 from .disparity import DisparityTransform
 from .loop import (PlateauStopper, check_finite_output, check_memory, estimate_peak_memory_gb, holdout_mask,
                    to_tensor)
-from .losses import (ConstantTarget, disparity_loss, flatness_loss, flatness_region, rgb_loss, smoothness_loss,
+from .baselines import NEIGHBOUR_OFFSETS, colorization_affinities
+from .losses import (ConstantTarget, affinity_loss, disparity_loss, flatness_loss, flatness_region, rgb_loss, smoothness_loss,
                      smoothness_weights, warp_loss)
 from .nets import fill_channel, image_channels
 from .variants import VARIANTS, get_variant
@@ -270,6 +271,12 @@ def _fit_one(rgb, depth, camera, neighbors, variant, config, *, gt_depth=None, t
         if config.flatness > 0 and config.flatness_reach is not None:
             flat_weights = smooth_weights * to_tensor(flatness_region(free, config.flatness_reach), device)
 
+    affinities = affinity_region = affinity_total = None
+    if config.affinity > 0 and rgb is not None:
+        affinities = torch.from_numpy(colorization_affinities(rgb))[None].to(device)  # (1, 8, H, W)
+        affinity_region = to_tensor(~(valid & ~heldout), device)  # (1, 1, H, W): holes and held-out pixels
+        affinity_total = affinity_region.sum()
+
     def loss_fn(output):
         disparity = output[:, :1]  # (1, 1, H, W)
         terms = {"disp": disparity_loss(disparity, disp_target, lambda_z=config.lambda_z)}
@@ -288,6 +295,9 @@ def _fit_one(rgb, depth, camera, neighbors, variant, config, *, gt_depth=None, t
         if config.flatness > 0:
             terms["flat"] = flatness_loss(disparity, flat_weights, weight_total)
             total = total + config.flatness * terms["flat"]
+        if affinities is not None:
+            terms["affinity"] = affinity_loss(disparity, affinities, NEIGHBOUR_OFFSETS, affinity_region, affinity_total)
+            total = total + config.affinity * terms["affinity"]
         return total, terms
 
     heldout_error = None

@@ -301,3 +301,29 @@ def flatness_region(holes: np.ndarray, reach: float) -> np.ndarray:
     at_border = np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]]))
     touching = np.isin(labels, at_border[at_border > 0])
     return touching | (holes & (ndimage.distance_transform_edt(holes) <= reach))
+
+
+def affinity_loss(disparity: torch.Tensor, affinities: torch.Tensor, offsets, region: torch.Tensor,
+                  normaliser: torch.Tensor) -> torch.Tensor:
+    """Levin et al.'s colorization energy as a hole term: Σ_p∈region |z_p − Σ_q w_pq z_q| / ``normaliser``.
+
+    ``disparity`` (B, 1, H, W); ``affinities`` (1, 8, H, W), the weights w_pq of each pixel's 3×3
+    neighbours q at ``offsets`` (eight (dy, dx), ``baselines.colorization_affinities``), summing to 1;
+    ``region`` (1, 1, H, W) float, where the term acts (the holes). Zero where every pixel is the
+    affinity-weighted mean of its neighbours: a colorization fill is its minimum in the holes.
+    Unlike the exp(−edge·|∇I|) weights of :func:`smoothness_weights`, these adapt to the local colour
+    variance, so a textured surface stays linked while the boundary between two surfaces does not.
+
+    Example:
+        >>> w = torch.full((1, 8, 3, 3), 1 / 8)
+        >>> offsets = [(dy, dx) for dy in (-1, 0, 1) for dx in (-1, 0, 1) if (dy, dx) != (0, 0)]
+        >>> z = torch.zeros(1, 1, 3, 3); z[..., 1, 1] = 1.0  # a spike in the middle
+        >>> region = torch.zeros(1, 1, 3, 3); region[..., 1, 1] = 1.0
+        >>> affinity_loss(z, w, offsets, region, region.sum()).item()  # its neighbours' mean is 0
+        1.0
+    """
+    H, W = disparity.shape[-2:]
+    padded = F.pad(disparity, (1, 1, 1, 1), mode="replicate")  # (B, 1, H + 2, W + 2); weight 0 outside
+    mean = sum(affinities[:, k:k + 1] * padded[..., 1 + dy:1 + dy + H, 1 + dx:1 + dx + W]
+               for k, (dy, dx) in enumerate(offsets))  # (B, 1, H, W)
+    return ((disparity - mean).abs() * region).sum() / normaliser.clamp(min=1e-12) / disparity.shape[0]

@@ -222,3 +222,22 @@ def test_guided_fills_refuse_bad_parameters_and_need_the_image():
                         (lambda: fill_guided_filter(depth), "rgb is required")):
         with pytest.raises(ValueError, match=match):
             call()
+
+
+def test_the_colorization_fill_zeroes_the_affinity_hole_term():
+    """The kit's affinity term (losses.affinity_loss) is the colorization system's residual in the holes:
+    the fill scipy solves for makes it vanish there, a colour-blind fill does not."""
+    import torch
+    from ddp_lite.baselines import NEIGHBOUR_OFFSETS, colorization_affinities
+    from ddp_lite.losses import affinity_loss
+    rgb, depth, gt = _two_regions()
+    rgb = rgb + 0.05 * np.random.default_rng(0).random(rgb.shape).astype(np.float32)  # texture on both sides
+    holes = np.isnan(depth)
+    weights = torch.from_numpy(colorization_affinities(rgb))[None]  # (1, 8, H, W)
+    region = torch.from_numpy(holes.astype(np.float32))[None, None]
+
+    def energy(filled):
+        return affinity_loss(torch.from_numpy(filled.astype(np.float32))[None, None], weights, NEIGHBOUR_OFFSETS,
+                             region, region.sum()).item()
+    assert energy(fill_colorization(depth, rgb)) < 1e-5
+    assert energy(fill_linear(depth)) > 1e-3
