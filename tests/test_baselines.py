@@ -239,5 +239,6 @@ def test_the_colorization_fill_zeroes_the_affinity_hole_term():
     def energy(filled):
         return affinity_loss(torch.from_numpy(filled.astype(np.float32))[None, None], weights, NEIGHBOUR_OFFSETS,
                              region, region.sum()).item()
-    assert energy(fill_colorization(depth, rgb)) < 1e-5
-    assert energy(fill_linear(depth)) > 1e-3
+    zero = energy(fill_colorization(depth, rgb))
+    assert zero < 1e-4  # float32 rounding of metre-sized values
+    assert energy(fill_linear(depth)) > 100 * zero
