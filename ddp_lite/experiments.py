@@ -26,7 +26,7 @@ from .variants import get_variant
 from .views import LABEL_SKY
 
 __all__ = ["Case", "make_case", "sgm_depth_at_scale", "edge_band", "disparity_rmse", "run_variants", "error_table", "format_table",
-           "texture_leakage", "format_mean_spread", "cloud_scores", "ablation", "TABLE2_CONFIGS"]
+           "format_ranking", "texture_leakage", "format_mean_spread", "cloud_scores", "ablation", "TABLE2_CONFIGS"]
 
 
 @dataclass
@@ -147,6 +147,26 @@ def format_table(table: dict[str, dict[str, float]], digits: int = 2, title: str
     lines.append(" " * width + "".join(f"{c:>12}" for c in columns))
     for row, values in table.items():
         lines.append(f"{str(row):<{width}}" + "".join(f"{values[c]:>12.{digits}f}" for c in columns))
+    return "\n".join(lines)
+
+
+def format_ranking(table: dict[str, dict[str, float]], digits: int = 3) -> str:
+    """``table`` {case: {method: error}} → the methods ranked by their mean error over the cases, one
+    line each: the error per case, the mean and the rank (1 = best). Every case must have every method.
+
+    Example:
+        >>> print(format_ranking({"a": {"x": 1.0, "y": 3.0}, "b": {"x": 2.0, "y": 1.0}}, digits=1))
+        method                        a        b  average  rank
+        x                           1.0      2.0      1.5     1
+        y                           3.0      1.0      2.0     2
+    """
+    cases = list(table)
+    methods = list(table[cases[0]])
+    average = {m: float(np.mean([table[c][m] for c in cases])) for m in methods}
+    lines = [f"{'method':<22}" + "".join(f"{c:>9}" for c in cases) + f"{'average':>9}{'rank':>6}"]
+    for rank, m in enumerate(sorted(methods, key=average.get), 1):
+        lines.append(f"{m:<22}" + "".join(f"{table[c][m]:>9.{digits}f}" for c in cases)
+                     + f"{average[m]:>9.{digits}f}{rank:>6}")
     return "\n".join(lines)
 
 
