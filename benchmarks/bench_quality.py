@@ -216,6 +216,13 @@ def rmse_px(depth, case: Case, fb: float) -> float:
     return float(np.sqrt(np.mean((fb / depth[mask] - fb / case.gt[mask]) ** 2)))
 
 
+def region_errors(case, depth) -> dict:
+    """A real case's hole RMSE (px) by region (``RealCase.regions``) as ``{"px_<region>": ...}``; {} otherwise."""
+    if not hasattr(case, "regions"):
+        return {}
+    return {f"px_{region}": case.rmse_px(depth, mask) for region, mask in case.regions().items()}
+
+
 def parse_recipe(text: str) -> tuple[str, dict]:
     """``name`` (from RECIPES) or ``name:key=value,key=value`` → (name, overrides)."""
     if ":" not in text:
@@ -273,7 +280,8 @@ def run(args) -> None:
                 start = time.perf_counter()
                 filled = fill(disparity_in, case.rgb)
                 record(dict(case=name, method=method, variant=None, seed=None, size=size,
-                            px=rmse_px(fb / filled, case, fb), seconds=time.perf_counter() - start))
+                            px=rmse_px(fb / filled, case, fb), seconds=time.perf_counter() - start,
+                            **region_errors(case, fb / filled)))
         for recipe, overrides in recipes:
             for variant in args.variants:
                 if variant == "rgbd+warp" and not case.neighbors:
@@ -290,7 +298,7 @@ def run(args) -> None:
                     record(dict(case=name, method=recipe, variant=variant, seed=seed, size=size,
                                 px=rmse_px(result.merged(case.depth), case, fb),
                                 seconds=time.perf_counter() - start, iterations=result.iterations,
-                                overrides=repr(overrides)))
+                                overrides=repr(overrides), **region_errors(case, result.merged(case.depth))))
                     print(f"{name:<22} {recipe:<14} {variant:<10} seed {seed}: {rows[-1]['px']:.3f} px "
                           f"({rows[-1]['seconds']:.0f} s)", flush=True)
     if out:

@@ -95,8 +95,9 @@ def fill_channel(disparity: np.ndarray, rgb: np.ndarray | None, scale: float = 1
         >>> fill_channel(np.array([[0.2, np.nan, 0.6], [0.2, 0.4, 0.6]]), None).round(3).tolist()
         [[0.2, 0.4, 0.6], [0.2, 0.4, 0.6]]
     """
-    filled = fill_colorization(disparity, rgb) if rgb is not None else fill_linear(disparity)
-    return (scale * filled).astype(np.float32)
+    shifted = disparity + 1.0  # the fills take positive values (they are written for metres); 0 is a valid disparity
+    filled = fill_colorization(shifted, rgb) if rgb is not None else fill_linear(shifted)
+    return (scale * (filled - 1.0)).astype(np.float32)
 
 
 PADDINGS = ("reflect", "zeros")

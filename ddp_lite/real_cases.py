@@ -24,6 +24,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy import ndimage
 from .baselines import BASELINES
 from .experiments import Case
 from .fit import FitConfig, complete_depth
@@ -53,10 +54,30 @@ class RealCase(Case):
         """(H, W) bool: holes of the input where the truth is known, the only pixels scored."""
         return ~np.isfinite(self.depth) & np.isfinite(self.gt)
 
-    def rmse_px(self, depth) -> float:
-        """Hole RMSE of ``depth`` (H, W) metres against the truth, in disparity pixels of the working size."""
-        mask = self.scored_holes
+    def rmse_px(self, depth, mask=None) -> float:
+        """Hole RMSE of ``depth`` (H, W) metres against the truth, in disparity pixels of the working size,
+        over the scored holes (or the part ``mask`` (H, W) bool of them; NaN if that is empty)."""
+        mask = self.scored_holes if mask is None else mask & self.scored_holes
+        if not mask.any():
+            return float("nan")
         return float(np.sqrt(np.mean((self.fb / depth[mask] - self.fb / self.gt[mask]) ** 2)))
+
+    def regions(self) -> dict[str, np.ndarray]:
+        """Where in the scored holes an error comes from, (H, W) bool each: ``edges`` (within 2 px of a
+        depth edge of the truth: a disparity step > 1 px), ``textured`` / ``smooth`` (grey-level standard
+        deviation over 5×5 above / below 0.03), ``near`` / ``far`` (≤ / > 6 px from the nearest valid
+        input pixel)."""
+        disparity = np.nan_to_num(self.fb / self.gt, nan=0.0)
+        step = np.zeros(disparity.shape, bool)
+        step[:, 1:] |= np.abs(np.diff(disparity, axis=1)) > 1.0
+        step[1:] |= np.abs(np.diff(disparity, axis=0)) > 1.0
+        edges = ndimage.binary_dilation(step, iterations=2)
+        grey = self.rgb.mean(axis=2)
+        local_std = np.sqrt(np.maximum(ndimage.uniform_filter(grey ** 2, 5) - ndimage.uniform_filter(grey, 5) ** 2, 0))
+        distance = ndimage.distance_transform_edt(~np.isfinite(self.depth))
+        scored = self.scored_holes
+        return {"edges": scored & edges, "textured": scored & (local_std > 0.03), "smooth": scored & (local_std <= 0.03),
+                "near": scored & (distance <= 6), "far": scored & (distance > 6)}
 
 
 def _pool_mean(array: np.ndarray, factor: int) -> np.ndarray:
