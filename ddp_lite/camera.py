@@ -72,11 +72,6 @@ class Camera:
                 raise ValueError(f"K: focal length {axis}={focal:.6g} px is implausible for a {self.width}×{self.height} "
                                  f"image (expected {MIN_FOCAL_RATIO:g}–{MAX_FOCAL_RATIO:g} × the larger side); "
                                  f"is it in pixels?")
-        # a principal point far outside the image: K belongs to another image size (640×480 on 48×32)
-        cx, cy = K[0, 2], K[1, 2]
-        if not (-self.width <= cx <= 2 * self.width and -self.height <= cy <= 2 * self.height):
-            raise ValueError(f"K: principal point ({cx:.6g}, {cy:.6g}) px lies far outside the {self.width}×{self.height} "
-                             f"image; are the intrinsics for another image size? (Camera.resized scales them)")
         K.setflags(write=False)
         pose.setflags(write=False)
         object.__setattr__(self, "K", K)

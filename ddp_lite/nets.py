@@ -215,14 +215,15 @@ def build_net(kind: str, in_channels: int, out_channels: int, channels=None, **u
 
 
 def smallest_input(kind: str, channels=None) -> int:
-    """The smallest height (and width) in px the net ``kind`` with encoder ``channels`` accepts: its
-    total down-sampling factor + 1, so the deepest level is at least 2×2 (BatchNorm needs more than
-    one value per channel; a 3×3 reflection pad needs 2 px)."""
+    """The smallest height (and width) in px a fit with the net ``kind`` and encoder ``channels`` takes:
+    its total down-sampling factor + 1, so the deepest level is at least 2×2 (BatchNorm needs more
+    than one value per channel; a 3×3 reflection pad needs 2 px), and at least the losses' 11×11
+    SSIM window."""
     if kind == "unet":
         factor = 2 ** (len(tuple(channels or UNET_CHANNELS)) - 1)
     else:
         factor = 2 ** len(tuple(channels or SKIP_CHANNELS))
-    return factor + 1
+    return max(factor + 1, 11)
 
 
 def check_input_size(kind: str, channels, height: int, width: int, name: str = "depth") -> None:
