@@ -11,8 +11,10 @@ How files are trusted (the honest part). Every file in ``registry.py`` carries a
 ``None`` = *unverified*. The kit was written on machines that cannot reach the dataset servers,
 so no hash could be computed, and none is invented: today **every** entry is unverified. ``fetch``
 therefore refuses an unverified file by default. With ``--trust-first-download`` it accepts what
-arrives (trust on first use), records its SHA-256 in ``<dataset>/registry.json`` next to the data,
-and from then on verifies every fetch against that record, so a later change is caught even
+arrives (trust on first use): only bytes that fetch itself downloads, or a manual download you
+placed (a file already under the final name of a downloadable file is refused, not trusted). It
+records the SHA-256 in ``<dataset>/registry.json`` next to the data, with whose bytes they were
+(``bytes_from``), and from then on verifies every fetch against that record, so a later change is caught even
 though the first copy was taken on trust. Once somebody has checked a file against its source,
 its hash belongs in ``registry.py`` and the flag is no longer needed for it.
 

@@ -30,7 +30,7 @@ def main(argv=None) -> int:
     except ManualDownloadRequired as error:
         print(error)
         return 2
-    except (FetchError, ValueError) as error:
+    except (FetchError, ValueError, OSError) as error:
         print(f"error: {error}", file=sys.stderr)
         return 1
     print(f"{args.name}: {len(paths)} file(s) verified in {paths[0].parent if paths else '-'}")

@@ -5,7 +5,8 @@ Layout under the data root (``--dest``, else ``$DDP_DATA``, else platformdirs'
 
     <root>/<dataset>/<file>             the verified file (final name only after its hash matched)
     <root>/<dataset>/<file>.part        an interrupted download, resumed by the next fetch
-    <root>/<dataset>/registry.json      hashes recorded by --trust-first-download (and when)
+    <root>/<dataset>/registry.json      hashes recorded by --trust-first-download (when, and whose bytes:
+                                        downloaded by that fetch, or a manual download the user placed)
     <root>/<dataset>/.<file>.unpacked   marker: this archive (this hash) was unpacked here
 """
 from __future__ import annotations
@@ -22,6 +23,7 @@ import pooch
 
 from .atomic import write_bytes_atomic
 from .download import ChecksumError, FetchError, ResumableDownloader
+from .files import regular_file
 from .registry import Dataset, RemoteFile, get_dataset
 from .unpack import safe_extract
 
@@ -45,9 +47,22 @@ def data_dir(dest=None) -> Path:
         if not str(dest).strip():
             raise ValueError("dest must name a folder, got an empty string")
         return Path(dest).expanduser()
-    if os.environ.get(ENV_VAR):
+    if ENV_VAR in os.environ:
+        if not os.environ[ENV_VAR].strip():  # set but blank: a typo'd export, not a wish for the default
+            raise ValueError(f"{ENV_VAR} is set but blank; name a folder (export {ENV_VAR}=/path/to/data) or unset "
+                             f"it to use {platformdirs.user_data_dir('ddp-lite')}")
         return Path(os.environ[ENV_VAR]).expanduser()
     return Path(platformdirs.user_data_dir("ddp-lite"))
+
+
+def _check_writable(folder: Path) -> None:
+    """Refuse, before any download, a dataset folder (or its nearest existing parent) we cannot write to."""
+    existing = folder
+    while not existing.exists() and existing != existing.parent:
+        existing = existing.parent
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise FetchError(f"dest: {existing} is not writable, so {folder} cannot hold the data; pick another data "
+                         f"root (--dest, or ${ENV_VAR}) or make it writable")
 
 
 def _read_records(folder: Path) -> dict:
@@ -69,9 +84,9 @@ def _read_records(folder: Path) -> dict:
     return records
 
 
-def _record(folder: Path, entry: RemoteFile, sha256: str, how: str) -> None:
+def _record(folder: Path, entry: RemoteFile, sha256: str, how: str, bytes_from: str) -> None:
     records = _read_records(folder)
-    records[entry.name] = {"sha256": sha256, "url": entry.url, "how": how,
+    records[entry.name] = {"sha256": sha256, "url": entry.url, "how": how, "bytes_from": bytes_from,
                            "recorded": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")}
     write_bytes_atomic(folder / REGISTRY_FILE, (json.dumps(records, indent=2, sort_keys=True) + "\n").encode())
 
@@ -123,7 +138,7 @@ def _download(folder: Path, entry: RemoteFile, known: str | None, retries: int, 
 
 
 def _verify_manual(folder: Path, entry: RemoteFile, known: str) -> None:
-    path = folder / entry.name
+    path = regular_file(folder / entry.name, "manual download")
     actual = pooch.file_hash(str(path), alg=known.split(":")[0] if ":" in known else "sha256")
     if actual != known.split(":")[-1]:
         rejected = path.with_name(path.name + ".rejected")
@@ -147,6 +162,7 @@ def fetch(dataset, dest=None, only=None, trust_first_download: bool = False, ret
             raise FetchError(f"dest: {where} is a file; the data root and its dataset folders must be folders")
     folder = root / dataset.name
     entries = _select(dataset, only)
+    _check_writable(folder)
     manual = dataset.manual is not None or any(f.url is None for f in entries)
     if manual:
         missing = [f.name for f in entries if not (folder / f.name).exists()]
@@ -157,9 +173,16 @@ def fetch(dataset, dest=None, only=None, trust_first_download: bool = False, ret
     for entry in entries:
         known = _known_hash(folder, entry, trust_first_download)
         if manual:
+            regular_file(folder / entry.name, "manual download")  # a FIFO would make the hashing wait forever
             if known is not None:
                 _verify_manual(folder, entry, known)
         else:
+            if known is None and os.path.lexists(folder / entry.name):
+                # trust on first use covers what this fetch downloads, not whatever already sits there
+                raise UnpinnedFileError(
+                    f"{folder / entry.name} is already there, but no SHA-256 is pinned or recorded for it, so it "
+                    f"cannot be verified; --trust-first-download trusts only bytes this fetch downloads. Move it "
+                    f"away (or delete it) and fetch again.")
             _download(folder, entry, known, retries, progressbar, backoff)
         path = folder / entry.name
         digest = known or pooch.file_hash(str(path))
@@ -171,7 +194,9 @@ def fetch(dataset, dest=None, only=None, trust_first_download: bool = False, ret
                     path.unlink(missing_ok=True)
                 raise
         if known is None:  # trust on first use, recorded only once the file proved usable
-            _record(folder, entry, digest, "trust-first-download")
+            _record(folder, entry, digest, "trust-first-download",
+                    "a manual download placed in this folder by the user" if manual
+                    else f"downloaded by this fetch from {entry.url}")
             say(f"recorded SHA-256 {digest} for {entry.name} in {folder / REGISTRY_FILE} (trusted on first use)")
         paths.append(path)
     return paths

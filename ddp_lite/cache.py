@@ -34,6 +34,8 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from data_fetch.files import describe_kind, regular_file
+
 from .atomic import write_bytes_atomic
 from .config import FitConfig
 from .profiles import current_profile_name
@@ -45,9 +47,18 @@ ENV_VAR = "DDP_CACHE"
 
 
 def cache_folder() -> Path | None:
-    """The folder ``DDP_CACHE`` names (``~`` expanded), or None when it is unset or empty."""
+    """The folder ``DDP_CACHE`` names (``~`` expanded), or None when it is unset or empty.
+
+    A name that exists but is not a folder is refused here, before any fit runs (``ValueError``):
+    otherwise the first store, after the whole fit, would fail."""
     folder = os.environ.get(ENV_VAR, "").strip()
-    return Path(folder).expanduser() if folder else None
+    if not folder:
+        return None
+    path = Path(folder).expanduser()
+    if path.exists() and not path.is_dir():
+        raise ValueError(f"{ENV_VAR}={folder!r} names {path}, which is {describe_kind(path.stat().st_mode)}; "
+                         f"{ENV_VAR} must name a folder for the fit cache (or be unset)")
+    return path
 
 
 @functools.lru_cache(maxsize=1)
@@ -109,7 +120,7 @@ def cached(function):
             return function(*args, **kwargs)
         path = folder / f"{function.__name__}-{key}.pkl"
         try:
-            return pickle.loads(path.read_bytes())
+            return pickle.loads(regular_file(path).read_bytes())
         except Exception:  # not there yet, or unreadable (say, pickled by another version of a dependency)
             pass
         result = function(*args, **kwargs)

@@ -140,6 +140,25 @@ def view_overlap(ref: "Camera", depth, nbr: "Camera", max_points: int = 4096) ->
     return float(inside.sum()) / max(len(v), 1)
 
 
+def view_parallax(ref: "Camera", depth, nbr: "Camera", max_points: int = 4096) -> float:
+    """The largest parallax, in ``nbr``'s pixels, of ``ref``'s valid depth (``depth`` (H, W) metres):
+    how far each point lands from where a point at infinity on the same ray would (the shift the
+    warp loss measures depth by). 0 for a neighbour at the reference's centre; below a pixel, the
+    neighbour's warp cannot tell depths apart (e.g. depth in millimetres with poses in metres)."""
+    v, u = np.nonzero(np.isfinite(depth))
+    step = max(1, len(v) // max_points)
+    v, u = v[::step], u[::step]
+    rays = np.linalg.inv(ref.K) @ np.stack([u, v, np.ones_like(u)]).astype(np.float64)  # (3, N), z = 1
+    pose = relative_pose(ref, nbr)
+    near = nbr.K @ (pose[:3, :3] @ (rays * depth[v, u]) + pose[:3, 3:])  # the point itself
+    far = nbr.K @ (pose[:3, :3] @ rays)  # its vanishing point: rotation only
+    ok = (near[2] > 1e-9) & (far[2] > 1e-9)
+    if not ok.any():
+        return 0.0
+    shift = np.hypot(near[0, ok] / near[2, ok] - far[0, ok] / far[2, ok], near[1, ok] / near[2, ok] - far[1, ok] / far[2, ok])
+    return float(shift.max())
+
+
 def look_at(eye, target, up=(0.0, -1.0, 0.0)) -> np.ndarray:
     """``cam_from_world`` (4×4) of a camera at ``eye`` looking at ``target`` (world metres).
 

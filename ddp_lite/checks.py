@@ -21,10 +21,24 @@ import numbers
 import numpy as np
 import torch
 
-__all__ = ["check_int", "check_real", "check_bool", "check_choice", "check_int_tuple", "check_image", "check_depth",
+__all__ = ["check_callback", "check_int", "check_real", "check_bool", "check_choice", "check_int_tuple", "check_image", "check_depth",
            "check_size", "MIN_VALID_PIXELS"]
 
 MIN_VALID_PIXELS = 16  # a fit, or a mask, with fewer known pixels is refused
+MAX_DEPTH_RATIO = 1e6  # farthest / nearest valid depth: beyond it float32 disparity cannot resolve the far part
+
+
+def _unmask(array, name: str, holes: bool):
+    """A NumPy masked array → a plain one: masked entries become NaN holes (``holes``), or ``TypeError``
+    for arrays with no holes (colour). Anything else is returned as it is."""
+    if not np.ma.isMaskedArray(array):
+        return array
+    if not holes:
+        raise TypeError(f"{name} must be a plain NumPy array, got a masked array (colour has no holes: "
+                        f"fill it, e.g. {name}.filled(0))")
+    if not np.issubdtype(array.dtype, np.floating):
+        raise TypeError(f"{name} must be float metres with NaN holes, got a masked array of dtype {array.dtype}")
+    return np.ma.filled(array, np.nan)  # masked = hole, the kit's NaN; a copy
 
 
 def check_bool(value, name: str) -> bool:
@@ -81,13 +95,24 @@ def check_int_tuple(value, name: str, minimum: int, min_length: int = 0) -> tupl
     return tuple(check_int(v, f"{name}[{i}]", minimum=minimum) for i, v in enumerate(value))
 
 
+def check_callback(callback, every) -> None:
+    """A fit's ``callback``: None, or a function that ``every`` (config.callback_every) > 0 will call."""
+    if callback is None:
+        return
+    if not callable(callback):
+        raise TypeError(f"callback must be a function callback(iteration, outputs), got {type(callback).__name__}")
+    if every == 0:
+        raise ValueError("callback is given but config.callback_every is 0, so it would never be called; "
+                         "set config.callback_every to how often (iterations) to call it")
+
+
 # --------------------------------------------------------------------------- arrays a fit takes
 
 def check_image(image, name: str, shape=None) -> np.ndarray:
     """(H, W, 3) float32 in [0, 1] (uint8 is scaled by 1/255), a copy; ``shape`` (H, W) if given."""
     if isinstance(image, torch.Tensor):
         raise TypeError(f"{name} must be a NumPy array (H, W, 3), got a torch tensor")
-    array = np.asarray(image)
+    array = np.asarray(_unmask(image, name, holes=False))
     if array.dtype == np.uint8:
         array = array.astype(np.float32) / 255.0
     if not np.issubdtype(array.dtype, np.floating):
@@ -109,11 +134,13 @@ def check_depth(depth, name: str = "depth", allow_holes: bool = True, min_valid:
     ``min_valid`` valid pixels, (H, W) = ``shape`` if given → a copy as ``dtype`` (float32).
 
     One error type per fault: a torch tensor or a non-float dtype → ``TypeError``; a wrong shape,
-    ``inf``, a value ≤ 0, too few valid pixels, or holes where ``allow_holes=False`` → ``ValueError``.
+    ``inf``, a value ≤ 0, too few valid pixels, holes where ``allow_holes=False``, values that
+    ``dtype`` cannot hold, or a valid range wider than ``MAX_DEPTH_RATIO`` → ``ValueError``. A
+    NumPy masked array is honoured: masked entries are holes.
     """
     if isinstance(depth, torch.Tensor):
         raise TypeError(f"{name} must be a NumPy array (H, W), got a torch tensor")
-    array = np.asarray(depth)
+    array = np.asarray(_unmask(depth, name, holes=True))
     if not np.issubdtype(array.dtype, np.floating):
         raise TypeError(f"{name} must be float metres with NaN holes, got dtype {array.dtype}")
     if array.ndim != 2:
@@ -124,12 +151,25 @@ def check_depth(depth, name: str = "depth", allow_holes: bool = True, min_valid:
     if np.any(np.isinf(array)):
         raise ValueError(f"{name} contains inf; mark holes with NaN (loaders convert a dataset's own marker)")
     if np.any(array[finite] <= 0):
-        raise ValueError(f"{name} must be positive metres where valid, got minimum {array[finite].min():.3g}")
+        raise ValueError(f"{name} must be positive metres where valid, got minimum {array[finite].min():.3g} "
+                         f"({int((array[finite] <= 0).sum())} pixel(s) ≤ 0); mark unknown pixels with NaN, not 0")
     if finite.sum() < min_valid:
         raise ValueError(f"{name} has {int(finite.sum())} valid pixels; need at least {min_valid} valid (finite) pixel(s)")
     if not allow_holes and not finite.all():
         raise ValueError(f"{name} must have no holes")
-    return array.astype(dtype)  # always a copy: astype copies by default
+    converted = array.astype(dtype)  # always a copy: astype copies by default
+    lost = finite & ~(np.isfinite(converted) & (converted > 0))
+    if lost.any():
+        raise ValueError(f"{name} has {int(lost.sum())} valid value(s) that {np.dtype(dtype).name} cannot hold "
+                         f"(they would become inf or 0, i.e. holes); range {array[finite].min():.3g}–"
+                         f"{array[finite].max():.3g}: is the unit right (metres)?")
+    if finite.any():
+        near, far = float(converted[finite].min()), float(converted[finite].max())
+        if far > MAX_DEPTH_RATIO * near:
+            raise ValueError(f"{name} spans {near:.3g}–{far:.3g} m, a ratio of {far / near:.3g} (at most "
+                             f"{MAX_DEPTH_RATIO:g}): in float32 disparity the far part would be indistinguishable. "
+                             f"Are the tiny values invalid readings (make them NaN), or is a unit wrong?")
+    return converted
 
 
 def check_size(size) -> tuple[int, int]:

@@ -22,7 +22,7 @@ from scipy.spatial.transform import Rotation
 from .atomic import write_bytes_atomic
 from .camera import Camera
 from .fileio import (_depth_png_bytes, _png_bytes, _read_depth_file, _read_rgb, npy_bytes, pfm_bytes,
-                     read_colmap_depth, write_colmap_depth)
+                     read_colmap_depth, regular_file, write_colmap_depth)
 from .resample import _finish, _undistort
 from .textparse import _fail, _floats, _rotation, _text_lines
 from .views import Scene, View
@@ -127,9 +127,12 @@ def _depth_path(depth_dir: Path, image_name: str, suffix: str | None) -> Path:
     suffixes = [suffix] if suffix else [".geometric.bin", ".photometric.bin", ".png", ".npy", ".pfm"]
     stem = str(Path(image_name).with_suffix(""))
     for s in suffixes:
-        for candidate in (depth_dir / (image_name + s), depth_dir / (stem + s)):
-            if candidate.is_file():
-                return candidate
+        found = [c for c in dict.fromkeys((depth_dir / (image_name + s), depth_dir / (stem + s))) if c.exists()]
+        if len(found) == 2:  # one would shadow the other (say, an earlier run's output written here)
+            raise FileNotFoundError(f"depth_dir: image {image_name!r} has two depth maps in {depth_dir}: "
+                                    f"{found[0].name} and {found[1].name}; keep one (or pass depth_suffix)")
+        if found:
+            return regular_file(found[0], "depth_dir")
     raise FileNotFoundError(f"depth_dir: no depth map for image {image_name!r} in {depth_dir} "
                             f"(looked for {image_name}{suffixes[0]} and {stem}{suffixes[0]}, suffixes {suffixes})")
 
@@ -185,7 +188,7 @@ def read_colmap(folder, images_dir=None, depth_dir=None, depth_suffix: str | Non
         if np.any(cam.dist != 0):
             rgb, depth = _undistort(rgb, depth, cam.K, cam.dist)
         views.append(View(rgb, depth, Camera(cam.K, cam_from_world, cam.width, cam.height), image_name))
-    return _finish(name or folder.name, views, size)
+    return _finish(name or folder.name, views, size, [folder, cameras_path.parent, images_dir, depth_dir])
 
 
 def write_colmap(scene: Scene, folder, depths=None, depth_format: str = "bin", model: str = "PINHOLE",

@@ -7,9 +7,11 @@ what differs between the DDP variants comes from :mod:`ddp_lite.variants`.
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import functools
 from dataclasses import dataclass
 
+import numpy as np
 import torch
 
 from .checks import check_bool, check_choice, check_int, check_int_tuple, check_real
@@ -24,12 +26,18 @@ __all__ = ["FitConfig", "HOLDOUTS", "use_bf16", "resolve_device"]
 HOLDOUTS = ("pixels", "blobs")
 
 
-@dataclass
+MAX_ITERATIONS = 1_000_000  # 60× the paper's 16000; more would only allocate (a loss history row per iteration)
+MAX_SEED = 2**63 - 1  # seeds are signed 64-bit wherever torch and NumPy take them
+
+
+@dataclass(slots=True)
 class FitConfig:
     """Everything a fit needs besides the data. Defaults are the paper's (supplement).
 
     ``iterations=None`` means 16000 (6000 for depth only); milestones are absolute iterations.
-    Use :meth:`for_profile` for the sizes and schedules of ``DDP_PROFILE``.
+    Use :meth:`for_profile` for the sizes and schedules of ``DDP_PROFILE``. Slotted: a field may be
+    changed (``config.lr = 1e-2``), a misspelt one (``config.lerning_rate``) raises ``AttributeError``
+    instead of being ignored. NumPy integers given for integer fields become Python ints.
     """
 
     net: str = "unet"  # "unet" or "skip"
@@ -74,6 +82,20 @@ class FitConfig:
     progress: bool = True
     callback_every: int = 0
     max_memory_gb: float | None = None  # refuse a fit whose estimated peak exceeds this; None → 75 % of RAM
+
+    def __post_init__(self):
+        for f in dataclasses.fields(self):  # np.int64(3) → 3: torch's seeding takes Python ints only
+            value = getattr(self, f.name)
+            if isinstance(value, np.integer):
+                setattr(self, f.name, int(value))
+
+    def __setattr__(self, name, value):
+        try:
+            object.__setattr__(self, name, value)
+        except AttributeError:  # not a field (the class is slotted): a typo must not pass in silence
+            close = difflib.get_close_matches(name, [f.name for f in dataclasses.fields(self)], n=1)
+            raise AttributeError(f"FitConfig has no field {name!r}" + (f"; did you mean {close[0]!r}?" if close else
+                                 "; see dataclasses.fields(FitConfig)")) from None
 
     @classmethod
     def for_profile(cls, profile=None, variant: str = "rgbd+warp", recipe=None, **overrides) -> "FitConfig":
@@ -121,13 +143,14 @@ class FitConfig:
                               ("edge_guide", EDGE_GUIDES)):
             check_choice(getattr(self, name), f"config.{name}", choices)
         for name, minimum in (("noise_channels", 1), ("ensemble", 1), ("patience", 1), ("plateau_decays", 0),
-                              ("eval_every", 1), ("seed", 0), ("callback_every", 0)):
+                              ("eval_every", 1), ("callback_every", 0)):
             check_int(getattr(self, name), f"config.{name}", minimum=minimum)
+        check_int(self.seed, "config.seed", minimum=0, maximum=MAX_SEED - (self.ensemble - 1))
         if self.net_input == "meshgrid" and self.noise_channels < 2:
             raise ValueError(f"config.noise_channels must be at least 2 with net_input='meshgrid' (x and y), "
                              f"got {self.noise_channels}")
         if self.iterations is not None:
-            check_int(self.iterations, "config.iterations", minimum=1)
+            check_int(self.iterations, "config.iterations", minimum=1, maximum=MAX_ITERATIONS)
         check_int_tuple(self.lr_milestones, "config.lr_milestones", minimum=1)
         for name, low, high, low_open, high_open in (
                 ("lr", 0.0, None, True, False), ("lr_gamma", 0.0, None, True, False),

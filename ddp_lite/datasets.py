@@ -25,7 +25,7 @@ import numpy as np
 from .camera import Camera
 # Middlebury, the file formats and resize_scene lived here; their names stay importable from here.
 from .fileio import (_existing, _read_rgb, _read_text, depth_png_bytes, npy_bytes, pfm_bytes, read_depth_image,
-                     read_pfm, write_pfm)
+                     read_image_file, read_pfm, regular_file, write_pfm)
 from .middlebury import (MiddleburyCalib, _require_valid, _stereo_scene, load_middlebury, load_middlebury2006,
                          make_middlebury_fixture, parse_middlebury_calib, read_middlebury_calib)
 from .resample import _check_size, _depth_range, _resize, resize_scene
@@ -49,10 +49,9 @@ NYU_K = np.array([[5.1885790117450188e+02, 0.0, 3.2558244941119034e+02],
 
 def read_kitti_disparity(path) -> np.ndarray:
     """A KITTI 16-bit disparity PNG → (H, W) float32 px: value / 256, 0 (no ground truth) → NaN."""
-    raw = cv2.imread(str(_existing(path, "path")), cv2.IMREAD_UNCHANGED)
-    if raw is None or raw.dtype != np.uint16 or raw.ndim != 2:
-        raise ValueError(f"path: {path} must be a 1-channel 16-bit PNG (KITTI disparity), "
-                         f"got {None if raw is None else (raw.dtype, raw.shape)}")
+    raw = read_image_file(path, "path")
+    if raw.dtype != np.uint16 or raw.ndim != 2:
+        raise ValueError(f"path: {path} must be a 1-channel 16-bit PNG (KITTI disparity), got {(raw.dtype, raw.shape)}")
     disparity = raw.astype(np.float32) / np.float32(256.0)
     disparity[raw == 0] = np.nan
     return disparity
@@ -154,7 +153,7 @@ def load_tnt(folder, indices=None, size=None, depth_dir=None, name: str | None =
         info0 = info0 or info
         depth = np.full((H, W), np.nan, np.float32)
         if depth_dir is not None:
-            depth = read_pfm(_existing(Path(depth_dir) / f"{stem}.pfm", "depth_dir"))
+            depth = read_pfm(regular_file(Path(depth_dir) / f"{stem}.pfm", "depth_dir"))
             if depth.ndim != 2:
                 raise ValueError(f"depth_dir: {stem}.pfm must be 1-channel")
             depth = np.where(np.isfinite(depth) & (depth > 0), depth, np.nan).astype(np.float32)
@@ -179,7 +178,7 @@ def load_nyu(path, index: int = 0, depth_path=None, raw: bool = True, depth_scal
     ``raw`` picks rawDepths (Kinect holes) over the toolbox's filled depths) or an RGB
     image with ``depth_path`` a depth PNG/NPY in millimetres (× ``depth_scale``). ``K`` defaults to
     ``NYU_K`` (640×480)."""
-    path = _existing(path, "path")
+    path = regular_file(path, "path")
     if path.suffix.lower() == ".mat":
         import h5py  # a dependency, imported here because only this branch needs it
         with h5py.File(path, "r") as f:

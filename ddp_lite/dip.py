@@ -11,9 +11,10 @@ import numpy as np
 
 from . import loop
 from .cache import cached
-from .checks import MIN_VALID_PIXELS, check_image
+from .checks import MIN_VALID_PIXELS, check_callback, check_image
 from .config import FitConfig, resolve_device
 from .loop import check_finite_output, check_memory, holdout_mask, to_tensor
+from .nets import check_input_size
 
 __all__ = ["ImageResult", "fit_image"]
 
@@ -41,6 +42,8 @@ def fit_image(image, mask=None, config: FitConfig | None = None, clean=None, cal
     config.validate()
     image = check_image(image, "image")
     H, W, _ = image.shape
+    check_input_size(config.net, config.channels, H, W, "image")
+    check_callback(callback, config.callback_every)
     mask = np.ones((H, W), bool) if mask is None else np.asarray(mask)
     if mask.shape != (H, W) or mask.dtype != bool:
         raise ValueError(f"mask must be bool (H, W) = {(H, W)}, got {mask.dtype} {mask.shape}")

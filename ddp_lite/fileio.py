@@ -17,10 +17,13 @@ from __future__ import annotations
 
 import io
 import re
+import warnings
 from pathlib import Path
 
 import cv2
 import numpy as np
+
+from data_fetch.files import regular_file
 
 from .atomic import write_bytes_atomic
 from .textparse import _fail
@@ -35,26 +38,97 @@ def _existing(path, name: str) -> Path:
 
 def _read_text(path, name: str) -> str:
     """A small text file (calibration) → str; a clear error naming it if it is not UTF-8 text."""
-    path = _existing(path, name)
+    path = regular_file(path, name)
     try:
         return path.read_text(encoding="utf-8")
     except UnicodeDecodeError as error:
         raise ValueError(f"{name}: {path} is not a UTF-8 text file (byte {error.start}); is it the right file?") from None
 
 
-def _read_rgb(path, name: str = "path") -> np.ndarray:
-    """An 8- or 16-bit image file → (H, W, 3) float32 RGB in [0, 1]."""
-    image = cv2.imread(str(_existing(path, name)), cv2.IMREAD_UNCHANGED)
+_ORIENTATIONS = {2: "mirrored", 3: "rotated 180°", 4: "flipped", 5: "mirrored and rotated 90°", 6: "rotated 90°",
+                 7: "mirrored and rotated 270°", 8: "rotated 270°"}
+
+
+def exif_orientation(data: bytes) -> int | None:
+    """The EXIF orientation tag (1–8) of an encoded image, or None when it carries none (or is unreadable)."""
+    try:
+        from PIL import Image  # matplotlib's dependency: always there
+
+        with Image.open(io.BytesIO(data)) as image:
+            value = image.getexif().get(0x0112)
+    except Exception:  # noqa: BLE001: not an image PIL knows (PFM, EXR): it has no EXIF either
+        return None
+    return int(value) if isinstance(value, int) and 1 <= value <= 8 else None
+
+
+def _jpeg_truncated(data: bytes) -> bool:
+    """True for a JPEG whose entropy-coded data has no end marker (EOI): a cut-off file, which libjpeg
+    decodes anyway (grey below the cut) with only a warning on stderr. The markers up to the first
+    scan are walked, so an EXIF thumbnail's own EOI (inside APP1) does not count; bytes appended after
+    the EOI (phones' "motion photos") are fine."""
+    i = 2
+    while i + 4 <= len(data) and data[i] == 0xFF:
+        marker = data[i + 1]
+        if marker == 0xDA:  # start of scan: the image data follows
+            return data.find(b"\xff\xd9", i) < 0
+        if marker == 0xFF:  # fill byte
+            i += 1
+            continue
+        i += 2 + int.from_bytes(data[i + 2:i + 4], "big")
+    return True  # no scan at all
+
+
+def read_image_file(path, name: str = "path", flags: int = cv2.IMREAD_UNCHANGED) -> np.ndarray:
+    """Any image file → the array OpenCV decodes (``flags``; BGR order), the pixels **as stored**.
+
+    Every reader of the kit goes through here, so colour and depth are read the same way: a
+    regular file only; a truncated JPEG refused; EXIF orientation never applied (depth maps carry
+    none, and OpenCV's ``IMREAD_COLOR`` would rotate the colour alone, misregistering it against
+    its depth), with a warning naming the file when it carries an orientation other than upright."""
+    path = regular_file(path, name)
+    data = path.read_bytes()
+    if data[:2] == b"\xff\xd8" and _jpeg_truncated(data):
+        raise ValueError(f"{name}: {path} is a truncated JPEG (its image data has no end marker); the part "
+                         f"below the cut would be read as grey. Copy or export the file again")
+    image = cv2.imdecode(np.frombuffer(data, np.uint8), flags | cv2.IMREAD_IGNORE_ORIENTATION)
     if image is None:
         raise ValueError(f"{name}: {path} is not an image OpenCV can read")
+    orientation = exif_orientation(data)
+    if orientation is not None and orientation != 1:
+        warnings.warn(f"{name}: {path} carries EXIF orientation {orientation} ({_ORIENTATIONS[orientation]}); "
+                      f"ddp-lite reads every image as stored, unrotated (as its depth readers do), so colour and "
+                      f"depth stay registered. If your viewer shows it otherwise, rotate colour and depth alike "
+                      f"before giving them to the kit", stacklevel=3)
+    return image
+
+
+def read_rgb(path, name: str = "path") -> np.ndarray:
+    """An 8- or 16-bit image file → (H, W, 3) float32 RGB in [0, 1], pixels as stored (no EXIF rotation;
+    see :func:`read_image_file`); grey is repeated to 3 channels, alpha dropped."""
+    image = read_image_file(path, name)
     if image.dtype not in (np.uint8, np.uint16):
         raise ValueError(f"{name}: {path} must be an 8- or 16-bit image, got {image.dtype}")
     scale = 255.0 if image.dtype == np.uint8 else 65535.0
     if image.ndim == 2:
         image = np.repeat(image[:, :, None], 3, axis=2)
+    elif image.shape[2] == 1:
+        image = np.repeat(image, 3, axis=2)
     else:
         image = cv2.cvtColor(image[:, :, :3], cv2.COLOR_BGR2RGB)
     return (image.astype(np.float32) / np.float32(scale))
+
+
+_read_rgb = read_rgb  # the name the loaders import
+
+
+def load_npy(path, name: str = "path") -> np.ndarray:
+    """A ``.npy`` file → its array (no pickles); a corrupt or truncated file → ``ValueError`` naming it."""
+    path = regular_file(path, name)
+    try:
+        return np.load(path, allow_pickle=False)
+    except (ValueError, EOFError, OSError) as error:
+        raise ValueError(f"{name}: {path} is not a readable .npy file ({error}); is it truncated or "
+                         f"another kind of file?") from None
 
 
 def _png_bytes(rgb: np.ndarray) -> bytes:
@@ -90,7 +164,7 @@ def _pfm_header(data: bytes, path) -> tuple[int, int, int, float, int]:
 
 def read_pfm(path) -> np.ndarray:
     """A PFM file → float32 (H, W) or (H, W, 3), top row first, native byte order (either file endianness)."""
-    data = _existing(path, "path").read_bytes()
+    data = regular_file(path, "path").read_bytes()
     channels, width, height, scale, offset = _pfm_header(data, path)
     count = width * height * channels
     if len(data) - offset < 4 * count:
@@ -142,12 +216,12 @@ def read_depth_image(path, scale: float = 0.001) -> np.ndarray:
     0 and non-finite → NaN."""
     if not np.isfinite(scale) or scale <= 0:
         raise ValueError(f"scale must be a positive number (metres per unit), got {scale!r}")
-    path = _existing(path, "path")
+    path = regular_file(path, "path")
     if path.suffix.lower() == ".npy":
-        raw = np.load(path, allow_pickle=False)
+        raw = load_npy(path, "path")
     else:
-        raw = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
-        if raw is None or raw.dtype != np.uint16:
+        raw = read_image_file(path, "path")
+        if raw.dtype != np.uint16:
             raise ValueError(f"path: {path} must be a 16-bit depth PNG or a .npy")
     if raw.ndim != 2:
         raise ValueError(f"path: {path} must hold an (H, W) depth map, got shape {raw.shape}")
@@ -160,7 +234,7 @@ def read_colmap_depth(path) -> np.ndarray:
 
     The file: ASCII ``width&height&channels&``, then width·height·channels little-endian float32
     values in column-major order (x fastest is *not* the order: the first column comes first)."""
-    data = Path(path).read_bytes()
+    data = regular_file(path, "path").read_bytes()
     header = re.match(rb"(\d+)&(\d+)&(\d+)&", data[:64])
     if header is None:
         raise _fail(path, 1, "not a COLMAP dense map: expected the header 'width&height&channels&'")
@@ -200,18 +274,20 @@ def _read_depth_file(path: Path, scale: float | None) -> np.ndarray:
 
     ``.bin`` (COLMAP dense), ``.npy``, ``.pfm`` store floats (scale defaults to 1); 16-bit ``.png``
     stores integers and needs ``scale`` (metres per unit: 0.001 for millimetres, 1/5000 for TUM)."""
+    path = regular_file(path, "path")
     suffix = path.suffix.lower()
     if suffix == ".bin":
         raw = read_colmap_depth(path)
     elif suffix == ".npy":
-        raw = np.load(path, allow_pickle=False)
+        raw = load_npy(path, "path")
     elif suffix == ".pfm":
         raw = read_pfm(path)
     elif suffix == ".png":
-        raw = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
-        if raw is None or raw.dtype != np.uint16 or raw.ndim != 2:
-            raise ValueError(f"{path}: a depth PNG must be 1-channel 16-bit, got "
-                             f"{None if raw is None else (raw.dtype, raw.shape)}")
+        raw = read_image_file(path, "path")
+        if raw.dtype != np.uint16 or raw.ndim != 2:
+            raise ValueError(f"{path}: a depth PNG must be 1-channel 16-bit, got {raw.dtype} {raw.shape}"
+                             + (" (an 8-bit picture, e.g. a visualisation, is not depth)" if raw.dtype == np.uint8
+                                else ""))
         if scale is None:
             raise ValueError(f"{path} stores integers; give depth_scale (CLI: --depth-scale), the metres per stored "
                              f"unit (0.001 for millimetres)")

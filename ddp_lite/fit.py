@@ -21,8 +21,8 @@ import torch
 
 from . import loop
 from .cache import cached
-from .camera import Camera, view_overlap
-from .checks import MIN_VALID_PIXELS, check_depth, check_image
+from .camera import Camera, view_overlap, view_parallax
+from .checks import MIN_VALID_PIXELS, check_callback, check_depth, check_image
 from .config import FitConfig, resolve_device, use_bf16
 from .dip import ImageResult, fit_image
 from .disparity import DisparityTransform
@@ -31,7 +31,7 @@ from .loop import (PlateauStopper, check_finite_output, check_memory, estimate_p
 from .baselines import NEIGHBOUR_OFFSETS, colorization_affinities
 from .losses import (ConstantTarget, affinity_loss, disparity_loss, flatness_loss, flatness_region, rgb_loss, smoothness_loss,
                      smoothness_weights, warp_loss)
-from .nets import fill_channel, image_channels
+from .nets import check_input_size, fill_channel, image_channels
 from .variants import VARIANTS, get_variant
 from .warp import Warper
 
@@ -65,8 +65,11 @@ class DepthResult:
 
 
 def merge(input_depth, ddp_depth) -> np.ndarray:
-    """(H, W) metres: ``input_depth`` where it is finite, ``ddp_depth`` in its holes ("SGM+DDP")."""
-    input_depth = np.asarray(input_depth, dtype=np.float32)
+    """(H, W) metres: ``input_depth`` where it is finite, ``ddp_depth`` in its holes ("SGM+DDP").
+
+    ``input_depth`` follows the kit's convention (NaN holes, a masked array's mask = holes); a 0 or
+    negative "hole" marker, or inf, is refused rather than kept as a depth."""
+    input_depth = check_depth(input_depth, "input_depth", min_valid=0)
     ddp_depth = np.asarray(ddp_depth, dtype=np.float32)
     if input_depth.shape != ddp_depth.shape:
         raise ValueError(f"input_depth {input_depth.shape} and ddp_depth {ddp_depth.shape} must have the same shape")
@@ -76,6 +79,8 @@ def merge(input_depth, ddp_depth) -> np.ndarray:
 # --------------------------------------------------------------------------- input checks
 
 def _check_neighbors(neighbors) -> list[tuple[np.ndarray, Camera]]:
+    if neighbors is None:  # "no neighbours", as the empty default
+        return []
     if isinstance(neighbors, (np.ndarray, torch.Tensor, str)) or hasattr(neighbors, "camera"):
         raise TypeError(f"neighbors must be a list of (rgb, Camera) pairs or Views, got one "
                         f"{type(neighbors).__name__}; wrap a single view in a list")
@@ -102,6 +107,42 @@ def _check_overlap(camera: Camera, depth: np.ndarray, neighbors) -> None:
                          f"pixel (check their poses: cam_from_world, metres), so the warp term would be 0")
     for i in blind:
         warnings.warn(f"neighbors[{i}] sees none of the reference's valid pixels; its warp term is 0", stacklevel=4)
+
+
+MIN_PARALLAX_PX = 0.5  # below this a neighbour's warp cannot tell one depth from another
+
+
+def _check_useful_neighbors(camera: Camera, depth: np.ndarray, neighbors) -> None:
+    """Refuse a neighbour that repeats another or sits at the reference's own pose (it adds nothing but
+    weight); warn about one whose parallax over the valid depth is below ``MIN_PARALLAX_PX``."""
+    for i, (image, cam) in enumerate(neighbors):
+        if np.allclose(cam.cam_from_world, camera.cam_from_world, rtol=0.0, atol=1e-12):
+            raise ValueError(f"neighbors[{i}] has the reference's own pose (zero baseline): its warp compares the "
+                             f"reference with itself and adds nothing; use another view")
+        for j in range(i):
+            other_image, other = neighbors[j]
+            if (np.array_equal(other.cam_from_world, cam.cam_from_world) and np.array_equal(other.K, cam.K)
+                    and np.array_equal(other_image, image)):
+                raise ValueError(f"neighbors[{i}] repeats neighbors[{j}] (same image and camera): it only doubles "
+                                 f"that view's weight; list each neighbour once")
+        parallax = view_parallax(camera, depth, cam)
+        if parallax < MIN_PARALLAX_PX:
+            baseline = float(np.linalg.norm(cam.center - camera.center))
+            warnings.warn(f"neighbors[{i}]: a baseline of {baseline:.3g} (pose units) gives at most {parallax:.2g} px "
+                          f"of parallax over the valid depth ({np.nanmin(depth):.3g}–{np.nanmax(depth):.3g} m), so its "
+                          f"warp cannot tell depths apart; are depth and poses in the same unit (metres)?", stacklevel=4)
+
+
+def _check_transform(transform: DisparityTransform, depth: np.ndarray) -> None:
+    """Refuse a transform that does not cover the bulk of the valid depth (its 0.5–99.5th percentiles,
+    the range ``DisparityTransform.from_depth`` covers before its margin): the fit could not
+    reproduce those pixels, and every one of them would come back clipped."""
+    lo, hi = np.percentile(depth[np.isfinite(depth)], [0.5, 99.5])
+    if lo < transform.d_min or hi > transform.d_max:
+        outside = int(((depth < transform.d_min) | (depth > transform.d_max)).sum())
+        raise ValueError(f"transform: [{transform.d_min:.4g}, {transform.d_max:.4g}] m does not cover the valid "
+                         f"depth (0.5–99.5th percentiles {lo:.4g}–{hi:.4g} m; {outside} pixel(s) outside would come "
+                         f"back clipped); widen it, or pass transform=None to derive it from the depth")
 
 
 # --------------------------------------------------------------------------- the fit
@@ -135,8 +176,7 @@ def complete_depth(rgb, depth, camera: Camera | None = None, neighbors=(), varia
     """
     get_variant(variant)  # a bad name fails here, before any config is built
     config = FitConfig.for_profile(variant=variant) if config is None else config
-    if callback is not None and not callable(callback):
-        raise TypeError(f"callback must be a function callback(iteration, outputs), got {type(callback).__name__}")
+    check_callback(callback, config.callback_every if isinstance(config, FitConfig) else None)
     if not isinstance(config, FitConfig) or config.ensemble == 1:
         return _fit_one(rgb, depth, camera, neighbors, variant, config, gt_depth=gt_depth, transform=transform,
                         callback=callback, init=init)
@@ -207,6 +247,7 @@ def _check_fit_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth, 
     config.validate()
     depth = check_depth(depth)
     H, W = depth.shape
+    check_input_size(config.net, config.channels, H, W)
     rgb = check_image(rgb, "rgb", (H, W)) if spec.uses_rgb or rgb is not None else None
     neighbors = _check_neighbors(neighbors)
     if camera is not None and not isinstance(camera, Camera):
@@ -217,13 +258,13 @@ def _check_fit_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth, 
         raise ValueError(f"variant {spec.name!r} needs camera and at least one neighbor; use 'rgbd' without them")
     if spec.needs_neighbors:
         _check_overlap(camera, depth, neighbors)
-    if gt_depth is not None:
-        gt_depth = np.asarray(gt_depth, dtype=np.float32)
-        if gt_depth.shape != (H, W):
-            raise ValueError(f"gt_depth must be {(H, W)} like depth, got {gt_depth.shape}")
+        _check_useful_neighbors(camera, depth, neighbors)
+    if gt_depth is not None:  # the kit's convention: NaN = unknown (a 0 would be scored as truth)
+        gt_depth = check_depth(gt_depth, "gt_depth", min_valid=0, shape=(H, W))
     transform = DisparityTransform.from_depth(depth, margin=config.disparity_margin) if transform is None else transform
     if not isinstance(transform, DisparityTransform):
         raise TypeError(f"transform must be a DisparityTransform, got {type(transform).__name__}")
+    _check_transform(transform, depth)
     return config, depth, rgb, neighbors, gt_depth, transform
 
 

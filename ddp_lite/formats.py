@@ -16,11 +16,13 @@ importable from here, as before.
 """
 from __future__ import annotations
 
+import zipfile
+import zlib
 from pathlib import Path
 
 from .colmap import (COLMAP_MODELS, ColmapCamera, read_colmap, read_colmap_cameras, read_colmap_images,
                      write_colmap)
-from .fileio import read_colmap_depth, write_colmap_depth
+from .fileio import read_colmap_depth, regular_file, write_colmap_depth
 from .resample import resize_scene
 from .tum import (TUM_DEPTH_FACTOR, TUM_INTRINSICS, associate, read_tum, read_tum_list, read_tum_trajectory,
                   write_tum)
@@ -40,14 +42,15 @@ def read_scene(path, size=None) -> Scene:
         if len(found) != 1:
             raise ValueError(f"path: {path} must hold exactly one saved scene (.npz), found {len(found)}")
         path = found[0]
-    if not path.is_file():
-        raise FileNotFoundError(f"path: {path} does not exist")
+    regular_file(path, "path")
     try:
         scene = Scene.load(path)
-    except (KeyError, ValueError, OSError) as error:
-        raise ValueError(f"path: {path} is not a scene written by Scene.save ({error})") from None
+    except (KeyError, ValueError, OSError, EOFError, zipfile.BadZipFile, zlib.error) as error:
+        raise ValueError(f"path: {path} is not a scene written by Scene.save, or is truncated "
+                         f"({type(error).__name__}: {error})") from None
     if size is not None:
         scene = resize_scene(scene, size)
+    scene.sources = [path.absolute()]
     return scene
 
 

@@ -21,7 +21,7 @@ import numpy as np
 
 from .atomic import write_bytes_atomic
 from .camera import Camera
-from .fileio import _existing, _png_bytes, _read_rgb, _read_text, read_pfm, write_pfm
+from .fileio import _existing, read_image_file, _png_bytes, _read_rgb, _read_text, read_pfm, write_pfm
 from .resample import _check_size, _depth_range, resize_scene
 from .scenes import make_scene  # the renderer, for make_middlebury_fixture only
 from .stereo import disparity_to_depth, pixel_disparity
@@ -203,8 +203,8 @@ def load_middlebury2006(folder, focal: float = 3740.0, baseline: float = 0.160, 
     def depth_of(file):
         if not (folder / file).exists():
             return np.full((H, W), np.nan, np.float32)
-        raw = cv2.imread(str(folder / file), cv2.IMREAD_UNCHANGED)
-        if raw is None or raw.ndim != 2:
+        raw = read_image_file(folder / file, "folder")
+        if raw.ndim != 2:
             raise ValueError(f"folder: {folder / file} must be a 1-channel disparity PNG")
         return calib.depth(np.where(raw > 0, raw.astype(np.float64), np.nan))
     depth1 = _require_valid(depth_of("disp1.png"), "folder", folder / "disp1.png") if (folder / "disp1.png").exists() \

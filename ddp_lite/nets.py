@@ -235,6 +235,28 @@ def build_net(kind: str, in_channels: int, out_channels: int, channels=None, **u
     raise ValueError(f"net must be 'unet' or 'skip', got {kind!r}")
 
 
+def smallest_input(kind: str, channels=None) -> int:
+    """The smallest height (and width) in px a fit with the net ``kind`` and encoder ``channels`` takes:
+    its total down-sampling factor + 1, so the deepest level is at least 2×2 (BatchNorm needs more
+    than one value per channel; a 3×3 reflection pad needs 2 px), and at least the losses' 11×11
+    SSIM window."""
+    if kind == "unet":
+        factor = 2 ** (len(tuple(channels or UNET_CHANNELS)) - 1)
+    else:
+        factor = 2 ** len(tuple(channels or SKIP_CHANNELS))
+    return max(factor + 1, 11)
+
+
+def check_input_size(kind: str, channels, height: int, width: int, name: str = "depth") -> None:
+    """``ValueError`` naming ``name`` if a ``height × width`` input is smaller than :func:`smallest_input`."""
+    smallest = smallest_input(kind, channels)
+    if min(height, width) < smallest:
+        raise ValueError(f"{name} is {width}×{height} px, but the {kind} of this config (encoder widths "
+                         f"{tuple(channels) if channels else 'the paper’s'}) needs at least {smallest} px on each "
+                         f"side (its deepest level must be 2×2 or more); upsample the inputs or use fewer "
+                         f"config.channels")
+
+
 def count_parameters(net: nn.Module) -> int:
     """Number of trainable parameters."""
     return sum(p.numel() for p in net.parameters() if p.requires_grad)

@@ -8,6 +8,8 @@ never modified.
 """
 from __future__ import annotations
 
+from pathlib import Path
+
 import cv2
 import numpy as np
 
@@ -55,7 +57,8 @@ def resize_scene(scene: Scene, size) -> Scene:
         return View(rgb.copy(), depth.copy(), camera, v.name)
     labels = [cv2.resize(np.asarray(l), (W, H), interpolation=cv2.INTER_NEAREST_EXACT) for l in scene.labels]
     meta = {k: (float(v) * sx if k in _PIXEL_META else v) for k, v in scene.meta.items()}
-    return Scene(scene.name, [view(v) for v in scene.views], [view(v) for v in scene.right], meta, labels)
+    return Scene(scene.name, [view(v) for v in scene.views], [view(v) for v in scene.right], meta, labels,
+                 list(scene.sources))
 
 
 def _depth_range(depths) -> dict:
@@ -81,9 +84,20 @@ def _undistort(rgb: np.ndarray, depth: np.ndarray, K: np.ndarray, dist) -> tuple
     return rgb, np.where(raw > 0, raw, np.nan).astype(np.float32)
 
 
-def _finish(name: str, views: list[View], size) -> Scene:
-    """Resample the views to ``size`` (H, W) if given; d_min/d_max from the depths (as make_scene sets them)."""
+def _finish(name: str, views: list[View], size, sources=()) -> Scene:
+    """Resample the views to ``size`` (H, W) if given; d_min/d_max from the depths (as make_scene sets them);
+    ``sources``: the folders and files the views were read from (``Scene.sources``)."""
     if size is not None:
         resized = [(_resize(v.rgb, v.depth, v.camera, check_size(size)), v.name) for v in views]
         views = [View(rgb.copy(), depth.copy(), camera, name) for (rgb, depth, camera), name in resized]
-    return Scene(name, views, [], _depth_range([v.depth for v in views]))
+    return Scene(name, views, [], _depth_range([v.depth for v in views]), [], _unique_paths(sources))
+
+
+def _unique_paths(paths) -> list:
+    """Absolute paths, each once, in order: what ``Scene.sources`` holds."""
+    seen = []
+    for path in paths:
+        path = Path(path).absolute()
+        if path not in seen:
+            seen.append(path)
+    return seen

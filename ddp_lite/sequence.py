@@ -32,14 +32,14 @@ from __future__ import annotations
 import dataclasses
 import json
 import time
-from pathlib import Path
 
 import numpy as np
 
 from .fit import FitConfig
 from .runner import run_jobs
 from .sequence_cost import estimate_sequence, format_estimate, measure_fit_cost
-from .sequence_files import MANIFEST, _files, _finished, _fuse, _write_manifest, _write_view, read_manifest
+from .sequence_files import (MANIFEST, _files, _finished, _fuse, _write_manifest, _write_view, check_out_folder,
+                             read_manifest)
 from .sequence_jobs import VARIANT, ViewJob, fit_view, plan_jobs
 from .sequence_jobs import N_NEIGHBORS  # re-exported: its old home
 from .views import Scene
@@ -55,6 +55,8 @@ def run_sequence(scene: Scene, out, config: FitConfig | None = None, views=None,
     Args:
         scene: the sequence (``ddp_lite.formats.load_sequence`` reads TUM, COLMAP, saved scenes).
         out: output folder (see the module docstring for its files); a re-run skips finished views.
+            It must not be, contain or lie inside an input (``scene.sources``, ``source["path"]``):
+            ``ValueError`` before any fit.
         config: the fit's config; None → ``FitConfig.for_profile()`` (``DDP_PROFILE``).
         client: a ``distributed.Client`` (``runner.open_client``) or None for in-process.
         threads: torch threads per fit. retries: Dask retries of a fit that raised.
@@ -64,7 +66,8 @@ def run_sequence(scene: Scene, out, config: FitConfig | None = None, views=None,
         "points": int, "manifest": path}.
     """
     config = FitConfig.for_profile(variant=VARIANT) if config is None else config
-    out = Path(out)
+    given = [source["path"]] if isinstance(source, dict) and source.get("path") else []
+    out = check_out_folder(out, list(getattr(scene, "sources", [])) + given)  # before any work
     jobs = plan_jobs(scene, config, views, threads)  # every input checked: nothing has run yet
     manifest = read_manifest(out)
     manifest.setdefault("views", {})

@@ -15,7 +15,7 @@ import numpy as np
 from matplotlib.figure import Figure  # no pyplot: no global figure state in a long run
 
 from .atomic import write_bytes_atomic
-from .fileio import depth_png_bytes, npy_bytes
+from .fileio import depth_png_bytes, load_npy, npy_bytes, regular_file
 from .fusion import fuse_depths, save_ply
 from .sequence_jobs import ViewJob
 from .viz import save_figure, show_depth, show_image
@@ -25,14 +25,49 @@ MANIFEST = "manifest.json"
 
 
 def read_manifest(out) -> dict:
-    """The manifest of an output folder ({} if there is none yet)."""
+    """The manifest of an output folder ({} if there is none yet); one that is not a ddp-lite
+    manifest (not JSON, not an object, ``views`` not a mapping of view entries) → ``ValueError``
+    naming it, before anything is fitted or written."""
     path = Path(out) / MANIFEST
     if not path.exists():
         return {}
     try:
-        return json.loads(path.read_text(encoding="utf-8"))
+        manifest = json.loads(regular_file(path, "out").read_text(encoding="utf-8"))
     except (json.JSONDecodeError, UnicodeDecodeError) as error:
         raise ValueError(f"{path} is not a ddp-lite manifest ({error}); move it away to start afresh") from None
+    views = manifest.get("views", {}) if isinstance(manifest, dict) else None
+    if not isinstance(views, dict) or not all(isinstance(entry, dict) for entry in views.values()):
+        raise ValueError(f"{path} is not a ddp-lite manifest (expected a JSON object whose 'views' maps view names "
+                         f"to entries); move it away to start afresh")
+    return manifest
+
+
+def check_out_folder(out, inputs) -> Path:
+    """``out`` as a ``Path`` if it can hold a run's files without touching an input; else ``ValueError``.
+
+    ``inputs``: the files and folders the scene was read from (``Scene.sources``, the caller's own
+    path). Refused, before anything is fitted: ``out`` a file; ``out`` *is* an input (a TUM
+    folder's depth PNGs would be overwritten); ``out`` *contains* an input (its files would be
+    written beside the inputs, and ``depth/`` is where captures keep theirs); ``out`` *inside* an
+    input folder (a re-run's reader would find the outputs first: COLMAP's ``depth/<name>.png.png``
+    shadows ``depth/<stem>.png``). Paths are compared after resolving symlinks."""
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"out: {out} is a file; give a folder for the run's files")
+    target = out.resolve()
+    for source in inputs:
+        source = Path(source).resolve()
+        if target == source:
+            problem = "is the input itself: its files would be overwritten, and a re-run would read the outputs"
+        elif target in source.parents:
+            problem = f"contains the input {source}: outputs would be written among the inputs"
+        elif source in target.parents:
+            problem = f"lies inside the input {source}: a re-run would read the outputs as input"
+        else:
+            continue
+        raise ValueError(f"out: {out} {problem}. Choose a folder outside the capture, e.g. "
+                         f"{source.parent / (source.name + '-ddp')}")
+    return out
 
 
 def _write_manifest(out: Path, manifest: dict) -> None:
@@ -44,8 +79,24 @@ def _files(job: ViewJob) -> dict:
 
 
 def _finished(out: Path, entry: dict | None, job: ViewJob) -> bool:
-    return (entry is not None and entry.get("status") == "done" and entry.get("key") == job.key
-            and all((out / f).is_file() for f in _files(job).values()))
+    """Done under the same key, every file there, and the depth ``.npy`` readable with the view's shape
+    (a corrupt one is redone, not read by the fusion)."""
+    if not (entry is not None and entry.get("status") == "done" and entry.get("key") == job.key
+            and all((out / f).is_file() for f in _files(job).values())):
+        return False
+    try:
+        return _load_depth(out / _files(job)["npy"]).shape == job.depth.shape
+    except ValueError:
+        return False
+
+
+def _load_depth(path: Path) -> np.ndarray:
+    """A finished view's ``depth/<view>.npy`` → (H, W) float32; anything else → ``ValueError`` naming it."""
+    depth = load_npy(path, "out")
+    if depth.ndim != 2 or depth.dtype != np.float32:
+        raise ValueError(f"out: {path} must hold an (H, W) float32 depth map, got {depth.dtype} {depth.shape}; "
+                         f"delete it and re-run to redo the view")
+    return depth
 
 
 def _write_view(out: Path, job: ViewJob, result: dict) -> int:
@@ -72,12 +123,14 @@ def _write_preview(path: Path, job: ViewJob, completed: np.ndarray) -> None:
 
 def _fuse(out: Path, scene: Scene, manifest: dict):
     """Fuse every finished view's depth into ``fused.ply``; → (path or None, point count, views used)."""
-    done = [(name, entry) for name, entry in manifest["views"].items() if entry.get("status") == "done"]
+    by_name = {v.name: v for v in scene.views}
+    # views of this scene only: a manifest may also list views of an earlier run that this scene lacks
+    done = [(name, entry) for name, entry in manifest["views"].items()
+            if entry.get("status") == "done" and name in by_name and isinstance(entry.get("files"), dict)]
     if len(done) < 2:
         return None, 0, [name for name, _ in done]
-    by_name = {v.name: v for v in scene.views}
     views = [by_name[name] for name, _ in done]
-    depths = [np.load(out / entry["files"]["npy"]) for _, entry in done]
+    depths = [_load_depth(out / entry["files"]["npy"]) for _, entry in done]
     width = views[0].camera.width
     cloud = fuse_depths(depths, [v.camera for v in views], [v.rgb for v in views], min_views=1,
                         disp_threshold=0.25 * width / 64)

@@ -7,10 +7,10 @@ these: ``#`` starts a comment; lines are numbered from 1; a fault raises ``Value
 """
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 from scipy.spatial.transform import Rotation
+
+from data_fetch.files import regular_file
 
 
 def _fail(path, line: int | None, message: str) -> ValueError:
@@ -20,9 +20,7 @@ def _fail(path, line: int | None, message: str) -> ValueError:
 
 def _text_lines(path, keep_blank: bool = False) -> list[tuple[int, str]]:
     """(1-based line number, stripped text) of a text file, ``#`` comments dropped (blank lines too unless asked)."""
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"{path} does not exist (or is not a file)")
+    path = regular_file(path, "path")
     try:
         text = path.read_text(encoding="utf-8")
     except UnicodeDecodeError as error:

@@ -52,13 +52,17 @@ def read_tum_list(path) -> list[tuple[float, str]]:
         >>> read_tum_list(p)
         [(1.0, 'rgb/1.0.png')]
     """
-    entries = []
+    entries, lines = [], {}
     for line, text in _text_lines(path):
         tokens = text.split()
         if len(tokens) != 2:
             raise _fail(path, line, f"expected 'timestamp filename', got {text!r}")
-        stamp = _floats(tokens[:1], path, line, "the timestamp")[0]
-        entries.append((float(stamp), tokens[1]))
+        stamp = float(_floats(tokens[:1], path, line, "the timestamp")[0])
+        if stamp in lines:  # two frames at one instant: the association would keep one at random
+            raise _fail(path, line, f"timestamp {tokens[0]} was already listed on line {lines[stamp]}; "
+                                    f"every frame needs its own timestamp")
+        lines[stamp] = line
+        entries.append((stamp, tokens[1]))
     if not entries:
         raise _fail(path, None, "lists no frames")
     return entries
@@ -182,7 +186,12 @@ def read_tum(folder, intrinsics=None, every: int = 1, max_frames: int | None = N
     if not pairs:
         raise ValueError(f"folder: no colour frame of {folder / 'rgb.txt'} has a depth frame within "
                          f"{max_difference} s in {folder / 'depth.txt'}")
-    views, dropped = [], 0
+    unpaired = len(rgb_list) - len(pairs)
+    if unpaired:  # uneven lists, or streams out of step: say so, never drop frames in silence
+        warnings.warn(f"{folder}: {unpaired} of {len(rgb_list)} colour frame(s) have no depth frame within "
+                      f"{max_difference} s ({len(depth_list)} depth frames listed) and were left out; "
+                      f"max_difference sets the tolerance")
+    views, dropped, read = [], 0, [folder]
     for i, j in pairs[::int(every)]:
         if max_frames is not None and len(views) >= max_frames:
             break
@@ -193,6 +202,7 @@ def read_tum(folder, intrinsics=None, every: int = 1, max_frames: int | None = N
             continue
         rgb = _read_rgb(folder / rgb_path, "folder")
         depth = _read_depth_file(folder / depth_list[j][1], 1.0 / float(depth_factor))
+        read += [(folder / rgb_path).parent, (folder / depth_list[j][1]).parent]
         if rgb.shape[:2] != depth.shape:
             raise ValueError(f"folder: {rgb_path} is {rgb.shape[1]}×{rgb.shape[0]} but {depth_list[j][1]} is "
                              f"{depth.shape[1]}×{depth.shape[0]}; TUM pairs must be registered 1:1")
@@ -204,7 +214,7 @@ def read_tum(folder, intrinsics=None, every: int = 1, max_frames: int | None = N
         warnings.warn(f"{folder}: {dropped} frame(s) had no ground-truth pose within {max_difference} s and were left out")
     if not views:
         raise ValueError(f"folder: no frame of {folder} has a ground-truth pose within {max_difference} s")
-    return _finish(name or folder.name, views, size)
+    return _finish(name or folder.name, views, size, read)
 
 
 def write_tum(scene: Scene, folder, depths=None, start: float = 1_000_000_000.0, fps: float = 30.0,

@@ -71,7 +71,9 @@ class Scene:
 
     ``right`` optionally holds a rectified right view per view (stereo rigs); ``meta`` holds
     scene facts (floats) such as the stereo baseline (metres) or the DDP disparity range;
-    ``labels`` optionally holds a (H, W) uint8 texture-class map per view (see ``LABELS``).
+    ``labels`` optionally holds a (H, W) uint8 texture-class map per view (see ``LABELS``);
+    ``sources`` the files and folders a reader took it from (not saved: a writer of results
+    refuses to write over, into or beside them, ``sequence.run_sequence``).
     """
 
     name: str
@@ -79,6 +81,7 @@ class Scene:
     right: list[View] = field(default_factory=list)
     meta: dict = field(default_factory=dict)
     labels: list = field(default_factory=list)
+    sources: list = field(default_factory=list)
 
     def __len__(self) -> int:
         return len(self.views)
