@@ -76,6 +76,7 @@ RECIPES = {
     "e100": dict(smoothness_edge=100.0),  # ... colour edges at strength 100 (textured photos),
     "blur2": dict(image_blur=2.0),  # ... the colour image in the input blurred by 2 px,
     "fillin": dict(fill_input=1.0),  # ... a colorization fill of the input disparity as one more input channel,
+    "affinity": dict(affinity=1.0, smoothness=0.0, flatness=0.0),  # ... the colorization energy as the hole term,
     "no-image": dict(**GREY, **E100),  # class before the seventh pass: no colour image in the net's input
     "image-e100": dict(**IMAGE, **E100),  # the seventh pass: the colour image in the input, at strength 100 ...
     "image-sharp": dict(image_input=1.0, image_blur=0.0, **E100),  # ... unblurred
