@@ -202,3 +202,64 @@ def test_solution_copies_keep_their_figures_and_stop_at_a_failing_cell(tmp_path)
     with pytest.raises(Exception, match="ZeroDivisionError"):
         classroom.build_solutions(source, tmp_path / "solutions", profile="ci", names=["02"], log=lambda *_: None)
     assert not (tmp_path / "solutions" / "02_broken.ipynb").exists()
+
+
+# --- the grader's paths, renamed downloads, one row per student, hand-given points ------------------
+
+def test_a_renamed_download_is_graded_and_an_unknown_file_is_named(tmp_path):
+    source_path = _tiny_source(tmp_path)
+    folder = tmp_path / "submissions" / "ada"
+    folder.mkdir(parents=True)
+    nbformat.write(nbformat.read(source_path, as_version=4), folder / "01_tiny (1).ipynb")  # a browser's rename
+    nbformat.write(nbformat.v4.new_notebook(), folder / "scratch.ipynb")
+    log = []
+    scores = classroom.grade(tmp_path / "submissions", source_path.parent, timeout=30, log=log.append)
+    assert {s.exercise: s.status for s in scores} == {"01.1": "pass", "01.2": "pass", "01.3": "answered"}
+    assert any("'01_tiny (1).ipynb' as 01_tiny.ipynb" in line for line in log), log
+    assert any("scratch.ipynb" in line and "not graded" in line for line in log), log
+    assert len([line for line in log if line.startswith("[1/1] ada")]) == 1  # one line per student by default
+
+
+def test_match_submissions_prefers_the_exact_name_then_the_newest_copy(tmp_path):
+    names = ["01_a.ipynb", "02_b.ipynb", "03_c.ipynb"]
+    for i, name in enumerate(["01_a.ipynb", "01_a (1).ipynb", "Copy of 02_b.ipynb", "02_b-Copy1.ipynb", "x.ipynb"]):
+        (tmp_path / name).write_text("{}")
+        os.utime(tmp_path / name, (1000 + i, 1000 + i))
+    matched, notes, unmatched = classroom.match_submissions(sorted(tmp_path.iterdir()), names)
+    assert {k: v.name for k, v in matched.items()} == {"01_a.ipynb": "01_a.ipynb", "02_b.ipynb": "02_b-Copy1.ipynb"}
+    assert sorted(p.name for p in unmatched) == ["01_a (1).ipynb", "Copy of 02_b.ipynb", "x.ipynb"]
+    assert notes == ["graded '02_b-Copy1.ipynb' as 02_b.ipynb (the newest of 2 copies)"]
+
+
+def test_grade_refuses_an_unwritable_feedback_folder_before_any_run(tmp_path):
+    source_path = _tiny_source(tmp_path)
+    _submit(tmp_path, "ada", nbformat.read(source_path, as_version=4))
+    (tmp_path / "feedback").mkdir()
+    (tmp_path / "feedback" / "ada").write_text("a file where ada's folder goes")
+    log = []
+    with pytest.raises(ValueError, match="executed_dir"):
+        classroom.grade(tmp_path / "submissions", source_path.parent, executed_dir=tmp_path / "feedback", log=log.append)
+    assert log == []  # nobody was graded, nobody scored 0
+
+
+def test_hand_points_merge_into_the_scores_and_open_answers_go_to_one_file_per_student(tmp_path):
+    source_path = _tiny_source(tmp_path)
+    student = classroom.student_copy(nbformat.read(source_path, as_version=4))
+    _submit(tmp_path, "cy", _edit(student, "ex3_answer", "Because it is quick."))
+    _submit(tmp_path, "dan", student)
+    scores = classroom.grade(tmp_path / "submissions", source_path.parent, timeout=30, log=lambda *_: None)
+    (tmp_path / "hand.csv").write_text("student,exercise,points,comment\ncy,01.3,0.5,fair\n")
+    merged = classroom.merge_hand_points(scores, classroom.read_hand_points(tmp_path / "hand.csv"))
+    assert [(s.points, s.status) for s in merged if (s.student, s.exercise) == ("cy", "01.3")] == [(0.5, "graded")]
+    assert [s for s in scores if s.status == "graded"] == []  # a new list; the input is unchanged
+    assert re.search(r"^cy\s+0\s+0\s+0/5\s+1/1\s+0.5/1$", classroom.format_grades(merged), flags=re.M)
+    for bad, match in (("cy,01.1,1\n", "autograded"), ("cy,01.3,2\n", "more than"), ("zed,01.3,1\n", "zed"),
+                       ("cy,01.3,-1\n", "line 2")):
+        (tmp_path / "bad.csv").write_text("student,exercise,points\n" + bad)
+        with pytest.raises(ValueError, match=match):
+            classroom.merge_hand_points(scores, classroom.read_hand_points(tmp_path / "bad.csv"))
+    written = classroom.write_feedback(merged, tmp_path / "open", tmp_path / "submissions", source_path.parent)
+    assert sorted(p.name for p in written) == ["cy.md", "dan.md"]
+    text = (tmp_path / "open" / "cy.md").read_text()
+    assert "## 01.3" in text and "> why?" in text and "Because it is quick." in text and "points: 0.5" in text
+    assert "YOUR ANSWER HERE" in (tmp_path / "open" / "dan.md").read_text()
