@@ -172,3 +172,86 @@ def test_student_refuses_an_out_that_is_inside_or_contains_the_source(tmp_path, 
         assert "--out" in capsys.readouterr().err
     assert {p.name: p.read_bytes() for p in source.glob("*.ipynb")} == before
     assert main(["student", "--source", str(source), "--out", str(tmp_path / "build")]) == 0
+
+
+# --- ddp-lite complete on a full-size image: a tilted plane with a known hole -------------------------
+
+def _plane(H=60, W=90):
+    """A tilted plane seen by a pinhole camera: disparity 1/Z is affine in the pixel coordinates."""
+    v, u = np.mgrid[0:H, 0:W].astype(np.float64)
+    return (1.0 / (0.4 + 0.002 * u + 0.001 * v)).astype(np.float32)  # 0.4–0.65 1/m: 1.5–2.5 m
+
+
+def _pair(tmp_path, H=60, W=90):
+    from ddp_lite.holes import random_holes
+    gt = _plane(H, W)
+    depth, _ = random_holes(gt, fraction=0.1, seed=3)
+    depth[20:35, 30:50] = np.nan  # and one known hole
+    v, u = np.mgrid[0:H, 0:W]
+    rgb = np.stack([u / W, v / H, 0.5 + 0 * u], axis=-1)
+    cv2.imwrite(str(tmp_path / "rgb.png"), (rgb[..., ::-1] * 255).astype(np.uint8))
+    np.save(tmp_path / "depth.npy", depth)
+    np.save(tmp_path / "gt.npy", gt)
+    return depth, gt
+
+
+def test_complete_keeps_valid_pixels_exactly_fills_the_holes_and_writes_a_preview(tmp_path, capsys):
+    depth, gt = _pair(tmp_path)
+    before = (tmp_path / "depth.npy").read_bytes()
+    argv = ["complete", "--rgb", str(tmp_path / "rgb.png"), "--depth", str(tmp_path / "depth.npy"),
+            "--out", str(tmp_path / "filled.npy"), "--profile", "ci", "--iterations", "40", "--max-side", "32"]
+    assert main(argv + ["--gt", str(tmp_path / "gt.npy")]) == 0
+    printed = capsys.readouterr().out
+    assert "fitting at 21×32" in printed, printed  # 60×90 → longer side 32
+    filled = np.load(tmp_path / "filled.npy")
+    valid = np.isfinite(depth)
+    assert filled.shape == depth.shape and np.array_equal(filled[valid], depth[valid])  # bit for bit
+    assert np.isfinite(filled).all() and 0.3 < np.nanmean(valid) < 0.95
+    assert np.abs(filled[~valid] - gt[~valid]).max() < 1.0  # within the plane's 1.5–2.5 m, not a wild value
+    assert (tmp_path / "depth.npy").read_bytes() == before
+    preview = cv2.imread(str(tmp_path / "filled.preview.png"))
+    assert preview is not None and preview.shape[1] > 2 * preview.shape[0]  # three panels side by side
+    line = next(line for line in printed.splitlines() if line.startswith("hole RMSE at full size"))
+    assert "DDP" in line and "linear" in line and "navier-stokes" in line
+    rmse = dict((name, float(value)) for name, value in
+                __import__("re").findall(r"(DDP|linear|navier-stokes) ([0-9.e-]+) m", line))
+    holes = ~valid  # the printed DDP RMSE is the file's, recomputed independently here
+    assert rmse["DDP"] == pytest.approx(float(np.sqrt(np.mean((filled[holes] - gt[holes]) ** 2))), rel=1e-3)
+    assert main(argv + ["--raw", "--out", str(tmp_path / "raw.npy")]) == 0
+    assert "differ by" in capsys.readouterr().out  # without --gt: the two fills' mean difference
+    raw = np.load(tmp_path / "raw.npy")
+    assert np.isfinite(raw).all() and not np.array_equal(raw[valid], depth[valid])  # the net's own output
+
+
+def test_complete_refuses_an_implausible_scale_before_fitting_and_names_a_better_one(tmp_path, capsys):
+    depth, _ = _pair(tmp_path)
+    np.save(tmp_path / "mm.npy", depth * 1000)  # millimetres, read as metres
+    assert main(["complete", "--rgb", str(tmp_path / "rgb.png"), "--depth", str(tmp_path / "mm.npy"),
+                 "--out", str(tmp_path / "f.npy"), "--profile", "ci"]) == 2
+    printed = capsys.readouterr()
+    assert "--depth-scale 0.001 would give 1.5" in printed.err and "fitting" not in printed.out, printed.err
+    cv2.imwrite(str(tmp_path / "mm.png"), np.nan_to_num(depth * 1000).astype(np.uint16))
+    assert main(["complete", "--rgb", str(tmp_path / "rgb.png"), "--depth", str(tmp_path / "mm.png"),
+                 "--depth-scale", "1", "--out", str(tmp_path / "f.npy"), "--profile", "ci"]) == 2
+    assert "kilo" not in capsys.readouterr().err  # named in metres, with the scale to use
+    assert not (tmp_path / "f.npy").exists() and not (tmp_path / "f.preview.png").exists()
+
+
+def test_working_size_keeps_a_plane_a_plane_in_disparity():
+    from ddp_lite.working_size import fill_holes_at_full_size, shrink, working_shape
+    assert working_shape((500, 741), 128) == (86, 128) and working_shape((40, 30), 128) == (40, 30)
+    gt = _plane(64, 96)
+    depth = gt.copy()
+    depth[10:40, 20:60] = np.nan
+    _, small = shrink(np.zeros((64, 96, 3), np.float32), depth, (16, 24))
+    v, u = np.mgrid[0:16, 0:24]
+    centre_u, centre_v = (u + 0.5) * 4 - 0.5, (v + 0.5) * 4 - 0.5  # a block's centre in full-size pixels
+    expected = 1.0 / (0.4 + 0.002 * centre_u + 0.001 * centre_v)
+    rows = np.arange(16)[:, None] * 4  # each block's first full-size row: blocks wholly above or below the hole
+    whole = np.isfinite(small) & ((rows + 4 <= 10) | (rows >= 40)) & np.ones((1, 24), bool)
+    assert np.allclose(small[whole], expected[whole], rtol=1e-5)  # the average of an affine disparity
+    full = fill_holes_at_full_size(depth, expected)  # the plane's own small depth, brought back
+    inner = np.zeros(depth.shape, bool)
+    inner[2:-2, 2:-2] = True  # OpenCV clamps at the outer half-block
+    assert np.allclose(full[inner], gt[inner], rtol=1e-5) and np.array_equal(full[np.isfinite(depth)],
+                                                                              depth[np.isfinite(depth)])
