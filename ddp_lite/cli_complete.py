@@ -151,8 +151,10 @@ def _write_preview(path: str, depth: np.ndarray, filled: np.ndarray, summary: st
     axes = fig.subplots(1, 3)
     show_depth(axes[0], depth, f"input ({holes.mean():.1%} holes)", vmin, vmax)
     show_depth(axes[1], filled, "filled", vmin, vmax)
-    axes[2].imshow(holes, cmap="gray_r", interpolation="nearest")
-    axes[2].set_title("holes (black)")
+    shown = axes[2].imshow(holes, cmap="gray_r", vmin=0, vmax=1, interpolation="nearest")
+    bar = fig.colorbar(shown, ax=axes[2], fraction=0.046, pad=0.04, ticks=[0.25, 0.75])  # same panel size as the others
+    bar.ax.set_yticklabels(["valid", "hole"])
+    axes[2].set_title("holes")
     axes[2].axis("off")
     fig.suptitle(summary, fontsize=10)
     fig.tight_layout()
