@@ -16,8 +16,9 @@ A test cell scores its points when it ran without an error and printed nothing o
 What is not the student's doing (no kernel starts, the feedback cannot be written) stops the
 grading with an error instead of scoring anyone 0.
 
-A cell tagged ``student-omit`` is left out of the student copy; one with a ``student_source``
-entry in its metadata gets that text instead (a "What we saw" that would give an answer away).
+Notes that would give an open exercise's answer away are kept from the student copy: a cell tagged
+``student-omit`` is left out, and in a Markdown cell the text between ``<!-- answer -->`` and
+``<!-- /answer -->`` (invisible when rendered) is cut.
 """
 from __future__ import annotations
 
@@ -41,6 +42,7 @@ __all__ = ["student_copy", "execute", "exercises", "grade_notebook", "grade", "f
 
 STATUSES = ("pass", "fail", "not run", "missing", "unreadable", "answered", "blank", "graded")
 OMIT_TAG = "student-omit"  # a source cell with this tag is not in the student copy
+ANSWER_SPAN = re.compile(r"<!-- answer -->.*?<!-- /answer -->", flags=re.S)  # cut from the student copy
 
 
 @dataclass
@@ -103,8 +105,8 @@ def student_copy(nb) -> nbformat.NotebookNode:
     for cell in nb.cells:
         if OMIT_TAG in cell.get("metadata", {}).get("tags", []):
             continue
-        if "student_source" in cell.get("metadata", {}):
-            cell.source = cell.metadata.pop("student_source")
+        if cell.cell_type == "markdown":
+            cell.source = ANSWER_SPAN.sub("", cell.source)
         cells.append(cell)
     nb.cells = cells
     resources: dict = {}

@@ -96,9 +96,11 @@ def _sequence(args) -> int:
     print(f"{scene}; profile '{profile.name}'")
     if args.dry_run:
         n_views = len(scene) if indices is None else len(indices)
+        flags = {"every": args.every, "max_frames": args.max_frames, "depth_scale": args.depth_scale,
+                 "size": " ".join(map(str, args.size)) if args.size else None}
         command = (f"ddp-lite sequence {args.path} --format {args.format} --out {args.out} --profile {profile.name} "
                    f"--scheduler tcp://SCHEDULER:8786" + "".join(f" --{k.replace('_', '-')} {v}" for k, v in
-                                                                  options.items() if k in ("every", "max_frames")))
+                                                                  flags.items() if v is not None))
         print(format_estimate(estimate_sequence(n_views, scene.size, profile, gpu_tflops=args.gpu_tflops), command))
         return 0
     source = {"path": os.path.abspath(args.path), "format": args.format,

@@ -263,3 +263,21 @@ def test_hand_points_merge_into_the_scores_and_open_answers_go_to_one_file_per_s
     text = (tmp_path / "open" / "cy.md").read_text()
     assert "## 01.3" in text and "> why?" in text and "Because it is quick." in text and "points: 0.5" in text
     assert "YOUR ANSWER HERE" in (tmp_path / "open" / "dan.md").read_text()
+
+
+def test_exercise_10_3s_command_prints_what_its_expected_answer_says(tmp_path, capsys):
+    from ddp_lite.cli import main
+    from ddp_lite.formats import write_tum
+    from ddp_lite.scenes import make_scene
+    nb = nbformat.read(NOTEBOOKS / "10_your_own_data.ipynb", as_version=4)
+    listed = next(c.source for c in nb.cells if "## Exercises" in c.source).split("3. Run `", 1)[1]
+    command = listed.split("`", 1)[0].split()
+    assert command[:2] == ["ddp-lite", "sequence"] and "<DATA>" in command
+    data = write_tum(make_scene("desk", size=(24, 32), n_views=4), tmp_path / "capture")
+    assert main([str(data) if a == "<DATA>" else a for a in command[1:]]) == 0
+    printed = capsys.readouterr().out
+    minutes = float(re.search(r"≈ ([0-9.]+) min per view", printed).group(1))
+    answer = next(c.source for c in nb.cells if _meta(c).get("grade_id") == "ex3_answer")
+    assert f"≈ {minutes} GPU-minutes per view" in answer and "4 jobs" in printed and "960×512" in printed
+    claimed = float(re.search(r"≈ (\d+) GPU-hours", answer).group(1))
+    assert round(150 * minutes / 60) == claimed  # the answer's arithmetic on the printed figure
