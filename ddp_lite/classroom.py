@@ -38,7 +38,7 @@ from .outpaths import check_not_overlapping, check_output_folder
 
 __all__ = ["student_copy", "execute", "exercises", "grade_notebook", "grade", "format_grades", "write_csv",
            "build_student", "build_solutions", "Score", "match_submissions", "read_hand_points",
-           "merge_hand_points", "write_feedback", "open_answers"]
+           "merge_hand_points", "write_feedback", "open_answers", "exercise_table", "update_readme_table"]
 
 STATUSES = ("pass", "fail", "not run", "missing", "unreadable", "answered", "blank", "graded")
 OMIT_TAG = "student-omit"  # a source cell with this tag is not in the student copy
@@ -373,6 +373,57 @@ def open_answers(nb) -> dict:
             if _nbgrader_meta(c).get("grade") and _nbgrader_meta(c).get("solution")}
 
 
+def _listed_exercises(nb) -> dict:
+    """``{"1": text}`` of the numbered items under a notebook's "## Exercises" heading."""
+    listed = next((c.source for c in nb.cells if c.cell_type == "markdown" and "## Exercises" in c.source), "")
+    items = re.findall(r"^(\d+)\. (.+?)(?=^\d+\. |\Z)", listed.split("## Exercises", 1)[-1], flags=re.M | re.S)
+    return {number: " ".join(text.split()) for number, text in items}
+
+
+TABLE_START = "<!-- exercise table: written by ddp_lite.classroom.exercise_table; refresh: python -m ddp_lite.classroom README.md -->"
+TABLE_END = "<!-- end of the exercise table -->"
+
+
+def exercise_table(source_dir="notebooks", width: int = 80) -> str:
+    """The Markdown table of every exercise (number, task, how it is graded, points) and a count,
+    read from the source notebooks: the README's table, so that it cannot drift from them."""
+    rows = ["| exercise | task | graded by | points |", "|---|---|---|---|"]
+    checked = open_ = checked_points = open_points = 0
+    for path in _source_notebooks(source_dir):
+        nb = _read(path)
+        items = _listed_exercises(nb)
+        cells = {_nbgrader_meta(c).get("grade_id"): c for c in nb.cells}
+        for number, meta in exercises(nb):
+            task = items.get(number, "")
+            first = task if len(task) <= width else task[:width - 1].rsplit(" ", 1)[0] + " …"
+            if first.count("`") % 2:  # cut inside a code span: close it
+                first = first[:-2] + "` …"
+            if meta.get("solution"):
+                graded, open_, open_points = "expected answer, by hand", open_ + 1, open_points + meta["points"]
+            else:
+                names = sorted(set(re.findall(r"\b(check_\w+)\(", cells[meta["grade_id"]].source)))
+                graded = ", ".join(f"`{n}`" for n in names) or "its assert"
+                checked, checked_points = checked + 1, checked_points + meta["points"]
+            rows.append(f"| {path.stem[:2]}.{number} | {first.replace('|', '/')} | {graded} | {meta['points']:g} |")
+    rows += ["", f"{checked + open_} exercises: {checked} checked ({checked_points:g} points), {open_} open "
+                 f"({open_points:g} points, graded by hand)."]
+    return "\n".join(rows)
+
+
+def update_readme_table(readme, source_dir="notebooks") -> bool:
+    """Rewrite the exercise table between ``TABLE_START`` and ``TABLE_END`` in ``readme`` (atomically);
+    True if it changed."""
+    text = Path(readme).read_text(encoding="utf-8")
+    if TABLE_START not in text or TABLE_END not in text:
+        raise ValueError(f"readme {str(readme)!r} has no exercise table markers ({TABLE_START} ... {TABLE_END})")
+    head, rest = text.split(TABLE_START, 1)
+    _, tail = rest.split(TABLE_END, 1)
+    new = f"{head}{TABLE_START}\n{exercise_table(source_dir)}\n{TABLE_END}{tail}"
+    if new != text:
+        write_bytes_atomic(readme, new.encode("utf-8"))
+    return new != text
+
+
 def write_feedback(scores: list[Score], out_dir, submissions_dir, source_dir="notebooks") -> list[Path]:
     """Write each student's open answers to ``<out_dir>/<student>.md`` (question, answer, points
     field), atomically; returns the paths. The question is the source's exercise list item."""
@@ -380,10 +431,9 @@ def write_feedback(scores: list[Score], out_dir, submissions_dir, source_dir="no
     questions = {}
     for path in _source_notebooks(source_dir):
         nb = _read(path)
-        listed = next((c.source for c in nb.cells if c.cell_type == "markdown" and "## Exercises" in c.source), "")
-        items = dict(re.findall(r"^(\d+)\. (.+?)(?=^\d+\. |\Z)", listed.split("## Exercises", 1)[-1], flags=re.M | re.S))
+        items = _listed_exercises(nb)
         for number, meta in exercises(nb):
-            questions[meta["grade_id"]] = items.get(number, "").strip()
+            questions[meta["grade_id"]] = items.get(number, "")
     written = []
     for student in dict.fromkeys(s.student for s in scores):
         manual = [s for s in scores if s.student == student and s.kind == "manual"]
@@ -483,3 +533,11 @@ def build_solutions(source_dir="notebooks", out_dir="build/solutions", profile: 
         _write(nb, target)
         written.append(target)
     return written
+
+
+if __name__ == "__main__":  # python -m ddp_lite.classroom README.md [notebooks]: refresh the README's table
+    import sys
+    if len(sys.argv) not in (2, 3):
+        sys.exit("usage: python -m ddp_lite.classroom README.md [SOURCE_DIR]")
+    changed = update_readme_table(sys.argv[1], *(sys.argv[2:] or ["notebooks"]))
+    print(f"{sys.argv[1]}: exercise table {'updated' if changed else 'already up to date'}")

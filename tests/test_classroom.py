@@ -281,3 +281,40 @@ def test_exercise_10_3s_command_prints_what_its_expected_answer_says(tmp_path, c
     assert f"≈ {minutes} GPU-minutes per view" in answer and "4 jobs" in printed and "960×512" in printed
     claimed = float(re.search(r"≈ (\d+) GPU-hours", answer).group(1))
     assert round(150 * minutes / 60) == claimed  # the answer's arithmetic on the printed figure
+
+
+# --- the README's instructor section, from the notebooks and the Makefile --------------------------
+
+README = NOTEBOOKS.parent / "README.md"
+
+
+def test_the_readmes_exercise_table_is_the_notebooks(tmp_path):
+    text = README.read_text(encoding="utf-8")
+    block = text.split(classroom.TABLE_START, 1)[1].split(classroom.TABLE_END, 1)[0].strip()
+    assert block == classroom.exercise_table(NOTEBOOKS)
+    listed = sum(len(classroom.exercises(nbformat.read(p, as_version=4))) for p in SOURCES)
+    assert f"{listed} exercises:" in block and "| 10.3 |" in block  # every notebook's, 10's too
+    copy = tmp_path / "README.md"  # and the refresh rewrites only the table
+    copy.write_text(text.replace("| 01.1 |", "| 01.9 |"), encoding="utf-8")
+    assert classroom.update_readme_table(copy, NOTEBOOKS) and copy.read_text(encoding="utf-8") == text
+
+
+def test_notebook_09s_exercises_are_its_own():
+    def checks(path):
+        return {re.search(r"check_\w+", c.source).group(0) for c in _checks(nbformat.read(path, as_version=4))}
+    nine = checks(NOTEBOOKS / "09_real_data.ipynb")
+    others = set().union(*(checks(p) for p in SOURCES if not p.name.startswith("09")))
+    assert nine and not nine & others, nine & others
+
+
+@pytest.mark.parametrize("target", ["student", "solutions", "grade"])
+def test_make_classroom_targets_use_an_existing_environment_without_installing(target, tmp_path):
+    import subprocess
+    def dry(*extra):
+        return subprocess.run(["make", "-n", target, *extra], cwd=NOTEBOOKS.parent, capture_output=True,
+                              text=True, env={**os.environ, "MAKEFLAGS": ""}).stdout
+    own = dry(f"VENV={tmp_path}")
+    assert f"{tmp_path}/bin/ddp-lite {target}" in own and "pip install --" not in own and "-m venv" not in own, own
+    assert "pip install --" in dry("-B")  # the kit's own .venv: (re)installed when asked to remake everything
+    assert f"ddp-lite grade submissions --source notebooks --csv grades.csv --details" in dry(
+        "VENV=/x", "GRADE_ARGS=--details") or target != "grade"
