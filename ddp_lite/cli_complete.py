@@ -185,6 +185,7 @@ def _complete(args) -> int:
     _check_outputs(args, writers)
     from .fit import FitConfig, complete_depth
     from .profiles import get_profile
+    from .progress import command_progress
     from .working_size import fill_holes_at_full_size, shrink, working_shape
     profile = get_profile(args.profile)
     config = FitConfig.for_profile(profile, variant=args.variant, device=args.device, seed=args.seed,
@@ -212,7 +213,8 @@ def _complete(args) -> int:
     small_rgb, small_depth = shrink(rgb, depth, shape)
     print(f"{depth.shape[0]}×{depth.shape[1]} (H×W), {holes.mean():.1%} holes; fitting at "
           f"{shape[0]}×{shape[1]} (--max-side {max_side}), profile '{profile.name}'", flush=True)
-    result = complete_depth(small_rgb, small_depth, variant=args.variant, config=config)
+    with command_progress(config.resolved_iterations(args.variant) * config.ensemble):  # every fit of the command
+        result = complete_depth(small_rgb, small_depth, variant=args.variant, config=config)
     filled = fill_holes_at_full_size(depth, result.depth, raw=args.raw)
     comparison = _comparison(depth, rgb, filled, gt)
     write_bytes_atomic(args.out, writers[os.path.splitext(args.out)[1].lower()](filled), overwrite_readonly=args.force)

@@ -24,6 +24,7 @@ from .loop import check_memory
 from .metrics import hole_rmse
 from .outpaths import check_output_file
 from .profiles import get_profile
+from .progress import command_progress
 from .scenes import SCENES, list_scenes
 from .variants import get_variant
 from .viz import save_figure, show_depth, show_error, show_image
@@ -52,8 +53,9 @@ def _demo(args) -> int:
     case = make_case(args.scene, profile, holes=args.holes, seed=args.seed)
     print(f"{case.scene}\n{args.holes} holes: {np.isnan(case.depth).mean():.0%} of the reference view; "
           f"warp loss uses views {[n.name for n in case.neighbors]}")
-    result = complete_depth(case.rgb, case.depth, case.camera, case.neighbors, variant=VARIANT, config=config,
-                            gt_depth=case.scored_gt, transform=case.transform)
+    with command_progress(config.resolved_iterations(VARIANT) * config.ensemble):  # every fit of the command
+        result = complete_depth(case.rgb, case.depth, case.camera, case.neighbors, variant=VARIANT, config=config,
+                                gt_depth=case.scored_gt, transform=case.transform)
     estimates = {"linear": fill_linear(case.depth), "colorization": fill_colorization(case.depth, case.rgb),
                  "DDP rgbd+warp": result.depth}
     table = error_table(case, estimates)

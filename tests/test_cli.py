@@ -255,3 +255,36 @@ def test_working_size_keeps_a_plane_a_plane_in_disparity():
     inner[2:-2, 2:-2] = True  # OpenCV clamps at the outer half-block
     assert np.allclose(full[inner], gt[inner], rtol=1e-5) and np.array_equal(full[np.isfinite(depth)],
                                                                               depth[np.isfinite(depth)])
+
+
+# --- progress of a whole command ------------------------------------------------------------------
+
+class _Terminal(__import__("io").StringIO):
+    def isatty(self):
+        return True
+
+
+def test_a_terminal_bar_shows_the_whole_commands_share_and_time_left(monkeypatch):
+    from ddp_lite import progress as progress_module
+    from ddp_lite.progress import command_progress, progress
+    clock_now = [0.0]
+    monkeypatch.setattr(progress_module.time, "perf_counter", lambda: clock_now[0])
+    screen = _Terminal()
+    with command_progress(200) as clock:  # two fits of 100 iterations
+        first = progress(range(100), desc="fit 1", stream=screen)
+        for i in first:
+            clock_now[0] += 1.0  # one second per iteration
+            if i == 49:
+                break  # the first fit stops early: its 50 unrun iterations are handed back
+        first.close()
+        assert clock.done == 100 and clock.summary() == "all 50%, 0:50 left"  # 50 s for 100, 100 to go
+        second = progress(range(100), desc="fit 2", stream=screen)
+        for _ in second:
+            clock_now[0] += 1.0
+        second.close()
+    assert clock.done == 200 and "fit 2 (all " in screen.getvalue() and " left)" in screen.getvalue()
+    log = __import__("io").StringIO()  # a log's lines carry the command's share too
+    with command_progress(10):
+        for _ in progress(range(10), desc="fit", stream=log):
+            clock_now[0] += 1.0
+    assert log.getvalue().splitlines()[0].endswith("(all 10%, 0:09 left)")
