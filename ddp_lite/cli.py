@@ -42,7 +42,9 @@ EXAMPLES = {
     "complete": """examples:
   ddp-lite complete --rgb rgb.png --depth depth.png --depth-scale 0.001 --out filled.npy
   ddp-lite complete --rgb rgb.png --depth depth.npy --out filled.png --gt gt.npy   # also the hole RMSE
-  ddp-lite complete --rgb rgb.png --depth depth.pfm --out filled.pfm --max-side 256 --raw""",
+  ddp-lite complete --rgb rgb.png --depth depth.pfm --out filled.pfm --max-side 256 --raw
+  ddp-lite complete --rgb rgb.png --depth depth.png --depth-scale 0.001 --out filled.npy \\
+                    --intrinsics 615.2,615.0,320.5,240.1                  # + filled.ply, one RGB-D frame""",
     "sequence": """examples:
   ddp-lite sequence rgbd_dataset_freiburg1_desk --format tum --out desk --every 10 --max-frames 5
   ddp-lite sequence capture --format tum --depth-scale 0.001 --out out   # millimetre PNGs
@@ -152,6 +154,11 @@ def build_parser() -> argparse.ArgumentParser:
     complete.add_argument("--gt", default=None,
                           help="ground-truth depth (same formats and --depth-scale): print hole RMSE of DDP and "
                                "the classical fills")
+    complete.add_argument("--intrinsics", type=_intrinsics, default=None, metavar="FX,FY,CX,CY",
+                          help="the camera of --rgb/--depth in pixels (full size): also write the filled frame "
+                               "as a coloured point cloud (see --ply); no folder layout needed")
+    complete.add_argument("--ply", default=None,
+                          help="point cloud path with --intrinsics (default: OUT's name with .ply)")
     complete.add_argument("--force", action="store_true", help="replace --out even if it is read-only")
     complete.add_argument("--max-memory-gb", type=_number(float, 0.0, "--max-memory-gb"), default=None,
                           help="refuse fits estimated to need more (default: 75%% of RAM); raise it to override")

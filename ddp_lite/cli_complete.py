@@ -57,8 +57,18 @@ def _preview_path(args) -> str:
     return args.preview if args.preview else os.path.splitext(args.out)[0] + ".preview.png"
 
 
+def _ply_path(args) -> str | None:
+    if args.intrinsics is None:
+        if args.ply:
+            raise ValueError("--ply needs --intrinsics fx,fy,cx,cy (the camera that turns depth into points)")
+        return None
+    if isinstance(args.intrinsics, str):
+        raise ValueError(f"--intrinsics must be fx,fy,cx,cy in pixels, got {args.intrinsics!r}")
+    return args.ply if args.ply else os.path.splitext(args.out)[0] + ".ply"
+
+
 def _check_outputs(args, writers: dict) -> None:
-    """Refuse a bad --out or --preview before any work: unknown suffix, a folder, an input, a
+    """Refuse a bad --out, --preview or --ply before any work: unknown suffix, a folder, an input, a
     read-only file, an unwritable folder."""
     from .cli_demo import figure_suffixes
     inputs = {"--depth": args.depth, "--rgb": args.rgb, **({"--gt": args.gt} if args.gt else {})}
@@ -68,6 +78,9 @@ def _check_outputs(args, writers: dict) -> None:
         raise ValueError("--out: this OpenCV cannot write .exr (set OPENCV_IO_ENABLE_OPENEXR=1, or use .npy/.pfm)")
     check_output_file(_preview_path(args), "--preview", suffixes=figure_suffixes(),
                       inputs={**inputs, "--out": args.out}, example="preview.png")
+    if _ply_path(args):
+        check_output_file(_ply_path(args), "--ply", suffixes=(".ply",),
+                          inputs={**inputs, "--out": args.out, "--preview": _preview_path(args)}, example="filled.ply")
 
 
 def _read_depth(path: str, scale: float | None, flag: str = "--depth") -> np.ndarray:
@@ -202,6 +215,10 @@ def _complete(args) -> int:
         gt = _read_depth(args.gt, args.depth_scale, "--gt")
         if gt.shape != depth.shape:
             raise ValueError(f"--gt is {gt.shape[0]}×{gt.shape[1]} but --depth is {depth.shape[0]}×{depth.shape[1]}")
+    camera = None
+    if args.intrinsics is not None:
+        from .camera import Camera
+        camera = Camera(np.array(args.intrinsics, dtype=np.float64), np.eye(4), depth.shape[1], depth.shape[0])
     holes = ~np.isfinite(depth)
     if not holes.any():
         raise ValueError(f"--depth {args.depth!r} has no holes (0, inf or NaN pixels): nothing to fill")
@@ -221,7 +238,10 @@ def _complete(args) -> int:
     _write_preview(_preview_path(args), depth, filled,
                    f"{os.path.basename(args.out)}: DDP {args.variant} fitted at {shape[0]}×{shape[1]}, "
                    + ("the net's output everywhere" if args.raw else "valid input kept"))
+    if camera is not None:
+        from .fusion import fuse_depths, save_ply
+        save_ply(fuse_depths([filled], [camera], [rgb], min_views=0), _ply_path(args))  # one view: every pixel once
     print(comparison)
     print(f"filled {holes.mean():.1%} holes in {time.perf_counter() - start:.1f} s (the fit {result.seconds:.1f} s) "
-          f"→ {args.out}; preview {_preview_path(args)}")
+          f"→ {args.out}; preview {_preview_path(args)}" + (f"; point cloud {_ply_path(args)}" if camera else ""))
     return 0

@@ -288,3 +288,24 @@ def test_a_terminal_bar_shows_the_whole_commands_share_and_time_left(monkeypatch
         for _ in progress(range(10), desc="fit", stream=log):
             clock_now[0] += 1.0
     assert log.getvalue().splitlines()[0].endswith("(all 10%, 0:09 left)")
+
+
+def test_complete_with_intrinsics_writes_the_frame_as_a_point_cloud(tmp_path, capsys):
+    import open3d as o3d
+    depth, _ = _pair(tmp_path)
+    H, W = depth.shape
+    fx, fy, cx, cy = 80.0, 82.0, 45.0, 30.0
+    argv = ["complete", "--rgb", str(tmp_path / "rgb.png"), "--depth", str(tmp_path / "depth.npy"),
+            "--out", str(tmp_path / "filled.npy"), "--profile", "ci", "--iterations", "5", "--max-side", "32"]
+    assert main(argv + ["--ply", str(tmp_path / "c.ply")]) == 2  # a cloud needs a camera
+    assert "--ply needs --intrinsics" in capsys.readouterr().err
+    assert main(argv + ["--intrinsics", f"{fx},{fy},{cx},{cy}"]) == 0
+    filled = np.load(tmp_path / "filled.npy")
+    points = np.asarray(o3d.io.read_point_cloud(str(tmp_path / "filled.ply")).points)
+    assert points.shape == (H * W, 3)
+    v, u = np.mgrid[0:H, 0:W]
+    z = filled.astype(np.float64)
+    expected = np.stack([(u - cx) / fx * z, (v - cy) / fy * z, z], axis=-1).reshape(-1, 3)  # the pinhole model
+    order = np.lexsort((points[:, 0], points[:, 1], points[:, 2]))
+    reference = np.lexsort((expected[:, 0], expected[:, 1], expected[:, 2]))
+    assert np.allclose(points[order], expected[reference], atol=1e-5)
