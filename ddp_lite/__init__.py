@@ -42,10 +42,11 @@ _SUBMODULES = ("baselines", "datasets", "fusion", "metrics", "organic")
 
 def __getattr__(name: str):
     import importlib
+    import importlib.util
     if name in _HOME_OF:
         value = getattr(importlib.import_module(f".{_HOME_OF[name]}", __name__), name)
-    elif name in _SUBMODULES:
-        value = importlib.import_module(f".{name}", __name__)
+    elif name in _SUBMODULES or (not name.startswith("_") and importlib.util.find_spec(f"{__name__}.{name}")):
+        value = importlib.import_module(f".{name}", __name__)  # any submodule, as when the package imported them all
     else:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
     globals()[name] = value  # once: later look-ups do not come here

@@ -439,7 +439,7 @@ def write_feedback(scores: list[Score], out_dir, submissions_dir, source_dir="no
         manual = [s for s in scores if s.student == student and s.kind == "manual"]
         handed_in, _, _ = match_submissions(
             [p for p in sorted((Path(submissions_dir) / student).rglob("*.ipynb")) if ".ipynb_checkpoints" not in p.parts],
-            [f"{s.notebook}.ipynb" for s in manual])
+            list(dict.fromkeys(f"{s.notebook}.ipynb" for s in manual)))
         answers = {}
         for name, path in handed_in.items():
             try:
