@@ -6,7 +6,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.ddp-lite-installed
 
-.PHONY: lab lab-command test install clean-venv student solutions grade
+.PHONY: lab lab-command test install clean-venv student solutions grade classroom-check
 
 # `make lab` serves notebooks/ on $(IP):$(PORT) and prints the URL with its token.  --allow-root
 # only for root (Jupyter refuses root without it); --no-browser on Linux & co. without a display
@@ -65,18 +65,26 @@ test: $(STAMP)
 # The classroom kit (README, "For instructors"). notebooks/ is the instructor version; `student`
 # strips solutions and outputs, `solutions` executes every notebook at $(SOLUTIONS_PROFILE) (class:
 # minutes per notebook), `grade` runs $(SUBMISSIONS)/<student>/*.ipynb at ci and writes $(GRADES).
+# They run $(VENV)/bin/ddp-lite: with the default VENV=.venv they install it first (as `make lab`),
+# with VENV=DIR (an environment of your own that has ddp-lite) they install nothing.
 SOLUTIONS_PROFILE ?= class
 SUBMISSIONS ?= submissions
 GRADES ?= grades.csv
+GRADE_ARGS ?=
+DDP_LITE := $(VENV)/bin/ddp-lite
+CLASSROOM_NEEDS := $(if $(filter .venv,$(VENV)),$(STAMP),)
 
-student: $(STAMP)
-	$(VENV)/bin/ddp-lite student --source notebooks --out build/student
+classroom-check:
+	@test -x $(DDP_LITE) || { echo "$(DDP_LITE) not found: VENV=$(VENV) must be an environment with ddp-lite installed (pip install -e .)"; exit 2; }
 
-solutions: $(STAMP)
-	$(VENV)/bin/ddp-lite solutions --source notebooks --out build/solutions --profile $(SOLUTIONS_PROFILE)
+student: $(CLASSROOM_NEEDS) classroom-check
+	$(DDP_LITE) student --source notebooks --out build/student
 
-grade: $(STAMP)
-	$(VENV)/bin/ddp-lite grade $(SUBMISSIONS) --source notebooks --csv $(GRADES)
+solutions: $(CLASSROOM_NEEDS) classroom-check
+	$(DDP_LITE) solutions --source notebooks --out build/solutions --profile $(SOLUTIONS_PROFILE)
+
+grade: $(CLASSROOM_NEEDS) classroom-check
+	$(DDP_LITE) grade $(SUBMISSIONS) --source notebooks --csv $(GRADES) $(GRADE_ARGS)
 
 clean-venv:
 	rm -rf $(VENV)

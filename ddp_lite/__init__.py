@@ -14,28 +14,44 @@ __all__ = ["complete_depth", "DepthResult", "merge", "FitConfig", "VARIANTS", "f
            "get_profile", "Profile", "PROFILES", "make_scene", "list_scenes", "Scene", "View", "Camera", "look_at",
            "DisparityTransform", "sgm_depth", "random_holes"]
 
-from .camera import Camera, look_at
-from .disparity import DisparityTransform
-from .fit import DepthResult, FitConfig, ImageResult, complete_depth, fit_image, merge
-from .holes import random_holes
-from .profiles import PROFILES, Profile, get_profile
-from .scenes import list_scenes, make_scene
-from .stereo import sgm_depth
-from .variants import VARIANTS
-from .views import Scene, View
-from . import organic  # registers the curved, photo-textured scenes in SCENES
-
-# Building blocks, importable from here as before; new code imports them from their modules
-# (ddp_lite.losses, ddp_lite.nets, ddp_lite.warp, ...), where their documentation lives.
-from .camera import backproject, pixel_grid, project, relative_pose
-from .coarse_to_fine import complete_depth_coarse_to_fine
-from .holes import edge_band_holes, kinect_noise
-from .losses import disparity_loss, masked_l1, rgb_loss, ssim, warp_loss
-from .nets import SkipNet, UNet, build_net, make_noise
-from .neighbors import select_neighbors
-from .scenes import register_scene
-from .stereo import sgm_disparity
-from .warp import Warper, warp_to_reference
-from . import baselines, datasets, fusion, metrics
-
 __version__ = "0.1.0"
+
+# Names are imported on first use (PEP 562), not with the package: torch and the rest of the stack take
+# seconds to import, and `ddp-lite --help` (whose module lives in this package) must not wait for them.
+# Building blocks stay importable from here as before; new code imports them from their modules
+# (ddp_lite.losses, ddp_lite.nets, ddp_lite.warp, ...), where their documentation lives.
+_HOMES = {
+    "camera": ("Camera", "look_at", "backproject", "pixel_grid", "project", "relative_pose"),
+    "disparity": ("DisparityTransform",),
+    "fit": ("DepthResult", "FitConfig", "ImageResult", "complete_depth", "fit_image", "merge"),
+    "holes": ("random_holes", "edge_band_holes", "kinect_noise"),
+    "profiles": ("PROFILES", "Profile", "get_profile"),
+    "scenes": ("list_scenes", "make_scene", "register_scene"),
+    "stereo": ("sgm_depth", "sgm_disparity"),
+    "variants": ("VARIANTS",),
+    "views": ("Scene", "View"),
+    "coarse_to_fine": ("complete_depth_coarse_to_fine",),
+    "losses": ("disparity_loss", "masked_l1", "rgb_loss", "ssim", "warp_loss"),
+    "nets": ("SkipNet", "UNet", "build_net", "make_noise"),
+    "neighbors": ("select_neighbors",),
+    "warp": ("Warper", "warp_to_reference"),
+}
+_HOME_OF = {name: module for module, names in _HOMES.items() for name in names}
+_SUBMODULES = ("baselines", "datasets", "fusion", "metrics", "organic")
+
+
+def __getattr__(name: str):
+    import importlib
+    import importlib.util
+    if name in _HOME_OF:
+        value = getattr(importlib.import_module(f".{_HOME_OF[name]}", __name__), name)
+    elif name in _SUBMODULES or (not name.startswith("_") and importlib.util.find_spec(f"{__name__}.{name}")):
+        value = importlib.import_module(f".{name}", __name__)  # any submodule, as when the package imported them all
+    else:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    globals()[name] = value  # once: later look-ups do not come here
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_HOME_OF) | set(_SUBMODULES))

@@ -3,8 +3,9 @@
 ``demo`` renders a scene at the profile's size (``--profile``, else ``DDP_PROFILE``, else class),
 cuts holes, fills them with DDP (rgbd+warp, two neighbours), prints the hole RMSE of DDP, linear
 and colorization fills (normalised disparity ×100, near depth edges, metres) and writes a 2×3
-figure. Handlers take the parsed ``argparse`` namespace and return the exit code; the parser is
-in ``cli``.
+figure. ``--out`` (a format Matplotlib writes, in a writable folder) and the fit's memory estimate
+at ``--size`` are checked before the scene is rendered. Handlers take the parsed ``argparse``
+namespace and return the exit code; the parser is in ``cli``.
 """
 from __future__ import annotations
 
@@ -16,25 +17,45 @@ import numpy as np
 from matplotlib.figure import Figure  # no pyplot: no backend to choose, no global figure state
 
 from .baselines import fill_colorization, fill_linear
+from .config import resolve_device
 from .experiments import error_table, format_table, make_case
 from .fit import FitConfig, complete_depth
+from .loop import check_memory
 from .metrics import hole_rmse
+from .outpaths import check_output_file
 from .profiles import get_profile
-from .scenes import list_scenes
+from .progress import command_progress
+from .scenes import SCENES, list_scenes
+from .variants import get_variant
 from .viz import save_figure, show_depth, show_error, show_image
+
+VARIANT = "rgbd+warp"
+N_NEIGHBORS = 2  # make_case's neighbours of the reference view
+
+
+def figure_suffixes() -> tuple[str, ...]:
+    """The file endings Matplotlib can write (".png", ".pdf", ".svg", ...)."""
+    return tuple(f".{kind}" for kind in Figure().canvas.get_supported_filetypes())
 
 
 def _demo(args) -> int:
     start = time.perf_counter()
+    check_output_file(args.out, "--out", suffixes=figure_suffixes(), example="ddp_demo.png")
+    if args.scene not in SCENES:
+        raise ValueError(f"--scene must be one of {', '.join(SCENES)} (ddp-lite scenes), got {args.scene!r}")
     profile = get_profile(args.profile)  # --profile, else DDP_PROFILE, else class
     profile = dataclasses.replace(profile, size=tuple(args.size)) if args.size else profile
+    config = FitConfig.for_profile(profile, variant=VARIANT, iterations=args.iterations, seed=args.seed,
+                                   device=args.device, max_memory_gb=args.max_memory_gb)
+    config.validate()
+    # before the scene is rendered (minutes at a large --size): a fit that cannot fit in memory
+    check_memory(config, get_variant(VARIANT).out_channels, *profile.size, N_NEIGHBORS, resolve_device(config))
     case = make_case(args.scene, profile, holes=args.holes, seed=args.seed)
     print(f"{case.scene}\n{args.holes} holes: {np.isnan(case.depth).mean():.0%} of the reference view; "
           f"warp loss uses views {[n.name for n in case.neighbors]}")
-    config = FitConfig.for_profile(profile, variant="rgbd+warp", iterations=args.iterations, seed=args.seed,
-                                   device=args.device)
-    result = complete_depth(case.rgb, case.depth, case.camera, case.neighbors, variant="rgbd+warp", config=config,
-                            gt_depth=case.scored_gt, transform=case.transform)
+    with command_progress(config.resolved_iterations(VARIANT) * config.ensemble):  # every fit of the command
+        result = complete_depth(case.rgb, case.depth, case.camera, case.neighbors, variant=VARIANT, config=config,
+                                gt_depth=case.scored_gt, transform=case.transform)
     estimates = {"linear": fill_linear(case.depth), "colorization": fill_colorization(case.depth, case.rgb),
                  "DDP rgbd+warp": result.depth}
     table = error_table(case, estimates)
@@ -63,6 +84,8 @@ def _demo(args) -> int:
 
 
 def _scenes(args) -> int:
-    for name, description in list_scenes().items():
-        print(f"{name:<8} {description}")
+    scenes = list_scenes()
+    width = max(len(name) for name in scenes)
+    for name, description in scenes.items():
+        print(f"{name:<{width}}  {description}")
     return 0

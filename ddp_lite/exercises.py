@@ -23,7 +23,7 @@ from .warp import warp_to_reference
 
 __all__ = ["check_psnr", "check_masked_mse", "check_disparity_transform", "check_hole_rmse", "check_ssim",
            "check_masked_l1", "check_backproject", "check_warp", "check_fscore", "check_nearest_fill",
-           "check_d1"]
+           "check_d1", "check_depth_from_disparity", "check_resize_calibration"]
 
 
 def _report(name: str, failures: list[str], cases: int, reference: str) -> bool:
@@ -247,3 +247,84 @@ def check_d1(student_d1) -> bool:
     pred[np.isnan(pred)] = 1.0
     cases.append(((pred, gt), 100 * d1_error(pred, gt)["d1_all"]))  # a random map vs the kit's tested metric
     return _run("D1", student_d1, cases, "hand-computed cases and ddp_lite.metrics.d1_error", _close(1e-9))
+
+
+# The calibration of scikit-image's Middlebury 2014 pair (skimage.data.stereo_motorcycle's docstring):
+# focal length px, baseline m, doffs = cx1 - cx0 px. Expected depths below were computed by hand
+# (Z = f·B/(d + doffs)) and are written out as numbers, so the check does not run the formula it checks.
+MOTORCYCLE_CALIBRATION = (994.978, 0.193001, 31.086)
+
+
+def check_depth_from_disparity(student_depth) -> bool:
+    """``student_depth(disp, f, baseline, doffs)`` → (H, W) metres: Z = f·B/(d + doffs), NaN where the
+    disparity is unknown (inf or NaN, Middlebury's marker) or d + doffs ≤ 0; ``disp`` unchanged."""
+    f, B, doffs = MOTORCYCLE_CALIBRATION
+    disp = np.array([[100.0, 250.5, 0.0], [np.inf, np.nan, 3.0], [-20.0, -31.086, -40.0]])
+    expected = np.array([[1.4649295041270614, 0.6819648312700205, 6.177435146947179],
+                         [np.nan, np.nan, 5.6337425622836355], [17.32200513963558, np.nan, np.nan]])
+    failures = []
+    for i, (args, want) in enumerate((((disp, f, B, doffs), expected),
+                                      ((disp[:1, :2] * 2, 2 * f, B, 2 * doffs), expected[:1, :2]))):
+        before = args[0].copy()
+        try:
+            got = np.asarray(student_depth(*args), dtype=np.float64)
+        except Exception as error:
+            failures.append(f"case {i} raised {type(error).__name__}: {error}")
+            continue
+        if not np.array_equal(args[0], before, equal_nan=True):
+            failures.append(f"case {i}: the disparity passed in was modified")
+        elif got.shape != want.shape:
+            failures.append(f"case {i}: shape {got.shape}, expected {want.shape}")
+        elif not np.array_equal(np.isnan(got), np.isnan(want)):
+            where = tuple(int(k) for k in np.argwhere(np.isnan(got) != np.isnan(want))[0])
+            failures.append(f"case {i}: at {where} (disparity {args[0][where]}) expected "
+                            f"{'NaN (unknown)' if np.isnan(want[where]) else f'{want[where]:.6g} m'}, got "
+                            f"{got[where]:.6g} (NaN only where d is unknown or d + doffs ≤ 0)")
+        elif not np.allclose(got[~np.isnan(want)], want[~np.isnan(want)], rtol=1e-9, atol=0):
+            where = tuple(int(k) for k in np.argwhere(~np.isclose(got, want, rtol=1e-9, atol=0, equal_nan=True))[0])
+            failures.append(f"case {i}: at {where} (disparity {args[0][where]}) got {got[where]:.6g} m, expected "
+                            f"{want[where]:.6g} m (is doffs added to the disparity?)")
+    return _report("depth_from_disparity", failures, 2, "hand-computed depths of the motorcycle calibration")
+
+
+def check_resize_calibration(student_resize) -> bool:
+    """``student_resize(K, doffs, sx, sy)`` → (K', doffs') of the image resized by (sx, sy), pixel (0, 0)
+    the centre of the top-left pixel. Reference: a point seen at full-size pixel (u, v) is seen at
+    ((u + 0.5)·sx − 0.5, (v + 0.5)·sy − 0.5) after the resize; each disparity scales by sx."""
+    f, B, doffs = MOTORCYCLE_CALIBRATION
+    K = np.array([[f, 0.0, 369.0], [0.0, f, 247.0], [0.0, 0.0, 1.0]])  # cx, cy: near the centre of 741×500
+    rng = np.random.default_rng(0)
+    points = np.stack([rng.uniform(-1, 1, 20), rng.uniform(-1, 1, 20), rng.uniform(2, 5, 20)], axis=1)
+    failures = []
+    cases = ((64 / 741, 48 / 500), (128 / 741, 128 / 741), (0.5, 0.25))
+    for i, (sx, sy) in enumerate(cases):
+        K_before = K.copy()
+        try:
+            K_small, doffs_small = student_resize(K, doffs, sx, sy)
+            K_small = np.asarray(K_small, dtype=np.float64)
+        except Exception as error:
+            failures.append(f"case {i} raised {type(error).__name__}: {error}")
+            continue
+        if not np.array_equal(K, K_before):
+            failures.append(f"case {i}: K passed in was modified")
+            continue
+        if K_small.shape != (3, 3):
+            failures.append(f"case {i}: K' has shape {K_small.shape}, expected (3, 3)")
+            continue
+        u, v = points[:, 0] / points[:, 2] * K[0, 0] + K[0, 2], points[:, 1] / points[:, 2] * K[1, 1] + K[1, 2]
+        want_u, want_v = (u + 0.5) * sx - 0.5, (v + 0.5) * sy - 0.5
+        projected = points @ K_small.T
+        got_u, got_v = projected[:, 0] / projected[:, 2], projected[:, 1] / projected[:, 2]
+        error = max(np.abs(got_u - want_u).max(), np.abs(got_v - want_v).max())
+        if not error < 1e-6:
+            failures.append(f"case {i} (sx {sx:.4g}, sy {sy:.4g}): K' puts points up to {error:.3g} px off where the "
+                            f"resized image shows them (pixel centres: u' = (u + 0.5)·sx − 0.5)")
+            continue
+        d = 60.0  # a disparity at full size; its depth must not change with the image size
+        depth_full = f * B / (d + doffs)
+        depth_small = K_small[0, 0] * B / (d * sx + float(doffs_small))
+        if not abs(depth_small - depth_full) < 1e-9 * depth_full:
+            failures.append(f"case {i}: doffs' {float(doffs_small):.6g} px turns a disparity of {d * sx:.4g} px into "
+                            f"{depth_small:.6g} m, but the full-size pixel says {depth_full:.6g} m (doffs is a "
+                            f"difference of u coordinates)")
+    return _report("resize_calibration", failures, len(cases), "pixel-centre resizing of projected points")

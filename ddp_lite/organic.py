@@ -13,7 +13,7 @@ Their pieces live in their own modules (and stay importable from here): ``solids
 (``Ellipsoid``, ``Cone``, ``Capsule``), ``terrain`` (``HeightField``), ``photo_texture``
 (``PhotoTexture``, ``PHOTOS``). World frame as in ``render``: x right, y down, z forward, metres.
 
-Scenes registered in ``scenes.SCENES`` when ``ddp_lite`` is imported: ``hills`` (terrain,
+Scenes registered in ``scenes.SCENES`` when ``ddp_lite.scenes`` is imported: ``hills`` (terrain,
 boulders, a tree, branches, sky), ``sculpture`` (a blob of ellipsoids on bumpy ground inside a
 dome) and ``logs`` (tilted cylinders, cones and rods in a round room).
 """

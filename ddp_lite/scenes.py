@@ -209,3 +209,7 @@ def make_scene(name: str, size=(96, 128), n_views: int = 5, seed: int = 0, fov_x
             "baseline": float(baseline), "fov_x_deg": float(fov), "seed": float(seed),
             "sky_depth": float(rig["sky"] or 0.0), "path_step": float(step)}
     return Scene(name, views, right, meta, labels)
+
+# The curved, photo-textured scenes register themselves in SCENES; importing them here makes them
+# available wherever SCENES is (the package no longer imports every module up front).
+from . import organic  # noqa: E402,F401  (organic imports this module's helpers, defined above)

@@ -202,3 +202,119 @@ def test_solution_copies_keep_their_figures_and_stop_at_a_failing_cell(tmp_path)
     with pytest.raises(Exception, match="ZeroDivisionError"):
         classroom.build_solutions(source, tmp_path / "solutions", profile="ci", names=["02"], log=lambda *_: None)
     assert not (tmp_path / "solutions" / "02_broken.ipynb").exists()
+
+
+# --- the grader's paths, renamed downloads, one row per student, hand-given points ------------------
+
+def test_a_renamed_download_is_graded_and_an_unknown_file_is_named(tmp_path):
+    source_path = _tiny_source(tmp_path)
+    folder = tmp_path / "submissions" / "ada"
+    folder.mkdir(parents=True)
+    nbformat.write(nbformat.read(source_path, as_version=4), folder / "01_tiny (1).ipynb")  # a browser's rename
+    nbformat.write(nbformat.v4.new_notebook(), folder / "scratch.ipynb")
+    log = []
+    scores = classroom.grade(tmp_path / "submissions", source_path.parent, timeout=30, log=log.append)
+    assert {s.exercise: s.status for s in scores} == {"01.1": "pass", "01.2": "pass", "01.3": "answered"}
+    assert any("'01_tiny (1).ipynb' as 01_tiny.ipynb" in line for line in log), log
+    assert any("scratch.ipynb" in line and "not graded" in line for line in log), log
+    assert len([line for line in log if line.startswith("[1/1] ada")]) == 1  # one line per student by default
+
+
+def test_match_submissions_prefers_the_exact_name_then_the_newest_copy(tmp_path):
+    names = ["01_a.ipynb", "02_b.ipynb", "03_c.ipynb"]
+    for i, name in enumerate(["01_a.ipynb", "01_a (1).ipynb", "Copy of 02_b.ipynb", "02_b-Copy1.ipynb", "x.ipynb"]):
+        (tmp_path / name).write_text("{}")
+        os.utime(tmp_path / name, (1000 + i, 1000 + i))
+    matched, notes, unmatched = classroom.match_submissions(sorted(tmp_path.iterdir()), names)
+    assert {k: v.name for k, v in matched.items()} == {"01_a.ipynb": "01_a.ipynb", "02_b.ipynb": "02_b-Copy1.ipynb"}
+    assert sorted(p.name for p in unmatched) == ["01_a (1).ipynb", "Copy of 02_b.ipynb", "x.ipynb"]
+    assert notes == ["graded '02_b-Copy1.ipynb' as 02_b.ipynb (the newest of 2 copies)"]
+
+
+def test_grade_refuses_an_unwritable_feedback_folder_before_any_run(tmp_path):
+    source_path = _tiny_source(tmp_path)
+    _submit(tmp_path, "ada", nbformat.read(source_path, as_version=4))
+    (tmp_path / "feedback").mkdir()
+    (tmp_path / "feedback" / "ada").write_text("a file where ada's folder goes")
+    log = []
+    with pytest.raises(ValueError, match="executed_dir"):
+        classroom.grade(tmp_path / "submissions", source_path.parent, executed_dir=tmp_path / "feedback", log=log.append)
+    assert log == []  # nobody was graded, nobody scored 0
+
+
+def test_hand_points_merge_into_the_scores_and_open_answers_go_to_one_file_per_student(tmp_path):
+    source_path = _tiny_source(tmp_path)
+    student = classroom.student_copy(nbformat.read(source_path, as_version=4))
+    _submit(tmp_path, "cy", _edit(student, "ex3_answer", "Because it is quick."))
+    _submit(tmp_path, "dan", student)
+    scores = classroom.grade(tmp_path / "submissions", source_path.parent, timeout=30, log=lambda *_: None)
+    (tmp_path / "hand.csv").write_text("student,exercise,points,comment\ncy,01.3,0.5,fair\n")
+    merged = classroom.merge_hand_points(scores, classroom.read_hand_points(tmp_path / "hand.csv"))
+    assert [(s.points, s.status) for s in merged if (s.student, s.exercise) == ("cy", "01.3")] == [(0.5, "graded")]
+    assert [s for s in scores if s.status == "graded"] == []  # a new list; the input is unchanged
+    assert re.search(r"^cy\s+0\s+0\s+0/5\s+1/1\s+0.5/1$", classroom.format_grades(merged), flags=re.M)
+    for bad, match in (("cy,01.1,1\n", "autograded"), ("cy,01.3,2\n", "more than"), ("zed,01.3,1\n", "zed"),
+                       ("cy,01.3,-1\n", "line 2")):
+        (tmp_path / "bad.csv").write_text("student,exercise,points\n" + bad)
+        with pytest.raises(ValueError, match=match):
+            classroom.merge_hand_points(scores, classroom.read_hand_points(tmp_path / "bad.csv"))
+    written = classroom.write_feedback(merged, tmp_path / "open", tmp_path / "submissions", source_path.parent)
+    assert sorted(p.name for p in written) == ["cy.md", "dan.md"]
+    text = (tmp_path / "open" / "cy.md").read_text()
+    assert "## 01.3" in text and "> why?" in text and "Because it is quick." in text and "points: 0.5" in text
+    assert "YOUR ANSWER HERE" in (tmp_path / "open" / "dan.md").read_text()
+
+
+def test_exercise_10_3s_command_prints_what_its_expected_answer_says(tmp_path, capsys):
+    from ddp_lite.cli import main
+    from ddp_lite.formats import write_tum
+    from ddp_lite.scenes import make_scene
+    nb = nbformat.read(NOTEBOOKS / "10_your_own_data.ipynb", as_version=4)
+    listed = next(c.source for c in nb.cells if "## Exercises" in c.source).split("3. Run `", 1)[1]
+    command = listed.split("`", 1)[0].split()
+    assert command[:2] == ["ddp-lite", "sequence"] and "<DATA>" in command
+    data = write_tum(make_scene("desk", size=(24, 32), n_views=4), tmp_path / "capture")
+    assert main([str(data) if a == "<DATA>" else a for a in command[1:]]) == 0
+    printed = capsys.readouterr().out
+    minutes = float(re.search(r"≈ ([0-9.]+) min per view", printed).group(1))
+    answer = next(c.source for c in nb.cells if _meta(c).get("grade_id") == "ex3_answer")
+    assert f"≈ {minutes} GPU-minutes per view" in answer and "4 jobs" in printed and "960×512" in printed
+    claimed = float(re.search(r"≈ (\d+) GPU-hours", answer).group(1))
+    assert round(150 * minutes / 60) == claimed  # the answer's arithmetic on the printed figure
+
+
+# --- the README's instructor section, from the notebooks and the Makefile --------------------------
+
+README = NOTEBOOKS.parent / "README.md"
+
+
+def test_the_readmes_exercise_table_is_the_notebooks(tmp_path):
+    text = README.read_text(encoding="utf-8")
+    block = text.split(classroom.TABLE_START, 1)[1].split(classroom.TABLE_END, 1)[0].strip()
+    assert block == classroom.exercise_table(NOTEBOOKS)
+    listed = sum(len(classroom.exercises(nbformat.read(p, as_version=4))) for p in SOURCES)
+    assert f"{listed} exercises:" in block and "| 10.3 |" in block  # every notebook's, 10's too
+    copy = tmp_path / "README.md"  # and the refresh rewrites only the table
+    copy.write_text(text.replace("| 01.1 |", "| 01.9 |"), encoding="utf-8")
+    assert classroom.update_readme_table(copy, NOTEBOOKS) and copy.read_text(encoding="utf-8") == text
+
+
+def test_notebook_09s_exercises_are_its_own():
+    def checks(path):
+        return {re.search(r"check_\w+", c.source).group(0) for c in _checks(nbformat.read(path, as_version=4))}
+    nine = checks(NOTEBOOKS / "09_real_data.ipynb")
+    others = set().union(*(checks(p) for p in SOURCES if not p.name.startswith("09")))
+    assert nine and not nine & others, nine & others
+
+
+@pytest.mark.parametrize("target", ["student", "solutions", "grade"])
+def test_make_classroom_targets_use_an_existing_environment_without_installing(target, tmp_path):
+    import subprocess
+    def dry(*extra):
+        return subprocess.run(["make", "-n", target, *extra], cwd=NOTEBOOKS.parent, capture_output=True,
+                              text=True, env={**os.environ, "MAKEFLAGS": ""}).stdout
+    own = dry(f"VENV={tmp_path}")
+    assert f"{tmp_path}/bin/ddp-lite {target}" in own and "pip install --" not in own and "-m venv" not in own, own
+    assert "pip install --" in dry("-B")  # the kit's own .venv: (re)installed when asked to remake everything
+    assert f"ddp-lite grade submissions --source notebooks --csv grades.csv --details" in dry(
+        "VENV=/x", "GRADE_ARGS=--details") or target != "grade"

@@ -1,5 +1,26 @@
-"""The ``ddp-lite demo`` command follows DDP_PROFILE (or --profile), like ``complete`` does."""
-from ddp_lite.cli import main
+"""The ``ddp-lite`` command line as its users meet it: help, exit codes, Ctrl-C, and every output
+path refused before the work starts."""
+import argparse
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from ddp_lite import cli
+from ddp_lite.cli import build_parser, main
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def _subparsers():
+    action = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
+    return action.choices
 
 
 def test_demo_honours_the_profile(tmp_path, monkeypatch, capsys):
@@ -10,3 +31,281 @@ def test_demo_honours_the_profile(tmp_path, monkeypatch, capsys):
     assert "of 48×64" in printed and out.stat().st_size > 0  # ci's size, not class's 96×128
     assert main(["demo", "--iterations", "2", "--size", "40", "56", "--out", str(out)]) == 0
     assert "of 40×56" in capsys.readouterr().out
+
+
+def test_every_option_has_help_every_command_examples_and_profile_is_one_list(capsys):
+    for name, parser in _subparsers().items():
+        for action in parser._actions:
+            assert action.help, f"{name} {action.option_strings or action.dest} has no help text"
+            if "--profile" in action.option_strings:
+                assert tuple(action.choices) == ("ci", "class", "paper"), name
+        text = parser.format_help()
+        assert f"ddp-lite {name}" in text.split("examples:", 1)[1], name  # an example of the command itself
+        assert "2 usage error" in text and "1 failed at run time" in text and "130 interrupted" in text
+    with pytest.raises(SystemExit) as exit_:
+        main(["--version"])
+    assert exit_.value.code == 0 and capsys.readouterr().out.startswith("ddp-lite 0.")
+
+
+def test_help_imports_nothing_heavy():
+    code = ("import sys; from ddp_lite.cli import main\n"
+            "try: main(['complete', '--help'])\nexcept SystemExit: pass\n"
+            "print(sorted(m for m in ('torch', 'open3d', 'cv2', 'matplotlib', 'nbformat', 'scipy') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                         env={**os.environ, "PYTHONPATH": str(ROOT)}).stdout
+    assert out.strip().splitlines()[-1] == "[]"
+
+
+def test_usage_errors_exit_2_and_failures_at_run_time_exit_1(tmp_path, capsys):
+    assert main(["demo", "--out", str(tmp_path / "f.txt")]) == 2
+    source = tmp_path / "source"
+    source.mkdir()
+    import nbformat
+    nbformat.write(nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell("1 / 0")]), source / "01_broken.ipynb")
+    capsys.readouterr()
+    assert main(["solutions", "--source", str(source), "--out", str(tmp_path / "solutions"), "--profile", "ci"]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "01_broken.ipynb" in err[0] and "ZeroDivisionError" in err[0], err
+    assert not (tmp_path / "solutions" / "01_broken.ipynb").exists()
+
+
+def test_ctrl_c_prints_one_line_exits_130_and_leaves_no_file(tmp_path):
+    out = tmp_path / "demo.png"
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "DDP_PROFILE": "ci", "OMP_NUM_THREADS": "1", "MPLBACKEND": "Agg"}
+    process = subprocess.Popen([sys.executable, "-u", "-c", "import sys; from ddp_lite.cli import main; sys.exit(main())",
+                                "demo", "--iterations", "100000", "--out", str(out)], cwd=tmp_path, env=env,
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    for line in process.stdout:  # the scene is rendered and the fit starts after this line
+        if "holes:" in line or time.monotonic() > deadline:
+            break
+    time.sleep(1.0)
+    process.send_signal(signal.SIGINT)
+    _, err = process.communicate(timeout=60)
+    assert process.returncode == 130, err
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err
+    assert [line for line in err.splitlines() if line.startswith("ddp-lite")] == [
+        "ddp-lite demo: interrupted; " + cli.INTERRUPTED["demo"] + "."]
+    assert sorted(p.name for p in tmp_path.iterdir()) == []  # no figure, no temporary file
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--out", "{tmp}/f.txt"], "--out must end in"),
+    (["--out", "{tmp}"], "is a folder"),
+    (["--out", "{tmp}/a_file/f.png"], "is a file, not a folder"),
+    (["--size", "3000", "4000", "--out", "{tmp}/f.png"], "GB at its peak"),
+    (["--scene", "nope", "--out", "{tmp}/f.png"], "--scene must be one of"),
+])
+def test_demo_refuses_before_rendering(tmp_path, capsys, argv, message):
+    (tmp_path / "a_file").write_text("x")
+    assert main(["demo", *[a.format(tmp=tmp_path) for a in argv]]) == 2
+    printed = capsys.readouterr()
+    assert message in printed.err and "holes:" not in printed.out  # no scene was rendered
+
+
+def test_scenes_keeps_its_columns(capsys):
+    assert main(["scenes"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    starts = {len(line) - len(line.split(None, 1)[1]) for line in lines}
+    assert len(lines) >= 7 and len(starts) == 1, lines
+
+
+def test_sequence_workers_capped_at_the_cpu_count(capsys):
+    from ddp_lite.cli_sequence import _workers
+    cores = os.cpu_count()
+    assert _workers(1000) == cores and f"{cores} CPU cores" in capsys.readouterr().err
+    assert _workers(1) == 1
+
+
+def test_sequence_tum_reads_a_millimetre_capture_with_depth_scale(tmp_path):
+    from ddp_lite.cli_sequence import _sequence_options
+    from ddp_lite.formats import load_sequence, write_tum
+    from ddp_lite.scenes import make_scene
+    scene = make_scene("desk", size=(24, 32), n_views=2)
+    folder = write_tum(scene, tmp_path / "rgbd_dataset_freiburg3_desk")
+    for png in (folder / "depth").glob("*.png"):  # TUM's 1/5000 m → millimetres, as a RealSense stores them
+        stored = cv2.imread(str(png), cv2.IMREAD_UNCHANGED).astype(np.float64)
+        cv2.imwrite(str(png), np.round(stored / 5).astype(np.uint16))
+    args = build_parser().parse_args(["sequence", str(folder), "--format", "tum", "--out", str(tmp_path / "o"),
+                                      "--depth-scale", "0.001"])
+    read = load_sequence(folder, "tum", **_sequence_options(args))
+    for view, original in zip(read.views, scene.views):
+        valid = np.isfinite(view.depth) & np.isfinite(original.depth)
+        assert valid.mean() > 0.5 and np.abs(view.depth[valid] - original.depth[valid]).max() <= 0.0006
+
+
+def test_sequence_refuses_a_view_index_out_of_range(tmp_path, capsys):
+    from ddp_lite.formats import write_tum
+    from ddp_lite.scenes import make_scene
+    folder = write_tum(make_scene("desk", size=(24, 32), n_views=3), tmp_path / "rgbd_dataset_freiburg3_desk")
+    assert main(["sequence", str(folder), "--format", "tum", "--out", str(tmp_path / "o"), "--views", "0", "99",
+                 "--dry-run"]) == 2
+    err = capsys.readouterr().err
+    assert "--views: 99 is out of range" in err and "3 views" in err
+
+
+def test_grade_refuses_bad_output_paths_before_any_notebook_runs(tmp_path, capsys):
+    import nbformat
+    (tmp_path / "source").mkdir()
+    nbformat.write(nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell("import time; time.sleep(30)")]),
+                   tmp_path / "source" / "01_slow.ipynb")
+    (tmp_path / "submissions" / "ada").mkdir(parents=True)
+    nbformat.write(nbformat.v4.new_notebook(), tmp_path / "submissions" / "ada" / "01_slow.ipynb")
+    (tmp_path / "taken").write_text("x")
+    (tmp_path / "folder.csv").mkdir()
+    base = ["grade", str(tmp_path / "submissions"), "--source", str(tmp_path / "source")]
+    for extra, message in ((["--executed", str(tmp_path / "taken")], "--executed"),
+                           (["--csv", str(tmp_path / "folder.csv")], "--csv"),
+                           (["--feedback", str(tmp_path / "submissions" / "fb")], "--feedback")):
+        assert main(base + extra) == 2
+        printed = capsys.readouterr()
+        assert message in printed.err and "ada" not in printed.out, printed  # no student was graded
+
+
+def test_student_refuses_an_out_that_is_inside_or_contains_the_source(tmp_path, capsys):
+    import shutil
+    source = tmp_path / "notebooks"
+    shutil.copytree(ROOT / "notebooks", source, ignore=shutil.ignore_patterns("*.py", "__pycache__"))
+    before = {p.name: p.read_bytes() for p in source.glob("*.ipynb")}
+    for out in (source, source / "student", tmp_path, source / ".." / "notebooks"):
+        assert main(["student", "--source", str(source), "--out", str(out)]) == 2
+        assert "--out" in capsys.readouterr().err
+    assert {p.name: p.read_bytes() for p in source.glob("*.ipynb")} == before
+    assert main(["student", "--source", str(source), "--out", str(tmp_path / "build")]) == 0
+
+
+# --- ddp-lite complete on a full-size image: a tilted plane with a known hole -------------------------
+
+def _plane(H=60, W=90):
+    """A tilted plane seen by a pinhole camera: disparity 1/Z is affine in the pixel coordinates."""
+    v, u = np.mgrid[0:H, 0:W].astype(np.float64)
+    return (1.0 / (0.4 + 0.002 * u + 0.001 * v)).astype(np.float32)  # 0.4–0.65 1/m: 1.5–2.5 m
+
+
+def _pair(tmp_path, H=60, W=90):
+    from ddp_lite.holes import random_holes
+    gt = _plane(H, W)
+    depth, _ = random_holes(gt, fraction=0.1, seed=3)
+    depth[20:35, 30:50] = np.nan  # and one known hole
+    v, u = np.mgrid[0:H, 0:W]
+    rgb = np.stack([u / W, v / H, 0.5 + 0 * u], axis=-1)
+    cv2.imwrite(str(tmp_path / "rgb.png"), (rgb[..., ::-1] * 255).astype(np.uint8))
+    np.save(tmp_path / "depth.npy", depth)
+    np.save(tmp_path / "gt.npy", gt)
+    return depth, gt
+
+
+def test_complete_keeps_valid_pixels_exactly_fills_the_holes_and_writes_a_preview(tmp_path, capsys):
+    depth, gt = _pair(tmp_path)
+    before = (tmp_path / "depth.npy").read_bytes()
+    argv = ["complete", "--rgb", str(tmp_path / "rgb.png"), "--depth", str(tmp_path / "depth.npy"),
+            "--out", str(tmp_path / "filled.npy"), "--profile", "ci", "--iterations", "40", "--max-side", "32"]
+    assert main(argv + ["--gt", str(tmp_path / "gt.npy")]) == 0
+    printed = capsys.readouterr().out
+    assert "fitting at 21×32" in printed, printed  # 60×90 → longer side 32
+    filled = np.load(tmp_path / "filled.npy")
+    valid = np.isfinite(depth)
+    assert filled.shape == depth.shape and np.array_equal(filled[valid], depth[valid])  # bit for bit
+    assert np.isfinite(filled).all() and 0.3 < np.nanmean(valid) < 0.95
+    assert np.abs(filled[~valid] - gt[~valid]).max() < 1.0  # within the plane's 1.5–2.5 m, not a wild value
+    assert (tmp_path / "depth.npy").read_bytes() == before
+    preview = cv2.imread(str(tmp_path / "filled.preview.png"))
+    assert preview is not None and preview.shape[1] > 2 * preview.shape[0]  # three panels side by side
+    line = next(line for line in printed.splitlines() if line.startswith("hole RMSE at full size"))
+    assert "DDP" in line and "linear" in line and "navier-stokes" in line
+    rmse = dict((name, float(value)) for name, value in
+                __import__("re").findall(r"(DDP|linear|navier-stokes) ([0-9.e-]+) m", line))
+    holes = ~valid  # the printed DDP RMSE is the file's, recomputed independently here
+    assert rmse["DDP"] == pytest.approx(float(np.sqrt(np.mean((filled[holes] - gt[holes]) ** 2))), rel=1e-3)
+    assert main(argv + ["--raw", "--out", str(tmp_path / "raw.npy")]) == 0
+    assert "differ by" in capsys.readouterr().out  # without --gt: the two fills' mean difference
+    raw = np.load(tmp_path / "raw.npy")
+    assert np.isfinite(raw).all() and not np.array_equal(raw[valid], depth[valid])  # the net's own output
+
+
+def test_complete_refuses_an_implausible_scale_before_fitting_and_names_a_better_one(tmp_path, capsys):
+    depth, _ = _pair(tmp_path)
+    np.save(tmp_path / "mm.npy", depth * 1000)  # millimetres, read as metres
+    assert main(["complete", "--rgb", str(tmp_path / "rgb.png"), "--depth", str(tmp_path / "mm.npy"),
+                 "--out", str(tmp_path / "f.npy"), "--profile", "ci"]) == 2
+    printed = capsys.readouterr()
+    assert "--depth-scale 0.001 would give 1.5" in printed.err and "fitting" not in printed.out, printed.err
+    cv2.imwrite(str(tmp_path / "mm.png"), np.nan_to_num(depth * 1000).astype(np.uint16))
+    assert main(["complete", "--rgb", str(tmp_path / "rgb.png"), "--depth", str(tmp_path / "mm.png"),
+                 "--depth-scale", "1", "--out", str(tmp_path / "f.npy"), "--profile", "ci"]) == 2
+    assert "kilo" not in capsys.readouterr().err  # named in metres, with the scale to use
+    assert not (tmp_path / "f.npy").exists() and not (tmp_path / "f.preview.png").exists()
+
+
+def test_working_size_keeps_a_plane_a_plane_in_disparity():
+    from ddp_lite.working_size import fill_holes_at_full_size, shrink, working_shape
+    assert working_shape((500, 741), 128) == (86, 128) and working_shape((40, 30), 128) == (40, 30)
+    gt = _plane(64, 96)
+    depth = gt.copy()
+    depth[10:40, 20:60] = np.nan
+    _, small = shrink(np.zeros((64, 96, 3), np.float32), depth, (16, 24))
+    v, u = np.mgrid[0:16, 0:24]
+    centre_u, centre_v = (u + 0.5) * 4 - 0.5, (v + 0.5) * 4 - 0.5  # a block's centre in full-size pixels
+    expected = 1.0 / (0.4 + 0.002 * centre_u + 0.001 * centre_v)
+    rows = np.arange(16)[:, None] * 4  # each block's first full-size row: blocks wholly above or below the hole
+    whole = np.isfinite(small) & ((rows + 4 <= 10) | (rows >= 40)) & np.ones((1, 24), bool)
+    assert np.allclose(small[whole], expected[whole], rtol=1e-5)  # the average of an affine disparity
+    full = fill_holes_at_full_size(depth, expected)  # the plane's own small depth, brought back
+    inner = np.zeros(depth.shape, bool)
+    inner[2:-2, 2:-2] = True  # OpenCV clamps at the outer half-block
+    assert np.allclose(full[inner], gt[inner], rtol=1e-5) and np.array_equal(full[np.isfinite(depth)],
+                                                                              depth[np.isfinite(depth)])
+
+
+# --- progress of a whole command ------------------------------------------------------------------
+
+class _Terminal(__import__("io").StringIO):
+    def isatty(self):
+        return True
+
+
+def test_a_terminal_bar_shows_the_whole_commands_share_and_time_left(monkeypatch):
+    from ddp_lite import progress as progress_module
+    from ddp_lite.progress import command_progress, progress
+    clock_now = [0.0]
+    monkeypatch.setattr(progress_module.time, "perf_counter", lambda: clock_now[0])
+    screen = _Terminal()
+    with command_progress(200) as clock:  # two fits of 100 iterations
+        first = progress(range(100), desc="fit 1", stream=screen)
+        for i in first:
+            clock_now[0] += 1.0  # one second per iteration
+            if i == 49:
+                break  # the first fit stops early: its 50 unrun iterations are handed back
+        first.close()
+        assert clock.done == 100 and clock.summary() == "all 50%, 0:50 left"  # 50 s for 100, 100 to go
+        second = progress(range(100), desc="fit 2", stream=screen)
+        for _ in second:
+            clock_now[0] += 1.0
+        second.close()
+    assert clock.done == 200 and "fit 2 (all " in screen.getvalue() and " left)" in screen.getvalue()
+    log = __import__("io").StringIO()  # a log's lines carry the command's share too
+    with command_progress(10):
+        for _ in progress(range(10), desc="fit", stream=log):
+            clock_now[0] += 1.0
+    assert log.getvalue().splitlines()[0].endswith("(all 10%, 0:09 left)")
+
+
+def test_complete_with_intrinsics_writes_the_frame_as_a_point_cloud(tmp_path, capsys):
+    import open3d as o3d
+    depth, _ = _pair(tmp_path)
+    H, W = depth.shape
+    fx, fy, cx, cy = 80.0, 82.0, 45.0, 30.0
+    argv = ["complete", "--rgb", str(tmp_path / "rgb.png"), "--depth", str(tmp_path / "depth.npy"),
+            "--out", str(tmp_path / "filled.npy"), "--profile", "ci", "--iterations", "5", "--max-side", "32"]
+    assert main(argv + ["--ply", str(tmp_path / "c.ply")]) == 2  # a cloud needs a camera
+    assert "--ply needs --intrinsics" in capsys.readouterr().err
+    assert main(argv + ["--intrinsics", f"{fx},{fy},{cx},{cy}"]) == 0
+    filled = np.load(tmp_path / "filled.npy")
+    points = np.asarray(o3d.io.read_point_cloud(str(tmp_path / "filled.ply")).points)
+    assert points.shape == (H * W, 3)
+    v, u = np.mgrid[0:H, 0:W]
+    z = filled.astype(np.float64)
+    expected = np.stack([(u - cx) / fx * z, (v - cy) / fy * z, z], axis=-1).reshape(-1, 3)  # the pinhole model
+    order = np.lexsort((points[:, 0], points[:, 1], points[:, 2]))
+    reference = np.lexsort((expected[:, 0], expected[:, 1], expected[:, 2]))
+    assert np.allclose(points[order], expected[reference], atol=1e-5)

@@ -147,3 +147,69 @@ def test_a_crashing_or_stub_answer_is_reported_not_raised(name, capsys):
     assert getattr(exercises, name)(stub) is False
     out = capsys.readouterr().out
     assert out.startswith("FAIL") and "NotImplementedError" in out
+
+
+def _depth_from_disparity(with_doffs=True, unknown_nan=True, copy=True):
+    def depth(disp, f, baseline, doffs):
+        d = np.array(disp, dtype=np.float64) if copy else disp
+        total = d + (doffs if with_doffs else 0.0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            z = f * baseline / total
+        if unknown_nan:
+            z[~np.isfinite(total) | (total <= 0)] = np.nan
+        else:
+            z[~np.isfinite(z)] = 0.0
+        if not copy:
+            d[...] = 0
+        return z
+    return depth
+
+
+def test_depth_from_disparity_check(capsys):
+    assert exercises.check_depth_from_disparity(_depth_from_disparity())
+    assert not exercises.check_depth_from_disparity(_depth_from_disparity(with_doffs=False))
+    assert "doffs" in capsys.readouterr().out
+    assert not exercises.check_depth_from_disparity(_depth_from_disparity(unknown_nan=False))
+    assert "NaN (unknown)" in capsys.readouterr().out
+    assert not exercises.check_depth_from_disparity(_depth_from_disparity(copy=False))
+    assert not exercises.check_depth_from_disparity(lambda d, f, b, o: 1 / 0)
+
+
+def _resize(centre=True, scale_doffs=True, fx_by=0):
+    def resize(K, doffs, sx, sy):
+        K = np.array(K, dtype=np.float64)
+        K[0, 0] *= (sx, sy)[fx_by]
+        K[1, 1] *= sy
+        K[0, 2] = (K[0, 2] + 0.5) * sx - 0.5 if centre else K[0, 2] * sx
+        K[1, 2] = (K[1, 2] + 0.5) * sy - 0.5 if centre else K[1, 2] * sy
+        return K, doffs * sx if scale_doffs else doffs
+    return resize
+
+
+def test_resize_calibration_check(capsys):
+    assert exercises.check_resize_calibration(_resize())
+    assert not exercises.check_resize_calibration(_resize(centre=False))
+    assert "pixel centres" in capsys.readouterr().out
+    assert not exercises.check_resize_calibration(_resize(scale_doffs=False))
+    assert "doffs" in capsys.readouterr().out
+    assert not exercises.check_resize_calibration(_resize(fx_by=1))  # fx scaled by the height factor
+
+
+def test_resize_calibration_agrees_with_the_kits_camera():
+    from ddp_lite.camera import Camera
+    K = np.array([[994.978, 0, 369.0], [0, 994.978, 247.0], [0, 0, 1.0]])
+    small = Camera(K, np.eye(4), 741, 500).resized(64, 48)  # the kit's own resize, independently written
+    got, _ = _resize()(K, 31.086, 64 / 741, 48 / 500)
+    assert np.allclose(small.K, got)
+
+
+CASES["check_depth_from_disparity"] = (_depth_from_disparity(), {
+    "doffs left out": _depth_from_disparity(with_doffs=False),
+    "unknown as 0 m": _depth_from_disparity(unknown_nan=False),
+    "the input overwritten": _depth_from_disparity(copy=False),
+})
+CASES["check_resize_calibration"] = (_resize(), {
+    "cx·sx (pixel corners)": _resize(centre=False),
+    "doffs not scaled": _resize(scale_doffs=False),
+    "fx by the height factor": _resize(fx_by=1),
+})
