@@ -27,7 +27,7 @@ import cv2
 import numpy as np
 
 from .atomic import write_bytes_atomic
-from .fileio import depth_png_bytes, npy_bytes, pfm_bytes, read_pfm
+from .fileio import depth_png_bytes, npy_bytes, pfm_bytes, read_image_file, read_pfm, read_rgb
 from .outpaths import check_output_file
 
 
@@ -97,9 +97,7 @@ def _read_depth(path: str, scale: float | None, flag: str = "--depth") -> np.nda
     elif suffix == ".pfm":
         raw = read_pfm(path)
     else:
-        raw = cv2.imread(path, cv2.IMREAD_UNCHANGED)
-        if raw is None:
-            raise ValueError(f"{flag}: cannot read {path!r} as an image")
+        raw = read_image_file(path, flag)  # as stored: no EXIF rotation, like the colour below
     if raw.ndim != 2 or raw.dtype == bool or not (np.issubdtype(raw.dtype, np.integer) or np.issubdtype(raw.dtype, np.floating)):
         raise ValueError(f"{flag}: {path!r} must hold one channel of numbers (H, W), got {raw.dtype} {raw.shape}")
     if scale is None:
@@ -146,10 +144,7 @@ def check_plausible_depth(stored, scale: float, flag: str = "--depth") -> None:
 def _read_rgb(path: str) -> np.ndarray:
     if not os.path.isfile(path):
         raise ValueError(f"--rgb: no such file {path!r}")
-    bgr = cv2.imread(path, cv2.IMREAD_COLOR)
-    if bgr is None:
-        raise ValueError(f"--rgb: cannot read {path!r} as an image")
-    return cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB).astype(np.float32) / 255.0
+    return read_rgb(path, "--rgb")  # pixels as stored, the same way as the depth: a phone's EXIF rotation is not applied
 
 
 def _write_preview(path: str, depth: np.ndarray, filled: np.ndarray, summary: str) -> None:

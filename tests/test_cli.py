@@ -309,3 +309,26 @@ def test_complete_with_intrinsics_writes_the_frame_as_a_point_cloud(tmp_path, ca
     order = np.lexsort((points[:, 0], points[:, 1], points[:, 2]))
     reference = np.lexsort((expected[:, 0], expected[:, 1], expected[:, 2]))
     assert np.allclose(points[order], expected[reference], atol=1e-5)
+
+
+def test_complete_reads_a_jpeg_with_exif_orientation_as_stored_like_its_depth(tmp_path):
+    """A phone JPEG tagged 'rotate 90°': OpenCV's default reader would turn the colour and not the depth,
+    misregistering them; complete's reader takes the pixels as stored (and warns)."""
+    import warnings
+
+    import cv2
+    from PIL import Image
+
+    from ddp_lite.cli_complete import _read_rgb
+    rgb = np.zeros((8, 12, 3), np.uint8)
+    rgb[:, :6] = 200  # left half bright: a rotation would put it on top
+    image = Image.fromarray(rgb)
+    exif = image.getexif()
+    exif[0x0112] = 6  # Orientation: rotate 90° clockwise to display
+    path = tmp_path / "phone.jpg"
+    image.save(path, exif=exif, quality=95)
+    assert cv2.imread(str(path), cv2.IMREAD_COLOR).shape[:2] == (12, 8)  # what the old reader did
+    with warnings.catch_warnings(record=True):
+        warnings.simplefilter("always")
+        read = _read_rgb(str(path))
+    assert read.shape == (8, 12, 3) and read[:, :6].mean() > read[:, 6:].mean() + 0.5
