@@ -21,7 +21,7 @@ import numbers
 import numpy as np
 import torch
 
-__all__ = ["check_callback", "check_int", "check_real", "check_bool", "check_choice", "check_int_tuple", "check_image", "check_depth",
+__all__ = ["env_choice", "named_choice", "check_callback", "check_int", "check_real", "check_bool", "check_choice", "check_int_tuple", "check_image", "check_depth",
            "check_size", "MIN_VALID_PIXELS"]
 
 MIN_VALID_PIXELS = 16  # a fit, or a mask, with fewer known pixels is refused
@@ -181,3 +181,23 @@ def check_size(size) -> tuple[int, int]:
     if H < 8 or W < 8 or tuple(size) != (H, W):
         raise ValueError(f"size must be two integers >= 8, got {size!r}")
     return H, W
+
+
+def env_choice(variable: str, default: str, choices) -> str:
+    """The value of the environment ``variable`` (stripped, lower case; ``default`` when unset or blank),
+    which must be one of ``choices``: a ``ValueError`` naming the variable otherwise."""
+    import os
+
+    value = os.environ.get(variable, default).strip().lower() or default
+    if value not in choices:
+        raise ValueError(f"{variable} must be one of {sorted(choices)}, got {value!r}")
+    return value
+
+
+def named_choice(name, table: dict, what: str, current):
+    """``table[name]``, or ``table[current()]`` for None; a ``ValueError`` saying ``what`` must be one of
+    the table's keys otherwise."""
+    name = current() if name is None else name
+    if name not in table:
+        raise ValueError(f"{what} must be one of {sorted(table)}, got {name!r}")
+    return table[name]

@@ -33,6 +33,7 @@ from .losses import (ConstantTarget, affinity_loss, disparity_loss, flatness_los
                      smoothness_weights, warp_loss)
 from .nets import check_input_size, fill_channel, image_channels
 from .variants import VARIANTS, get_variant
+from .views import image_and_camera
 from .warp import Warper
 
 __all__ = ["FitConfig", "DepthResult", "ImageResult", "complete_depth", "complete_depth_coarse_to_fine", "fit_image",
@@ -86,15 +87,7 @@ def _check_neighbors(neighbors) -> list[tuple[np.ndarray, Camera]]:
                         f"{type(neighbors).__name__}; wrap a single view in a list")
     checked = []
     for i, item in enumerate(neighbors):
-        if hasattr(item, "camera"):
-            rgb, camera = item.rgb, item.camera
-        elif isinstance(item, (tuple, list)) and len(item) == 2:
-            rgb, camera = item
-        else:
-            raise TypeError(f"neighbors[{i}] must be an (rgb, Camera) pair or a View, got {type(item).__name__}")
-        if not isinstance(camera, Camera):
-            raise TypeError(f"neighbors[{i}] must be an (rgb, Camera) pair or a View, got camera {type(camera).__name__}")
-        checked.append((check_image(rgb, f"neighbors[{i}] rgb", (camera.height, camera.width)), camera))
+        checked.append(image_and_camera(item, f"neighbors[{i}]"))
     return checked
 
 

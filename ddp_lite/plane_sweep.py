@@ -30,8 +30,8 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-from .camera import Camera
 from .checks import check_image, check_int, check_real
+from .views import image_and_camera
 from .warp import Warper
 
 __all__ = ["inverse_depth_planes", "SweepResult", "plane_sweep"]
@@ -74,19 +74,6 @@ class SweepResult:
         return np.where(self.probability >= threshold, self.depth, np.nan).astype(np.float32)
 
 
-def _as_pair(item, name: str) -> tuple[np.ndarray, Camera]:
-    """A View or an (rgb, Camera) pair → (rgb (H, W, 3) float32, Camera), or a TypeError naming ``name``."""
-    if hasattr(item, "camera") and hasattr(item, "rgb"):
-        rgb, camera = item.rgb, item.camera
-    elif isinstance(item, (tuple, list)) and len(item) == 2:
-        rgb, camera = item
-    else:
-        raise TypeError(f"{name} must be a View or an (rgb, Camera) pair, got {type(item).__name__}")
-    if not isinstance(camera, Camera):
-        raise TypeError(f"{name} must be a View or an (rgb, Camera) pair, got camera {type(camera).__name__}")
-    return check_image(rgb, f"{name} rgb", (camera.height, camera.width)), camera
-
-
 def _grey(rgb: np.ndarray) -> torch.Tensor:
     """(H, W, 3) → (1, 1, H, W) float32 luminance."""
     return torch.from_numpy(rgb @ np.array(_GREY, np.float32))[None, None]
@@ -126,12 +113,12 @@ def plane_sweep(ref, neighbors, d_min: float, d_max: float, n_planes: int = 64, 
         >>> sweep.depth.shape, sweep.probability.shape
         ((48, 64), (48, 64))
     """
-    ref_rgb, ref_cam = _as_pair(ref, "ref")
+    ref_rgb, ref_cam = image_and_camera(ref, "ref")
     if isinstance(neighbors, (np.ndarray, str)) or hasattr(neighbors, "camera") or not hasattr(neighbors, "__len__"):
         raise TypeError("neighbors must be a list of Views or (rgb, Camera) pairs; wrap a single view in a list")
     if len(neighbors) == 0:
         raise ValueError("neighbors must hold at least one calibrated view to match against")
-    pairs = [_as_pair(item, f"neighbors[{i}]") for i, item in enumerate(neighbors)]
+    pairs = [image_and_camera(item, f"neighbors[{i}]") for i, item in enumerate(neighbors)]
     planes = inverse_depth_planes(d_min, d_max, n_planes)
     window = check_int(window, "window", minimum=1)
     if window % 2 == 0:

@@ -102,9 +102,9 @@ pass) float32 scored 0.857× the best classical fill against bfloat16's 0.825× 
 """
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass
 
+from .checks import env_choice, named_choice
 from .variants import get_variant
 
 __all__ = ["Profile", "PROFILES", "get_profile", "current_profile_name"]
@@ -194,10 +194,7 @@ PROFILES = {
 
 def current_profile_name() -> str:
     """The profile named by ``DDP_PROFILE`` (default ``class``)."""
-    name = os.environ.get(ENV_VAR, DEFAULT).strip().lower() or DEFAULT
-    if name not in PROFILES:
-        raise ValueError(f"{ENV_VAR} must be one of {sorted(PROFILES)}, got {name!r}")
-    return name
+    return env_choice(ENV_VAR, DEFAULT, PROFILES)
 
 
 def get_profile(name: str | Profile | None = None) -> Profile:
@@ -205,7 +202,4 @@ def get_profile(name: str | Profile | None = None) -> Profile:
     (so every function taking ``profile`` accepts a name, a Profile or None the same way)."""
     if isinstance(name, Profile):
         return name
-    name = current_profile_name() if name is None else name
-    if name not in PROFILES:
-        raise ValueError(f"profile must be one of {sorted(PROFILES)}, got {name!r}")
-    return PROFILES[name]
+    return named_choice(name, PROFILES, "profile", current_profile_name)

@@ -15,8 +15,9 @@ paper's method in seconds. ``docs/`` holds the evidence behind the kit's additio
 """
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass, field
+
+from .checks import env_choice, named_choice
 
 __all__ = ["Recipe", "RECIPES", "ENV_VAR", "DEFAULT", "current_recipe_name", "get_recipe"]
 
@@ -44,17 +45,11 @@ RECIPES = {
 
 def current_recipe_name() -> str:
     """The recipe ``DDP_RECIPE`` names (default ``kit``)."""
-    name = os.environ.get(ENV_VAR, DEFAULT).strip().lower() or DEFAULT
-    if name not in RECIPES:
-        raise ValueError(f"{ENV_VAR} must be one of {sorted(RECIPES)}, got {name!r}")
-    return name
+    return env_choice(ENV_VAR, DEFAULT, RECIPES)
 
 
 def get_recipe(name: str | Recipe | None = None) -> Recipe:
     """The named recipe, or the one ``DDP_RECIPE`` selects; a :class:`Recipe` is returned as is."""
     if isinstance(name, Recipe):
         return name
-    name = current_recipe_name() if name is None else name
-    if name not in RECIPES:
-        raise ValueError(f"recipe must be one of {sorted(RECIPES)}, got {name!r}")
-    return RECIPES[name]
+    return named_choice(name, RECIPES, "recipe", current_recipe_name)

@@ -20,8 +20,9 @@ import numpy as np
 
 from .atomic import atomic_path
 from .camera import Camera
+from .checks import check_image
 
-__all__ = ["View", "Scene", "LABELS", "LABEL_SKY", "LABEL_TEXTURELESS", "LABEL_PLANKS", "LABEL_TEXTURED"]
+__all__ = ["View", "Scene", "image_and_camera", "LABELS", "LABEL_SKY", "LABEL_TEXTURELESS", "LABEL_PLANKS", "LABEL_TEXTURED"]
 
 # Scene.labels values: the texture class of the surface a pixel sees
 LABEL_SKY, LABEL_TEXTURELESS, LABEL_PLANKS, LABEL_TEXTURED = 0, 1, 2, 3
@@ -137,3 +138,17 @@ class Scene:
             labels = [data[f"labels{i}"] for i in range(n_labels)]
             return cls(str(data["name"]), read("view", int(data["n_views"])), read("right", int(data["n_right"])),
                        meta, labels)
+
+
+def image_and_camera(item, name: str) -> tuple[np.ndarray, Camera]:
+    """A :class:`View` or an ``(rgb, Camera)`` pair → (rgb (H, W, 3) float32 in [0, 1], Camera), checked;
+    a ``TypeError`` naming ``name`` for anything else. How every function taking neighbours reads one."""
+    if hasattr(item, "camera") and hasattr(item, "rgb"):
+        rgb, camera = item.rgb, item.camera
+    elif isinstance(item, (tuple, list)) and len(item) == 2:
+        rgb, camera = item
+    else:
+        raise TypeError(f"{name} must be an (rgb, Camera) pair or a View, got {type(item).__name__}")
+    if not isinstance(camera, Camera):
+        raise TypeError(f"{name} must be an (rgb, Camera) pair or a View, got camera {type(camera).__name__}")
+    return check_image(rgb, f"{name} rgb", (camera.height, camera.width)), camera
