@@ -1,4 +1,4 @@
-"""The classroom kit: nbgrader-format source notebooks, student copies, and the grader (issue 15).
+"""The classroom kit: nbgrader-format source notebooks, student copies, and the grader.
 
 The grader tests on tiny hand-made notebooks run in seconds; the solutions of two real notebooks (01
 and 08; set DDP_GRADE_ALL=1 to grade all ten) run at `ci`; every untouched student copy runs in

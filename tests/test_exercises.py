@@ -1,6 +1,6 @@
 """The exercise checks pass a right answer and fail every known wrong one (with a message).
 
-The wrong answers are the mistakes students make (and the ones issue 15 found passing): D1 with
+The wrong answers are the mistakes students make (and ones that once passed): D1 with
 5 % of the prediction instead of the truth, ``>=`` instead of ``>``, SSIM with a sample covariance.
 """
 import numpy as np

@@ -1,6 +1,6 @@
 """Every untouched student copy runs to the end at `ci`: each check fails cleanly (it prints FAIL and the
 stub's NotImplementedError, then its assert fails) and no other cell errors, so a student who has
-done nothing yet can still run the whole notebook, and the grader scores it 0 (issue 15).
+done nothing yet can still run the whole notebook, and the grader scores it 0.
 
 Ten notebook runs: kept out of test_classroom.py so that `make test` (pytest-xdist, one file per
 worker) runs them beside the other tests. They read their fits back from the session's fit cache
