@@ -83,10 +83,10 @@ def format_estimate(estimate: dict, command: str | None = None) -> str:
     e, c = estimate, estimate["cost"]
     H, W = e["size"]
     lines = [
-        f"{e['jobs']} jobs (one DDP rgbd+warp fit per view), {W}×{H} px, {e['iterations']} iterations each "
+        f"{e['jobs']} jobs (one DDP rgbd+warp fit per view), {H}×{W} px (H×W), {e['iterations']} iterations each "
         f"(profile '{e['profile']}')",
         f"  compute: {c['flops_per_pixel_iteration'] / 1e6:.2f} MFLOP per pixel-iteration (convolutions, forward + "
-        f"backward, counted at {c['size'][1]}×{c['size'][0]})",
+        f"backward, counted at {c['size'][0]}×{c['size'][1]})",
         f"  GPU:     ≈ {_round(e['gpu_hours'])} GPU-hours at an assumed {e['gpu_tflops_assumed']:g} TFLOP/s sustained "
         f"(≈ {60 * e['gpu_hours'] / max(e['jobs'], 1):.1f} min per view)",
         f"  CPU:     ≈ {_round(e['cpu_hours_one_thread'])} CPU-hours on this machine, one thread per fit "

@@ -116,7 +116,7 @@ def _write_preview(path: Path, job: ViewJob, completed: np.ndarray) -> None:
     axes = fig.subplots(1, 3)
     show_image(axes[0], job.rgb, f"view {job.name}")
     show_depth(axes[1], job.depth, f"input ({np.isnan(job.depth).mean():.0%} holes)", vmin, vmax)
-    show_depth(axes[2], completed, "SGM+DDP (input kept, DDP in the holes)", vmin, vmax)
+    show_depth(axes[2], completed, "SGM+DDP\n(input kept, DDP in holes)", vmin, vmax)
     fig.tight_layout()
     save_figure(fig, path, dpi=80)
 
