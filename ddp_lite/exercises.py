@@ -23,7 +23,7 @@ from .warp import warp_to_reference
 
 __all__ = ["check_psnr", "check_masked_mse", "check_disparity_transform", "check_hole_rmse", "check_ssim",
            "check_masked_l1", "check_backproject", "check_warp", "check_fscore", "check_nearest_fill",
-           "check_d1", "check_depth_from_disparity", "check_resize_calibration"]
+           "check_d1", "check_depth_from_disparity", "check_resize_calibration", "check_kinect_quantisation"]
 
 
 def _report(name: str, failures: list[str], cases: int, reference: str) -> bool:
@@ -328,3 +328,33 @@ def check_resize_calibration(student_resize) -> bool:
                             f"{depth_small:.6g} m, but the full-size pixel says {depth_full:.6g} m (doffs is a "
                             f"difference of u coordinates)")
     return _report("resize_calibration", failures, len(cases), "pixel-centre resizing of projected points")
+
+
+def check_kinect_quantisation(student_quantise) -> bool:
+    """``student_quantise(depth, focal, baseline, subpixel)`` → (H, W) metres as a structured-light
+    sensor reads them: disparity f·b/z rounded to 1/subpixel px, back to depth; NaN stays NaN, and so
+    does a disparity rounded to 0; ``depth`` unchanged. Reference: hand-computed values."""
+    # f·b = 10 px·m. z = 2 → d = 5 → 2; z = 3 → d = 3.33 → 3 (subpixel 1) → 3.333 m; → 3.375 (subpixel 8)
+    # → 2.962963 m; z = 40 → d = 0.25 → 0 at subpixel 1 (no reading); z = 30 → 0.333 → 0.375 → 26.667 m.
+    depth = np.array([[2.0, 3.0], [np.nan, 40.0], [30.0, 0.5]])
+    cases = ((depth, 100.0, 0.1, 1, np.array([[2.0, 10 / 3], [np.nan, np.nan], [np.nan, 0.5]])),
+             (depth, 100.0, 0.1, 8, np.array([[2.0, 10 / 3.375], [np.nan, 40.0], [10 / 0.375, 0.5]])),
+             (depth, 580.0, 0.075, 8, 43.5 / (np.round(43.5 / depth * 8) / 8)))
+    failures = []
+    for i, (z, f, b, subpixel, want) in enumerate(cases):
+        before = z.copy()
+        try:
+            got = np.asarray(student_quantise(z, f, b, subpixel), dtype=np.float64)
+        except Exception as error:
+            failures.append(f"case {i} raised {type(error).__name__}: {error}")
+            continue
+        if not np.array_equal(z, before, equal_nan=True):
+            failures.append(f"case {i}: the depth passed in was modified")
+        elif got.shape != want.shape:
+            failures.append(f"case {i}: shape {got.shape}, expected {want.shape}")
+        elif not np.allclose(got, want, rtol=1e-5, atol=0, equal_nan=True):
+            where = tuple(int(k) for k in np.argwhere(~np.isclose(got, want, rtol=1e-5, atol=0, equal_nan=True))[0])
+            failures.append(f"case {i} (f {f:g} px, b {b:g} m, 1/{subpixel} px): at {where} (depth {z[where]:g} m) "
+                            f"got {got[where]:.6g}, expected {want[where]:.6g} (round the disparity, not the depth; "
+                            f"a disparity rounded to 0 is no reading)")
+    return _report("kinect quantisation", failures, len(cases), "hand-computed readings")

@@ -172,8 +172,8 @@ def test_grade_refuses_a_folder_without_students(tmp_path):
 
 # --- the real notebooks at ci: minutes ------------------------------------------------------------
 
-def test_the_notebooks_have_thirteen_autograded_checks():
-    assert sum(len(_checks(nbformat.read(p, as_version=4))) for p in SOURCES) == 13
+def test_the_notebooks_have_fourteen_autograded_checks():
+    assert sum(len(_checks(nbformat.read(p, as_version=4))) for p in SOURCES) == 14
 
 
 @pytest.mark.fit_cache  # the fits of notebooks 01 and 08 are their nbval runs' (conftest.py)
@@ -278,7 +278,7 @@ def test_exercise_10_3s_command_prints_what_its_expected_answer_says(tmp_path, c
     printed = capsys.readouterr().out
     minutes = float(re.search(r"≈ ([0-9.]+) min per view", printed).group(1))
     answer = next(c.source for c in nb.cells if _meta(c).get("grade_id") == "ex3_answer")
-    assert f"≈ {minutes} GPU-minutes per view" in answer and "4 jobs" in printed and "960×512" in printed
+    assert f"≈ {minutes} GPU-minutes per view" in answer and "4 jobs" in printed and "512×960" in printed
     claimed = float(re.search(r"≈ (\d+) GPU-hours", answer).group(1))
     assert round(150 * minutes / 60) == claimed  # the answer's arithmetic on the printed figure
 

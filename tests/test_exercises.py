@@ -213,3 +213,30 @@ CASES["check_resize_calibration"] = (_resize(), {
     "doffs not scaled": _resize(scale_doffs=False),
     "fx by the height factor": _resize(fx_by=1),
 })
+
+
+def _quantise(round_depth=False, zero_is_reading=False, copy=True):
+    def quantise(depth, focal, baseline, subpixel):
+        depth = np.array(depth, dtype=np.float64) if copy else depth
+        if round_depth:  # the common mistake: the depth rounded instead of the disparity
+            return np.round(depth * subpixel) / subpixel
+        levels = np.round(focal * baseline / depth * subpixel) / subpixel
+        with np.errstate(divide="ignore"):
+            out = focal * baseline / levels
+        out = out if zero_is_reading else np.where(levels > 0, out, np.nan)
+        depth[...] = out  # a copy unless copy=False: then the caller's array is overwritten
+        return depth
+    return quantise
+
+
+def test_kinect_quantisation_check_agrees_with_the_kits_sensor_model():
+    from ddp_lite.kinect import quantise_depth
+    depth = np.linspace(0.5, 4.5, 40).reshape(5, 8)
+    assert np.allclose(_quantise()(depth, 580.0, 0.075, 8), quantise_depth(depth), rtol=1e-6)
+
+
+CASES["check_kinect_quantisation"] = (_quantise(), {
+    "the depth rounded": _quantise(round_depth=True),
+    "a zero disparity kept as a reading": _quantise(zero_is_reading=True),
+    "the input overwritten": _quantise(copy=False),
+})
