@@ -84,15 +84,15 @@ def ensemble_seconds(K: int, side_by_side: bool, iterations: int, size=(96, 128)
     rgb, depth, ref, nbrs = case(*size)
     config = FitConfig.for_profile("class", variant=variant, iterations=iterations, auto_stop=False, ensemble=K,
                                    progress=False)
-    members = fit._parallel_members
+    members = fit.parallel_members
     if not side_by_side:
-        fit._parallel_members = lambda *args, **kwargs: 1
+        fit.parallel_members = lambda *args, **kwargs: 1
     try:
         start = time.perf_counter()
         complete_depth(rgb, depth, ref, nbrs if variant == "rgbd+warp" else (), variant=variant, config=config)
         return time.perf_counter() - start
     finally:
-        fit._parallel_members = members
+        fit.parallel_members = members
 
 
 def main_fits(args) -> None:

@@ -35,7 +35,7 @@ import torch  # noqa: E402
 
 from ddp_lite import FitConfig, complete_depth  # noqa: E402
 from ddp_lite.experiments import make_case  # noqa: E402
-from ddp_lite.fit import complete_depth_coarse_to_fine  # noqa: E402
+from ddp_lite.coarse_to_fine import complete_depth_coarse_to_fine  # noqa: E402
 from _common import add_profile_args, profile_from_args  # noqa: E402
 
 SCENES = ("house", "desk", "room", "street")

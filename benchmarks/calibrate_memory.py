@@ -22,7 +22,8 @@ CASES = [(96, 128, "rgbd", (32, 64, 128, 256, 512)), (192, 256, "rgbd", (32, 64,
 def one(H: int, W: int, variant: str, channels) -> dict:
     import numpy as np
 
-    from ddp_lite.fit import FitConfig, complete_depth
+    from ddp_lite.config import FitConfig
+    from ddp_lite.fit import complete_depth
     depth = np.full((H, W), 2.0, np.float32)
     depth[H // 4:H // 2, W // 4:W // 2] = np.nan
     rgb = np.random.default_rng(0).random((H, W, 3)).astype(np.float32)
@@ -32,7 +33,8 @@ def one(H: int, W: int, variant: str, channels) -> dict:
 
 
 def main() -> None:
-    from ddp_lite.fit import FitConfig, estimate_peak_memory_gb
+    from ddp_lite.config import FitConfig
+    from ddp_lite.loop import estimate_peak_memory_gb
     print(f"{'size':>9} {'variant':>7} {'net':>20} {'measured GiB':>12} {'estimate':>9}")
     for H, W, variant, channels in CASES:
         out = subprocess.run([sys.executable, __file__, json.dumps([H, W, variant, channels])], check=True,

@@ -22,8 +22,10 @@ __version__ = "0.1.0"
 # (ddp_lite.losses, ddp_lite.nets, ddp_lite.warp, ...), where their documentation lives.
 _HOMES = {
     "camera": ("Camera", "look_at", "backproject", "pixel_grid", "project", "relative_pose"),
+    "config": ("FitConfig",),
+    "dip": ("ImageResult", "fit_image"),
     "disparity": ("DisparityTransform",),
-    "fit": ("DepthResult", "FitConfig", "ImageResult", "complete_depth", "fit_image", "merge"),
+    "fit": ("DepthResult", "complete_depth", "merge"),
     "holes": ("random_holes", "edge_band_holes", "kinect_noise"),
     "profiles": ("PROFILES", "Profile", "get_profile"),
     "scenes": ("list_scenes", "make_scene", "register_scene"),

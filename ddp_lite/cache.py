@@ -36,7 +36,7 @@ import torch
 
 from data_fetch.files import describe_kind, regular_file
 
-from .atomic import write_bytes_atomic
+from data_fetch.atomic import write_bytes_atomic
 from .config import FitConfig
 from .profiles import current_profile_name
 from .recipes import current_recipe_name

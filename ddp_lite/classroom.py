@@ -33,7 +33,7 @@ from pathlib import Path
 
 import nbformat
 
-from .atomic import write_bytes_atomic
+from data_fetch.atomic import write_bytes_atomic
 from .outpaths import check_not_overlapping, check_output_folder
 
 __all__ = ["student_copy", "execute", "exercises", "grade_notebook", "grade", "format_grades", "write_csv",

@@ -26,7 +26,7 @@ import time
 import cv2
 import numpy as np
 
-from .atomic import write_bytes_atomic
+from data_fetch.atomic import write_bytes_atomic
 from .fileio import depth_png_bytes, npy_bytes, pfm_bytes, read_image_file, read_pfm, read_rgb
 from .outpaths import check_output_file
 
@@ -191,7 +191,8 @@ def _complete(args) -> int:
     start = time.perf_counter()
     writers = _writers()
     _check_outputs(args, writers)
-    from .fit import FitConfig, complete_depth
+    from .config import FitConfig
+    from .fit import complete_depth
     from .profiles import get_profile
     from .progress import command_progress
     from .working_size import fill_holes_at_full_size, shrink, working_shape

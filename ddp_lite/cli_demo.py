@@ -19,7 +19,8 @@ from matplotlib.figure import Figure  # no pyplot: no backend to choose, no glob
 from .baselines import fill_colorization, fill_linear
 from .config import resolve_device
 from .experiments import error_table, format_table, make_case
-from .fit import FitConfig, complete_depth
+from .config import FitConfig
+from .fit import complete_depth
 from .loop import check_memory
 from .metrics import hole_rmse
 from .outpaths import check_output_file

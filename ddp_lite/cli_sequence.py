@@ -13,7 +13,7 @@ import sys
 
 import numpy as np
 
-from .fit import FitConfig
+from .config import FitConfig
 from .formats import load_sequence
 from .outpaths import check_output_folder
 from .profiles import get_profile

@@ -13,7 +13,8 @@ import torch
 from .camera import Camera
 from .config import FitConfig
 from .disparity import DisparityTransform
-from .fit import DepthResult, _check_fit_inputs, _fit_one
+from .fit import DepthResult, fit_once
+from .fit_inputs import check_fit_inputs
 from .nets import make_input
 
 __all__ = ["complete_depth_coarse_to_fine"]
@@ -91,7 +92,7 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
         raise ValueError(f"scale must be an integer ≥ 2, got {scale!r}")
     if not 0.0 < float(coarse_fraction) < 1.0:
         raise ValueError(f"coarse_fraction must lie in (0, 1), got {coarse_fraction!r}")
-    config, depth, rgb, neighbors, gt_depth, transform = _check_fit_inputs(
+    config, depth, rgb, neighbors, gt_depth, transform = check_fit_inputs(
         rgb, depth, camera, neighbors, variant, config, gt_depth, transform)
     scale = int(scale)
     H, W = depth.shape
@@ -106,7 +107,7 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
     coarse_config = config.replace(iterations=n_coarse, auto_stop=False,
                                    lr_milestones=tuple(m for m in config.lr_milestones if m < n_coarse))
     coarse_noise = make_input(config.net_input, config.noise_channels, h, w, seed=config.seed)
-    coarse = _fit_one(
+    coarse = fit_once(
         _downsample_image(rgb, scale) if rgb is not None else None, small,
         _downsample_camera(camera, scale) if camera is not None else None,
         [(_downsample_image(img, scale), _downsample_camera(cam, scale)) for img, cam in neighbors], variant,
@@ -119,7 +120,7 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
                                  lr_milestones=tuple(m - n_coarse for m in config.lr_milestones if m > n_coarse))
     fine_noise = torch.nn.functional.interpolate(coarse_noise, size=(h * scale, w * scale), mode="bilinear",
                                                  align_corners=False)[..., :H, :W].contiguous()
-    fine = _fit_one(rgb, depth, camera, neighbors, variant, fine_config, gt_depth=gt_depth, transform=transform,
+    fine = fit_once(rgb, depth, camera, neighbors, variant, fine_config, gt_depth=gt_depth, transform=transform,
                     init=coarse, noise=fine_noise)
 
     history = {}

@@ -19,12 +19,13 @@ import cv2
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from .atomic import write_bytes_atomic
+from data_fetch.atomic import write_bytes_atomic
+from data_fetch.files import regular_file
 from .camera import Camera
-from .fileio import (_depth_png_bytes, _png_bytes, _read_depth_file, _read_rgb, npy_bytes, pfm_bytes,
-                     read_colmap_depth, regular_file, write_colmap_depth)
-from .resample import _finish, _undistort
-from .textparse import _fail, _floats, _rotation, _text_lines
+from .fileio import (checked_depth_png_bytes, rgb_png_bytes, read_depth_file, read_rgb, npy_bytes, pfm_bytes,
+                     read_colmap_depth, write_colmap_depth)
+from .resample import finish_scene, undistort_rgbd
+from .textparse import parse_error, parse_floats, quaternion_rotation, text_lines
 from .views import Scene, View
 
 __all__ = ["COLMAP_MODELS", "ColmapCamera", "read_colmap_cameras", "read_colmap_images", "read_colmap_depth",
@@ -57,30 +58,30 @@ class ColmapCamera:
 def read_colmap_cameras(path) -> dict[int, ColmapCamera]:
     """``cameras.txt`` → {camera_id: ColmapCamera}; models SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL, OPENCV."""
     cameras = {}
-    for line, text in _text_lines(path):
+    for line, text in text_lines(path):
         tokens = text.split()
         if len(tokens) < 4:
-            raise _fail(path, line, f"expected 'CAMERA_ID MODEL WIDTH HEIGHT PARAMS...', got {text!r}")
+            raise parse_error(path, line, f"expected 'CAMERA_ID MODEL WIDTH HEIGHT PARAMS...', got {text!r}")
         if not (tokens[0].isdigit() and tokens[2].isdigit() and tokens[3].isdigit()) or 0 in (int(tokens[2]), int(tokens[3])):
-            raise _fail(path, line, f"CAMERA_ID, WIDTH and HEIGHT must be positive integers, got {' '.join(tokens[:4])!r}")
+            raise parse_error(path, line, f"CAMERA_ID, WIDTH and HEIGHT must be positive integers, got {' '.join(tokens[:4])!r}")
         model = tokens[1]
         if model not in COLMAP_MODELS:
-            raise _fail(path, line, f"camera model {model!r} is not supported; use one of {sorted(COLMAP_MODELS)} "
+            raise parse_error(path, line, f"camera model {model!r} is not supported; use one of {sorted(COLMAP_MODELS)} "
                                     f"(or run 'colmap image_undistorter', which writes PINHOLE cameras)")
         names = COLMAP_MODELS[model]
-        params = _floats(tokens[4:], path, line, "the camera parameters")
+        params = parse_floats(tokens[4:], path, line, "the camera parameters")
         if len(params) != len(names):
-            raise _fail(path, line, f"{model} needs {len(names)} parameters ({' '.join(names)}), got {len(params)}")
+            raise parse_error(path, line, f"{model} needs {len(names)} parameters ({' '.join(names)}), got {len(params)}")
         p = dict(zip(names, params))
         fx, fy = p.get("fx", p.get("f")), p.get("fy", p.get("f"))
         K = np.array([[fx, 0.0, p["cx"] - 0.5], [0.0, fy, p["cy"] - 0.5], [0.0, 0.0, 1.0]])
         dist = np.array([p.get("k1", p.get("k", 0.0)), p.get("k2", 0.0), p.get("p1", 0.0), p.get("p2", 0.0), 0.0])
         camera_id = int(tokens[0])
         if camera_id in cameras:
-            raise _fail(path, line, f"CAMERA_ID {camera_id} appears twice")
+            raise parse_error(path, line, f"CAMERA_ID {camera_id} appears twice")
         cameras[camera_id] = ColmapCamera(camera_id, model, int(tokens[2]), int(tokens[3]), K, dist)
     if not cameras:
-        raise _fail(path, None, "defines no camera")
+        raise parse_error(path, None, "defines no camera")
     return cameras
 
 
@@ -88,7 +89,7 @@ def read_colmap_images(path) -> list[tuple[int, str, int, np.ndarray, int]]:
     """``images.txt`` → [(image_id, name, camera_id, cam_from_world 4×4, line number)] sorted by name.
 
     Each image has two lines: the pose line, then its 2D points (which may be empty and are not read)."""
-    lines = _text_lines(path, keep_blank=True)
+    lines = text_lines(path, keep_blank=True)
     while lines and not lines[-1][1]:  # trailing blank lines are not a points line of a last image
         lines.pop()
     images, seen = [], set()
@@ -96,21 +97,21 @@ def read_colmap_images(path) -> list[tuple[int, str, int, np.ndarray, int]]:
         line, text = lines[k]
         tokens = text.split()
         if len(tokens) < 10:
-            raise _fail(path, line, f"expected 'IMAGE_ID QW QX QY QZ TX TY TZ CAMERA_ID NAME' (then a line of 2D "
+            raise parse_error(path, line, f"expected 'IMAGE_ID QW QX QY QZ TX TY TZ CAMERA_ID NAME' (then a line of 2D "
                                     f"points), got {text!r}")
         if not (tokens[0].isdigit() and tokens[8].isdigit()):
-            raise _fail(path, line, f"IMAGE_ID and CAMERA_ID must be integers, got {tokens[0]!r} and {tokens[8]!r}")
-        values = _floats(tokens[1:8], path, line, "QW QX QY QZ TX TY TZ")
+            raise parse_error(path, line, f"IMAGE_ID and CAMERA_ID must be integers, got {tokens[0]!r} and {tokens[8]!r}")
+        values = parse_floats(tokens[1:8], path, line, "QW QX QY QZ TX TY TZ")
         pose = np.eye(4)
-        pose[:3, :3] = _rotation(np.r_[values[1:4], values[0]], path, line)  # COLMAP writes w first
+        pose[:3, :3] = quaternion_rotation(np.r_[values[1:4], values[0]], path, line)  # COLMAP writes w first
         pose[:3, 3] = values[4:7]
         name = " ".join(tokens[9:])  # an image name may contain spaces
         if int(tokens[0]) in seen:
-            raise _fail(path, line, f"IMAGE_ID {tokens[0]} appears twice")
+            raise parse_error(path, line, f"IMAGE_ID {tokens[0]} appears twice")
         seen.add(int(tokens[0]))
         images.append((int(tokens[0]), name, int(tokens[8]), pose, line))
     if not images:
-        raise _fail(path, None, "lists no images")
+        raise parse_error(path, None, "lists no images")
     images.sort(key=lambda item: item[1])
     return images
 
@@ -172,23 +173,23 @@ def read_colmap(folder, images_dir=None, depth_dir=None, depth_suffix: str | Non
     views = []
     for image_id, image_name, camera_id, cam_from_world, line in images:
         if camera_id not in cameras:
-            raise _fail(images_path, line, f"CAMERA_ID {camera_id} is not in {cameras_path}")
+            raise parse_error(images_path, line, f"CAMERA_ID {camera_id} is not in {cameras_path}")
         cam = cameras[camera_id]
         if np.any(cam.dist != 0) and not undistort:
-            raise _fail(cameras_path, None, f"camera {camera_id} is {cam.model} with lens distortion "
+            raise parse_error(cameras_path, None, f"camera {camera_id} is {cam.model} with lens distortion "
                                             f"{cam.dist[:4].tolist()}; the kit needs pinhole images: pass "
                                             f"undistort=True (CLI: --undistort) or run 'colmap image_undistorter'")
-        rgb = _read_rgb(images_dir / image_name, "images_dir")
+        rgb = read_rgb(images_dir / image_name, "images_dir")
         if rgb.shape[:2] != (cam.height, cam.width):
-            raise _fail(images_path, line, f"image {image_name} is {rgb.shape[1]}×{rgb.shape[0]} but camera {camera_id} "
+            raise parse_error(images_path, line, f"image {image_name} is {rgb.shape[1]}×{rgb.shape[0]} but camera {camera_id} "
                                            f"is {cam.width}×{cam.height}")
-        depth = _read_depth_file(_depth_path(depth_dir, image_name, depth_suffix), depth_scale)
-        if depth.shape != rgb.shape[:2]:  # COLMAP's --max_image_size makes smaller maps: pixel centres, as _resize
+        depth = read_depth_file(_depth_path(depth_dir, image_name, depth_suffix), depth_scale)
+        if depth.shape != rgb.shape[:2]:  # COLMAP's --max_image_size makes smaller maps: pixel centres, as resize_view
             depth = cv2.resize(depth, (cam.width, cam.height), interpolation=cv2.INTER_NEAREST_EXACT)
         if np.any(cam.dist != 0):
-            rgb, depth = _undistort(rgb, depth, cam.K, cam.dist)
+            rgb, depth = undistort_rgbd(rgb, depth, cam.K, cam.dist)
         views.append(View(rgb, depth, Camera(cam.K, cam_from_world, cam.width, cam.height), image_name))
-    return _finish(name or folder.name, views, size, [folder, cameras_path.parent, images_dir, depth_dir])
+    return finish_scene(name or folder.name, views, size, [folder, cameras_path.parent, images_dir, depth_dir])
 
 
 def write_colmap(scene: Scene, folder, depths=None, depth_format: str = "bin", model: str = "PINHOLE",
@@ -228,13 +229,13 @@ def write_colmap(scene: Scene, folder, depths=None, depth_format: str = "bin", m
         w, x, y, z = np.roll(Rotation.from_matrix(cam.cam_from_world[:3, :3]).as_quat(), 1)  # → w first
         t = cam.cam_from_world[:3, 3]
         image_lines += [f"{k} " + " ".join(repr(float(v)) for v in (w, x, y, z, *t)) + f" {k} {name}", ""]
-        write_bytes_atomic(folder / "images" / name, _png_bytes(view.rgb))
+        write_bytes_atomic(folder / "images" / name, rgb_png_bytes(view.rgb))
         depth = np.asarray(depth, np.float32)
         if depth_format == "bin":
             write_colmap_depth(folder / "stereo" / "depth_maps" / f"{name}.geometric.bin", depth)
         elif depth_format == "png":
             target = folder / "depth" / f"{Path(name).stem}.png"
-            write_bytes_atomic(target, _depth_png_bytes(depth, 1.0 / depth_scale, target))
+            write_bytes_atomic(target, checked_depth_png_bytes(depth, 1.0 / depth_scale, target))
         elif depth_format == "npy":
             write_bytes_atomic(folder / "depth" / f"{Path(name).stem}.npy", npy_bytes(depth))
         else:

@@ -22,13 +22,14 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from data_fetch.files import regular_file
 from .camera import Camera
 # Middlebury, the file formats and resize_scene lived here; their names stay importable from here.
-from .fileio import (_existing, _read_rgb, _read_text, depth_png_bytes, npy_bytes, pfm_bytes, read_depth_image,
-                     read_image_file, read_pfm, regular_file, write_pfm)
-from .middlebury import (MiddleburyCalib, _require_valid, _stereo_scene, load_middlebury, load_middlebury2006,
+from .fileio import (existing_path, read_rgb, read_text_file, depth_png_bytes, npy_bytes, pfm_bytes, read_depth_image,
+                     read_image_file, read_pfm, write_pfm)
+from .middlebury import (MiddleburyCalib, require_valid_depth, stereo_scene, load_middlebury, load_middlebury2006,
                          make_middlebury_fixture, parse_middlebury_calib, read_middlebury_calib)
-from .resample import _check_size, _depth_range, _resize, resize_scene
+from .resample import check_optional_size, scene_depth_range, resize_view, resize_scene
 from .stereo import disparity_to_depth  # re-exported: its old home
 from .views import Scene, View
 
@@ -60,7 +61,7 @@ def read_kitti_disparity(path) -> np.ndarray:
 def read_kitti_calib(path) -> tuple[np.ndarray, float]:
     """A KITTI ``calib_cam_to_cam/<id>.txt`` → (K (3×3) of the rectified left colour camera, baseline m)."""
     values = {}
-    for line in _read_text(path, "path").splitlines():
+    for line in read_text_file(path, "path").splitlines():
         if ":" in line:
             key, rest = line.split(":", 1)
             values[key.strip()] = rest.split()
@@ -86,17 +87,17 @@ def load_kitti(root, index: int = 0, split: str = "training", disparity: str = "
         raise ValueError(f"split must be 'training' or 'testing', got {split!r}")
     if isinstance(index, bool) or int(index) != index or index < 0:
         raise ValueError(f"index must be a non-negative integer, got {index!r}")
-    base = _existing(root, "root") / split
+    base = existing_path(root, "root") / split
     stem = f"{int(index):06d}"
-    rgb0 = _read_rgb(base / "image_2" / f"{stem}_10.png", "root")
-    rgb1 = _read_rgb(base / "image_3" / f"{stem}_10.png", "root")
+    rgb0 = read_rgb(base / "image_2" / f"{stem}_10.png", "root")
+    rgb1 = read_rgb(base / "image_3" / f"{stem}_10.png", "root")
     K, baseline = read_kitti_calib(base / "calib_cam_to_cam" / f"{stem}.txt")
     H, W = rgb0.shape[:2]
     gt = base / disparity / f"{stem}_10.png"
-    disp = _require_valid(read_kitti_disparity(gt), "root", gt) if split == "training" \
+    disp = require_valid_depth(read_kitti_disparity(gt), "root", gt) if split == "training" \
         else np.full((H, W), np.nan, np.float32)
     calib = MiddleburyCalib(K, K, 0.0, baseline, W, H, 256)
-    return _stereo_scene(f"kitti{stem}", rgb0, rgb1, calib.depth(disp), np.full((H, W), np.nan, np.float32),
+    return stereo_scene(f"kitti{stem}", rgb0, rgb1, calib.depth(disp), np.full((H, W), np.nan, np.float32),
                          calib, size)
 
 
@@ -115,7 +116,7 @@ def _nearest_rotation(R: np.ndarray, path) -> np.ndarray:
 def read_mvsnet_cam(path, width: int, height: int) -> tuple[Camera, dict]:
     """An MVSNet ``<id>_cam.txt`` → (``Camera`` for a ``width × height`` image, {depth_min, depth_interval
     [, depth_num, depth_max]} metres/scene units). 'extrinsic' is world→camera (cam_from_world)."""
-    text = _read_text(path, "path")
+    text = read_text_file(path, "path")
     try:
         extrinsic = text.split("extrinsic", 1)[1].split("intrinsic", 1)[0].split()
         after = text.split("intrinsic", 1)[1].split()
@@ -135,7 +136,7 @@ def load_tnt(folder, indices=None, size=None, depth_dir=None, name: str | None =
     scenes). Depth from ``depth_dir/<id>.pfm`` if given (≤ 0 or non-finite → NaN), else all NaN
     (TnT's ground truth is a point cloud, not depth maps). ``meta``: d_min/d_max from the depth maps,
     else from the first cam file's depth range."""
-    folder = _existing(folder, "folder")
+    folder = existing_path(folder, "folder")
     images = sorted(p for p in (folder / "images").glob("*") if p.suffix.lower() in (".jpg", ".jpeg", ".png"))
     if not images:
         raise ValueError(f"folder: {folder / 'images'} holds no .jpg/.png images")
@@ -143,11 +144,11 @@ def load_tnt(folder, indices=None, size=None, depth_dir=None, name: str | None =
     for i in chosen:
         if isinstance(i, bool) or int(i) != i or not 0 <= i < len(images):
             raise ValueError(f"indices must be positions in [0, {len(images)}), got {i!r}")
-    size = _check_size(size)
+    size = check_optional_size(size)
     views, info0 = [], None
     for i in chosen:
         stem = images[i].stem
-        rgb = _read_rgb(images[i], "folder")
+        rgb = read_rgb(images[i], "folder")
         H, W = rgb.shape[:2]
         camera, info = read_mvsnet_cam(folder / "cams" / f"{stem}_cam.txt", W, H)
         info0 = info0 or info
@@ -158,11 +159,11 @@ def load_tnt(folder, indices=None, size=None, depth_dir=None, name: str | None =
                 raise ValueError(f"depth_dir: {stem}.pfm must be 1-channel")
             depth = np.where(np.isfinite(depth) & (depth > 0), depth, np.nan).astype(np.float32)
             if depth.shape != (H, W):
-                # MVSNet depth maps are often smaller than the images: pixel centres, as in _resize
+                # MVSNet depth maps are often smaller than the images: pixel centres, as in resize_view
                 depth = cv2.resize(depth, (W, H), interpolation=cv2.INTER_NEAREST_EXACT)
-        rgb, depth, camera = _resize(rgb, depth, camera, size)
+        rgb, depth, camera = resize_view(rgb, depth, camera, size)
         views.append(View(rgb, depth, camera, stem))
-    meta = _depth_range([v.depth for v in views])
+    meta = scene_depth_range([v.depth for v in views])
     if not meta and info0:
         d_max = info0.get("depth_max", info0["depth_min"] + info0["depth_interval"] * (info0.get("depth_num", 192) - 1))
         meta = {"d_min": float(info0["depth_min"]), "d_max": float(d_max)}
@@ -192,7 +193,7 @@ def load_nyu(path, index: int = 0, depth_path=None, raw: bool = True, depth_scal
     else:
         if depth_path is None:
             raise ValueError("depth_path must be given when path is an image (not the labelled .mat)")
-        rgb, depth = _read_rgb(path), read_depth_image(depth_path, depth_scale)
+        rgb, depth = read_rgb(path), read_depth_image(depth_path, depth_scale)
         name = path.stem
     H, W = depth.shape
     if rgb.shape[:2] != (H, W):
@@ -201,4 +202,4 @@ def load_nyu(path, index: int = 0, depth_path=None, raw: bool = True, depth_scal
         if (H, W) != (480, 640):
             raise ValueError(f"K must be given for a {W}×{H} image (NYU_K is for 640×480)")
         K = NYU_K
-    return Scene(name, [View(rgb, depth, Camera(K, np.eye(4), W, H), name)], [], _depth_range([depth]))
+    return Scene(name, [View(rgb, depth, Camera(K, np.eye(4), W, H), name)], [], scene_depth_range([depth]))

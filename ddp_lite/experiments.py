@@ -14,7 +14,8 @@ import numpy as np
 
 from .camera import Camera
 from .disparity import DisparityTransform
-from .fit import DepthResult, FitConfig, complete_depth
+from .config import FitConfig
+from .fit import DepthResult, complete_depth
 from .fusion import points_from_depth
 from .holes import edge_band_holes, random_holes
 from .metrics import cloud_scores, disparity_rmse, edge_band, texture_leakage  # re-exported: notebooks import them here

@@ -25,18 +25,19 @@ import numpy as np
 
 from data_fetch.files import regular_file
 
-from .atomic import write_bytes_atomic
-from .textparse import _fail
+from data_fetch.atomic import write_bytes_atomic
+from .textparse import parse_error
 
 
-def _existing(path, name: str) -> Path:
+def existing_path(path, name: str) -> Path:
+    """``path`` as a Path if it exists; ``FileNotFoundError`` naming ``name`` otherwise."""
     path = Path(path)
     if not path.exists():
         raise FileNotFoundError(f"{name}: {path} does not exist")
     return path
 
 
-def _read_text(path, name: str) -> str:
+def read_text_file(path, name: str) -> str:
     """A small text file (calibration) → str; a clear error naming it if it is not UTF-8 text."""
     path = regular_file(path, name)
     try:
@@ -118,9 +119,6 @@ def read_rgb(path, name: str = "path") -> np.ndarray:
     return (image.astype(np.float32) / np.float32(scale))
 
 
-_read_rgb = read_rgb  # the name the loaders import
-
-
 def load_npy(path, name: str = "path") -> np.ndarray:
     """A ``.npy`` file → its array (no pickles); a corrupt or truncated file → ``ValueError`` naming it."""
     path = regular_file(path, name)
@@ -131,7 +129,8 @@ def load_npy(path, name: str = "path") -> np.ndarray:
                          f"another kind of file?") from None
 
 
-def _png_bytes(rgb: np.ndarray) -> bytes:
+def rgb_png_bytes(rgb: np.ndarray) -> bytes:
+    """(H, W, 3) float image in [0, 1] → 8-bit PNG bytes."""
     bgr = cv2.cvtColor(np.clip(rgb * 255.0 + 0.5, 0, 255).astype(np.uint8), cv2.COLOR_RGB2BGR)
     ok, buffer = cv2.imencode(".png", bgr)
     if not ok:
@@ -237,14 +236,14 @@ def read_colmap_depth(path) -> np.ndarray:
     data = regular_file(path, "path").read_bytes()
     header = re.match(rb"(\d+)&(\d+)&(\d+)&", data[:64])
     if header is None:
-        raise _fail(path, 1, "not a COLMAP dense map: expected the header 'width&height&channels&'")
+        raise parse_error(path, 1, "not a COLMAP dense map: expected the header 'width&height&channels&'")
     width, height, channels = (int(v) for v in header.groups())
     count = width * height * channels
     if channels != 1 or count == 0:
-        raise _fail(path, 1, f"a depth map has 1 channel and a positive size, got {width}&{height}&{channels}&")
+        raise parse_error(path, 1, f"a depth map has 1 channel and a positive size, got {width}&{height}&{channels}&")
     body = data[header.end():]
     if len(body) != 4 * count:
-        raise _fail(path, None, f"holds {len(body)} data bytes, expected {4 * count} for {width}×{height}")
+        raise parse_error(path, None, f"holds {len(body)} data bytes, expected {4 * count} for {width}×{height}")
     return np.frombuffer(body, dtype="<f4").reshape(width, height).T.astype(np.float32)
 
 
@@ -260,7 +259,7 @@ def write_colmap_depth(path, depth) -> None:
     write_bytes_atomic(path, colmap_depth_bytes(depth))
 
 
-def _depth_png_bytes(depth: np.ndarray, factor: float, path_for_errors) -> bytes:
+def checked_depth_png_bytes(depth: np.ndarray, factor: float, path_for_errors) -> bytes:
     """(H, W) depth × ``factor`` → 16-bit PNG bytes, NaN → 0; refuse values the format cannot hold."""
     png, overflow = depth_png_bytes(depth, factor)
     if overflow:
@@ -269,7 +268,7 @@ def _depth_png_bytes(depth: np.ndarray, factor: float, path_for_errors) -> bytes
     return png
 
 
-def _read_depth_file(path: Path, scale: float | None) -> np.ndarray:
+def read_depth_file(path: Path, scale: float | None) -> np.ndarray:
     """A depth map file → (H, W) float32 × ``scale``; 0, negative and non-finite → NaN.
 
     ``.bin`` (COLMAP dense), ``.npy``, ``.pfm`` store floats (scale defaults to 1); 16-bit ``.png``

@@ -20,9 +20,10 @@ import zipfile
 import zlib
 from pathlib import Path
 
+from data_fetch.files import regular_file
 from .colmap import (COLMAP_MODELS, ColmapCamera, read_colmap, read_colmap_cameras, read_colmap_images,
                      write_colmap)
-from .fileio import read_colmap_depth, regular_file, write_colmap_depth
+from .fileio import read_colmap_depth, write_colmap_depth
 from .resample import resize_scene
 from .tum import (TUM_DEPTH_FACTOR, TUM_INTRINSICS, associate, read_tum, read_tum_list, read_tum_trajectory,
                   write_tum)

@@ -35,7 +35,7 @@ import os
 import matplotlib
 import numpy as np
 
-from .atomic import atomic_path
+from data_fetch.atomic import atomic_path
 from .camera import Camera, backproject_pixels, look_at, project_points
 from .checks import check_depth
 

@@ -25,7 +25,7 @@ from .nets import SKIP_CHANNELS, UNET_CHANNELS, build_net, count_parameters, mak
 from .progress import progress as tqdm
 
 __all__ = ["PlateauStopper", "run", "build", "holdout_mask", "estimate_peak_memory_gb", "check_memory",
-           "check_finite_output", "to_tensor", "memory_limit_gb"]
+           "check_finite_output", "to_tensor", "memory_limit_gb", "heldout_error_fn", "hole_errors_fn"]
 
 
 def to_tensor(array: np.ndarray, device) -> torch.Tensor:
@@ -230,6 +230,34 @@ def check_finite_output(name: str, array) -> None:
         bad = int(np.size(array) - np.isfinite(array).sum())
         raise FloatingPointError(f"the fit's {name} has {bad} non-finite value(s) of {np.size(array)}: the "
                                  f"optimisation diverged. Lower config.lr, or check the inputs and init.")
+
+
+def heldout_error_fn(target: torch.Tensor, heldout: np.ndarray, device):
+    """``error(output)``: the mean |Z_out - Z_in| over the held-out pixels (H, W) bool, the
+    ground-truth-free score auto-stop watches; ``target`` (1, 1, H, W) is Z_in."""
+    n_heldout = float(heldout.sum())
+    heldout_t = to_tensor(heldout, device).bool()
+
+    def heldout_error(output):
+        return float(((output[:, :1] - target).abs() * heldout_t).sum() / n_heldout)
+    return heldout_error
+
+
+def hole_errors_fn(gt_depth: np.ndarray, valid: np.ndarray, transform, device):
+    """``errors(output)`` → {"hole_rmse": disparity RMSE, "hole_rmse_m": depth RMSE in metres} over the
+    holes (``valid`` False) where ``gt_depth`` (H, W) metres is known: tracked, never optimised."""
+    holes = ~valid & np.isfinite(gt_depth)
+    holes_t = to_tensor(holes, device).bool()
+    gt_disp_t = to_tensor(np.nan_to_num(transform.to_disparity(gt_depth), nan=0.0), device)
+    gt_m_t = to_tensor(np.nan_to_num(np.clip(gt_depth, transform.d_min, transform.d_max), nan=0.0), device)
+    n_holes = max(float(holes.sum()), 1.0)
+
+    def evaluate(output):
+        disparity = output[:, :1]
+        err_disp = ((disparity - gt_disp_t) ** 2 * holes_t).sum() / n_holes
+        err_m = ((transform.to_depth(disparity) - gt_m_t) ** 2 * holes_t).sum() / n_holes
+        return {"hole_rmse": float(err_disp.sqrt()), "hole_rmse_m": float(err_m.sqrt())}
+    return evaluate
 
 
 def holdout_mask(valid: np.ndarray, fraction: float, seed: int, shape: str = "pixels") -> np.ndarray:

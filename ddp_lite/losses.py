@@ -8,10 +8,12 @@ is compared and which pixels count:
 - ``L_warp``: the reference colour vs each neighbour warped through the output depth, only where
   the warp lands inside the neighbour.
 
-Two more terms are the kit's, not the paper's, both on the disparity in the holes and weaker
-across colour edges: :func:`smoothness_loss`, a curvature penalty (``FitConfig.smoothness``; on in
-the ``ci`` and ``class`` profiles), and :func:`flatness_loss`, a first-order one
-(``FitConfig.flatness``; on in ``class``). ``paper`` has neither. See ``profiles.py`` for why.
+Three more terms are the kit's, not the paper's, all on the disparity in the holes
+(:mod:`ddp_lite.hole_terms` adds them to the paper's loss): :func:`smoothness_loss`, a curvature
+penalty (``FitConfig.smoothness``), and :func:`flatness_loss`, a first-order one
+(``FitConfig.flatness``), both weaker across colour edges, on in the ``kit`` recipe at ``ci`` and
+``class`` (:data:`ddp_lite.recipes.KIT_AT` says why); and :func:`affinity_loss`, tried, off by default.
+The ``paper`` recipe has none.
 
 Masking SSIM needs care: an 11×11 window centred on a valid pixel next to a hole would see the
 hole's values. So before SSIM both images get the *same* value wherever a pixel does not count
@@ -40,13 +42,14 @@ C1_FACTOR, C2_FACTOR = 0.01, 0.03  # k1, k2 of Wang et al. 2004
 
 
 @functools.lru_cache(maxsize=16)
-def _gaussian_1d(window_size: int, sigma: float, dtype: torch.dtype, device: str) -> torch.Tensor:
+def gaussian_kernel_1d(window_size: int, sigma: float, dtype: torch.dtype, device: str) -> torch.Tensor:
+    """The normalised 1-D Gaussian (``window_size``,) of ``sigma`` px that SSIM and the image input blur with."""
     offsets = torch.arange(window_size, dtype=torch.float64) - (window_size - 1) / 2
     weights = torch.exp(-offsets ** 2 / (2 * sigma ** 2))
     return (weights / weights.sum()).to(dtype=dtype, device=device)
 
 
-def _blur(x: torch.Tensor, kernel: torch.Tensor) -> torch.Tensor:
+def blur_valid(x: torch.Tensor, kernel: torch.Tensor) -> torch.Tensor:
     """Separable 'valid' Gaussian filter: (B, C, H, W) → (B, C, H - k + 1, W - k + 1)."""
     C, k = x.shape[1], kernel.numel()
     x = F.conv2d(x, kernel.reshape(1, 1, 1, k).expand(C, 1, 1, k), groups=C)
@@ -77,8 +80,8 @@ class ConstantTarget:
         self.window = (window_size, float(sigma))
         self.moments = None
         if min(image.shape[-2:]) >= window_size:
-            kernel = _gaussian_1d(window_size, float(sigma), image.dtype, str(image.device))
-            self.moments = _blur(torch.cat([self.image, self.image * self.image], dim=1), kernel).chunk(2, dim=1)
+            kernel = gaussian_kernel_1d(window_size, float(sigma), image.dtype, str(image.device))
+            self.moments = blur_valid(torch.cat([self.image, self.image * self.image], dim=1), kernel).chunk(2, dim=1)
 
 
 def ssim(x, y, data_range: float = 1.0, window_size: int = 11, sigma: float = 1.5, reduction: str = "mean"):
@@ -111,13 +114,13 @@ def ssim(x, y, data_range: float = 1.0, window_size: int = 11, sigma: float = 1.
         raise ValueError(f"x and y must share a (B, C, H, W) shape, got {tuple(x.shape)} and {tuple(y.shape)}")
     if min(x.shape[-2:]) < window_size:
         raise ValueError(f"images must be at least {window_size}×{window_size}, got {tuple(x.shape[-2:])}")
-    kernel = _gaussian_1d(window_size, float(sigma), x.dtype, str(x.device))
+    kernel = gaussian_kernel_1d(window_size, float(sigma), x.dtype, str(x.device))
     c1, c2 = (C1_FACTOR * data_range) ** 2, (C2_FACTOR * data_range) ** 2
     if target is not None and target.moments is not None:  # y's moments are blurred already
         mu_y, yy = target.moments
-        mu_x, xx, xy = _blur(torch.cat([x, x * x, x * y], dim=1), kernel).chunk(3, dim=1)
+        mu_x, xx, xy = blur_valid(torch.cat([x, x * x, x * y], dim=1), kernel).chunk(3, dim=1)
     else:  # one batched blur for the five moments instead of five calls
-        mu_x, mu_y, xx, yy, xy = _blur(torch.cat([x, y, x * x, y * y, x * y], dim=1), kernel).chunk(5, dim=1)
+        mu_x, mu_y, xx, yy, xy = blur_valid(torch.cat([x, y, x * x, y * y, x * y], dim=1), kernel).chunk(5, dim=1)
     var_x, var_y, cov = xx - mu_x ** 2, yy - mu_y ** 2, xy - mu_x * mu_y
     ssim_map = ((2 * mu_x * mu_y + c1) * (2 * cov + c2)) / ((mu_x ** 2 + mu_y ** 2 + c1) * (var_x + var_y + c2))
     if reduction == "none":

@@ -7,7 +7,7 @@
 
 A stereo scene has the left view at the world origin, the rectified right view in ``right``,
 ``meta`` baseline (m), doffs/ndisp/focal (px), d_min/d_max (m). ``MiddleburyCalib`` and
-``_stereo_scene`` serve KITTI too (``datasets.load_kitti``). ``load_motorcycle`` reads the real
+``stereo_scene`` serve KITTI too (``datasets.load_kitti``). ``load_motorcycle`` reads the real
 Middlebury 2014 pair that scikit-image ships (offline); ``make_middlebury_fixture`` writes a tiny
 Middlebury-2014-format scene from the kit's renderer, for tests of the file readers.
 """
@@ -19,16 +19,16 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from .atomic import write_bytes_atomic
+from data_fetch.atomic import write_bytes_atomic
 from .camera import Camera
-from .fileio import _existing, read_image_file, _png_bytes, _read_rgb, _read_text, read_pfm, write_pfm
-from .resample import _check_size, _depth_range, resize_scene
+from .fileio import existing_path, read_image_file, rgb_png_bytes, read_rgb, read_text_file, read_pfm, write_pfm
+from .resample import check_optional_size, scene_depth_range, resize_scene
 from .scenes import make_scene  # the renderer, for make_middlebury_fixture only
 from .stereo import disparity_to_depth, pixel_disparity
 from .views import Scene, View
 
 
-def _require_valid(depth: np.ndarray, what: str, path) -> np.ndarray:
+def require_valid_depth(depth: np.ndarray, what: str, path) -> np.ndarray:
     """Refuse a ground-truth map with no valid pixel: it is a wrong file, not a scene."""
     if not np.isfinite(depth).any():
         raise ValueError(f"{what}: {path} has no valid disparity (every pixel is the 'unknown' marker)")
@@ -111,23 +111,23 @@ def parse_middlebury_calib(text: str) -> MiddleburyCalib:
 
 def read_middlebury_calib(path) -> MiddleburyCalib:
     """Read a Middlebury ``calib.txt`` file (see ``parse_middlebury_calib``)."""
-    text = _read_text(path, "path")
+    text = read_text_file(path, "path")
     try:
         return parse_middlebury_calib(text)
     except ValueError as error:
         raise ValueError(f"{error} (in {path})") from None
 
 
-def _stereo_scene(name, rgb0, rgb1, depth0, depth1, calib: MiddleburyCalib, size) -> Scene:
+def stereo_scene(name, rgb0, rgb1, depth0, depth1, calib: MiddleburyCalib, size) -> Scene:
     """A one-view stereo Scene (left view + rectified right view) from loaded arrays."""
-    size = _check_size(size)
+    size = check_optional_size(size)
     cam0, cam1 = calib.cameras()
     for what, array in (("left image", rgb0), ("right image", rgb1), ("left depth", depth0), ("right depth", depth1)):
         if array.shape[:2] != (calib.height, calib.width):
             raise ValueError(f"{what} is {array.shape[1]}×{array.shape[0]} but calib says {calib.width}×{calib.height}")
     # the depth range comes from the full-resolution map, so it does not depend on ``size``
     meta = {"baseline": float(calib.baseline), "doffs": float(calib.doffs), "ndisp": float(calib.ndisp),
-            "focal": cam0.focal, **_depth_range([depth0])}
+            "focal": cam0.focal, **scene_depth_range([depth0])}
     scene = Scene(name, [View(rgb0, depth0, cam0, f"{name}-left")], [View(rgb1, depth1, cam1, f"{name}-right")], meta)
     return scene if size is None else resize_scene(scene, size)
 
@@ -137,16 +137,16 @@ def load_middlebury(folder, size=None, name: str | None = None) -> Scene:
     one-view stereo ``Scene``: GT depth (metres, NaN where disparity is inf), ``right`` view, and
     ``meta`` (baseline m, doffs px, ndisp, focal px, d_min, d_max). ``size`` (H, W) resamples
     (colour by area, depth by nearest, K accordingly). Note: Z = f·B/(d + doffs), doffs ≠ 0 here."""
-    folder = _existing(folder, "folder")
+    folder = existing_path(folder, "folder")
     calib = read_middlebury_calib(folder / "calib.txt")
     disparity = read_pfm(folder / "disp0.pfm")
     if disparity.ndim != 2:
         raise ValueError(f"folder: {folder / 'disp0.pfm'} must be a 1-channel PFM")
-    depth0 = _require_valid(calib.depth(disparity), "folder", folder / "disp0.pfm")
+    depth0 = require_valid_depth(calib.depth(disparity), "folder", folder / "disp0.pfm")
     depth1 = calib.depth(read_pfm(folder / "disp1.pfm")) if (folder / "disp1.pfm").exists() \
         else np.full_like(depth0, np.nan)
-    return _stereo_scene(name or folder.name, _read_rgb(folder / "im0.png", "folder"),
-                         _read_rgb(folder / "im1.png", "folder"), depth0, depth1, calib, size)
+    return stereo_scene(name or folder.name, read_rgb(folder / "im0.png", "folder"),
+                         read_rgb(folder / "im1.png", "folder"), depth0, depth1, calib, size)
 
 
 # scikit-image's Motorcycle pair: Middlebury 2014, down-sampled 4× (its docstring gives the calibration)
@@ -177,7 +177,7 @@ def load_motorcycle(size=None) -> Scene:
     calib = MiddleburyCalib(K0, K1, c["doffs"], c["baseline_mm"] / 1000.0, W, H, c["ndisp"])
     depth0 = calib.depth(np.where(np.isfinite(disparity), disparity, np.inf))
     rgb0, rgb1 = (np.asarray(image, np.float32) / 255.0 for image in (left, right))
-    return _stereo_scene("motorcycle", rgb0, rgb1, depth0, np.full_like(depth0, np.nan), calib, size)
+    return stereo_scene("motorcycle", rgb0, rgb1, depth0, np.full_like(depth0, np.nan), calib, size)
 
 
 def load_middlebury2006(folder, focal: float = 3740.0, baseline: float = 0.160, size=None,
@@ -186,14 +186,14 @@ def load_middlebury2006(folder, focal: float = 3740.0, baseline: float = 0.160, 
     disp5.png optional) → one-view stereo ``Scene``. Disparity = PNG value (0 = unknown → NaN) and
     Z = focal·baseline / (d + dmin). The defaults (3740 px, 160 mm) are the values the dataset page
     gives for the full-size images; the principal point is assumed at the image centre."""
-    folder = _existing(folder, "folder")
+    folder = existing_path(folder, "folder")
     try:
-        dmin = float(_read_text(folder / "dmin.txt", "folder").split()[0])
+        dmin = float(read_text_file(folder / "dmin.txt", "folder").split()[0])
     except (IndexError, ValueError) as error:
         raise ValueError(f"folder: {folder / 'dmin.txt'} must hold one number ({error})") from None
     if not np.isfinite(dmin):
         raise ValueError(f"folder: {folder / 'dmin.txt'} must hold a finite number, got {dmin}")
-    rgb0, rgb1 = _read_rgb(folder / "view1.png", "folder"), _read_rgb(folder / "view5.png", "folder")
+    rgb0, rgb1 = read_rgb(folder / "view1.png", "folder"), read_rgb(folder / "view5.png", "folder")
     H, W = rgb0.shape[:2]
     K0 = np.array([[focal, 0.0, (W - 1) / 2.0], [0.0, focal, (H - 1) / 2.0], [0.0, 0.0, 1.0]])
     K1 = K0.copy()
@@ -207,9 +207,9 @@ def load_middlebury2006(folder, focal: float = 3740.0, baseline: float = 0.160, 
         if raw.ndim != 2:
             raise ValueError(f"folder: {folder / file} must be a 1-channel disparity PNG")
         return calib.depth(np.where(raw > 0, raw.astype(np.float64), np.nan))
-    depth1 = _require_valid(depth_of("disp1.png"), "folder", folder / "disp1.png") if (folder / "disp1.png").exists() \
+    depth1 = require_valid_depth(depth_of("disp1.png"), "folder", folder / "disp1.png") if (folder / "disp1.png").exists() \
         else depth_of("disp1.png")
-    return _stereo_scene(name or folder.name, rgb0, rgb1, depth1, depth_of("disp5.png"), calib, size)
+    return stereo_scene(name or folder.name, rgb0, rgb1, depth1, depth_of("disp5.png"), calib, size)
 
 
 def make_middlebury_fixture(folder, size=(48, 64), seed: int = 0, scene: str = "desk",
@@ -217,7 +217,7 @@ def make_middlebury_fixture(folder, size=(48, 64), seed: int = 0, scene: str = "
     """Write a tiny Middlebury-2014-format scene (im0.png, im1.png, disp0.pfm, disp1.pfm, calib.txt)
     rendered by ``make_scene(scene, size, n_views=1, seed)`` into ``folder``; ``hole_fraction`` of
     disp0 is set to ``inf`` (unknown). doffs = 0 (the renderer's right view shares K). Returns the folder."""
-    size = _check_size(size)
+    size = check_optional_size(size)
     if not 0.0 <= hole_fraction < 1.0:
         raise ValueError(f"hole_fraction must be in [0, 1), got {hole_fraction!r}")
     synthetic = make_scene(scene, size=size, n_views=1, seed=seed)
@@ -260,8 +260,8 @@ def _write_middlebury_folder(folder, rgb0, rgb1, disp0, disp1, K0, K1, doffs: fl
     calib = (f"cam0={matrix(K0)}\ncam1={matrix(K1)}\ndoffs={float(doffs)!r}\nbaseline={baseline * 1000.0!r}\n"
              f"width={W}\nheight={H}\nndisp={ndisp}\nisint=0\n"
              f"vmin={int(np.floor(finite.min()))}\nvmax={int(np.ceil(finite.max()))}\n")
-    write_bytes_atomic(folder / "im0.png", _png_bytes(rgb0))
-    write_bytes_atomic(folder / "im1.png", _png_bytes(rgb1))
+    write_bytes_atomic(folder / "im0.png", rgb_png_bytes(rgb0))
+    write_bytes_atomic(folder / "im1.png", rgb_png_bytes(rgb1))
     write_pfm(folder / "disp0.pfm", disp0)
     write_pfm(folder / "disp1.pfm", disp1)
     write_bytes_atomic(folder / "calib.txt", calib.encode("ascii"))

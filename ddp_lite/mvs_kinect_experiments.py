@@ -15,7 +15,8 @@ from __future__ import annotations
 import numpy as np
 
 from .baselines import fill
-from .fit import FitConfig, complete_depth
+from .config import FitConfig
+from .fit import complete_depth
 from .fusion import fuse_depths, points_from_depth
 from .metrics import cloud_scores, psnr
 from .neighbors import select_neighbors

@@ -17,7 +17,7 @@ import torch.nn as nn
 import torch.nn.functional as F
 
 from .baselines import fill_colorization, fill_linear
-from .losses import _blur, _gaussian_1d  # SSIM's separable Gaussian, reused for the image input
+from .losses import blur_valid, gaussian_kernel_1d  # SSIM's separable Gaussian, reused for the image input
 
 __all__ = ["UNet", "SkipNet", "make_noise", "make_input", "image_channels", "fill_channel", "build_net", "count_parameters"]
 
@@ -77,8 +77,8 @@ def image_channels(image: torch.Tensor, scale: float = 1.0, blur: float = 1.0) -
     """
     if blur > 0:
         radius = int(3 * blur + 0.5)
-        kernel = _gaussian_1d(2 * radius + 1, float(blur), image.dtype, str(image.device))  # (2r + 1,)
-        image = _blur(F.pad(image, (radius,) * 4, mode="replicate"), kernel)  # (1, 3, H, W)
+        kernel = gaussian_kernel_1d(2 * radius + 1, float(blur), image.dtype, str(image.device))  # (2r + 1,)
+        image = blur_valid(F.pad(image, (radius,) * 4, mode="replicate"), kernel)  # (1, 3, H, W)
     return scale * image
 
 

@@ -13,7 +13,7 @@ Their pieces live in their own modules (and stay importable from here): ``solids
 (``Ellipsoid``, ``Cone``, ``Capsule``), ``terrain`` (``HeightField``), ``photo_texture``
 (``PhotoTexture``, ``PHOTOS``). World frame as in ``render``: x right, y down, z forward, metres.
 
-Scenes registered in ``scenes.SCENES`` when ``ddp_lite.scenes`` is imported: ``hills`` (terrain,
+Scenes listed in ``scenes.SCENES`` (from :data:`ORGANIC_SCENES`): ``hills`` (terrain,
 boulders, a tree, branches, sky), ``sculpture`` (a blob of ellipsoids on bumpy ground inside a
 dome) and ``logs`` (tilted cylinders, cones and rods in a round room).
 """
@@ -22,11 +22,12 @@ from __future__ import annotations
 import numpy as np
 
 from .photo_texture import PHOTOS, PhotoTexture
-from .scenes import jitter_colour, register_scene, seeded_texture, sky_plane
+from .render import sky_plane
 from .solids import Capsule, Cone, Ellipsoid
 from .terrain import HeightField
+from .textures import jitter_colour, seeded_texture
 
-__all__ = ["PHOTOS", "PhotoTexture", "Ellipsoid", "Cone", "Capsule", "HeightField"]
+__all__ = ["ORGANIC_SCENES", "PHOTOS", "PhotoTexture", "Ellipsoid", "Cone", "Capsule", "HeightField"]
 
 
 def _photo_tex(rng, image, scale, tint=(1.0, 1.0, 1.0), crop=(0.0, 1.0, 0.0, 1.0), variation=0.25):
@@ -156,6 +157,9 @@ def _logs(rng):
     return prims, dict(eye=(0.0, -1.2, 0.0), target=(0.0, -0.35, 3.0), fov=60.0, baseline=0.25, sky=None)
 
 
-register_scene("hills", _hills, "terrain height field, photo grass, ellipsoid boulders, a tree, branches, sky at 60 m")
-register_scene("sculpture", _sculpture, "organic blob of overlapping ellipsoids on bumpy gravel, inside a brick dome, 2–8 m")
-register_scene("logs", _logs, "tilted logs, cones and thin rods on bumpy ground in a round room, 1.5–6 m")
+# name → (builder, one-line description): ``scenes.SCENES`` lists them after its own
+ORGANIC_SCENES = {
+    "hills": (_hills, "terrain height field, photo grass, ellipsoid boulders, a tree, branches, sky at 60 m"),
+    "sculpture": (_sculpture, "organic blob of overlapping ellipsoids on bumpy gravel, inside a brick dome, 2–8 m"),
+    "logs": (_logs, "tilted logs, cones and thin rods on bumpy ground in a round room, 1.5–6 m"),
+}

@@ -27,7 +27,8 @@ import numpy as np
 from scipy import ndimage
 from .baselines import BASELINES
 from .experiments import Case
-from .fit import FitConfig, complete_depth
+from .config import FitConfig
+from .fit import complete_depth
 from .holes import random_holes
 from .middlebury import load_motorcycle
 from .profiles import get_profile

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .camera import Camera, pixel_rays
-from .textures import Texture
+from .textures import Texture, jitter_colour
 
 __all__ = ["Plane", "Box", "Sphere", "Cylinder", "render", "EPS", "unit_vector", "yaw_matrix", "LIGHT", "AMBIENT"]
 
@@ -239,3 +239,10 @@ def render(primitives, camera: Camera, seed: int = 0, supersample: int = 3):
         depth[rows] = t.reshape(len(rows), W, s * s)[:, :, centre]
         labels[rows] = label.reshape(len(rows), W, s * s)[:, :, centre]
     return np.clip(rgb, 0.0, 1.0).astype(np.float32), depth.astype(np.float32), labels
+
+
+def sky_plane(rng, distance, height):
+    """The sky: a plane facing the camera ``distance`` m away, textured at the scale ``height`` m."""
+    return Plane((0.0, 0.0, distance), (0, 0, -1), (1, 0, 0),
+                 Texture("sky", jitter_colour(rng, (0.82, 0.88, 0.95), 0.03), jitter_colour(rng, (0.42, 0.6, 0.88), 0.03),
+                         height))

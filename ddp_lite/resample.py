@@ -18,11 +18,12 @@ from .checks import check_size
 from .views import Scene, View
 
 
-def _check_size(size):
+def check_optional_size(size):
+    """``size`` checked as (H, W) positive ints, or None (keep the size)."""
     return None if size is None else check_size(size)
 
 
-def _resize(rgb, depth, camera: Camera, size):
+def resize_view(rgb, depth, camera: Camera, size):
     """Resample a view to ``size`` (H, W): colour by area/linear, depth by nearest (no invented depths).
 
     Nearest is OpenCV's ``INTER_NEAREST_EXACT``: a new pixel takes the old pixel under its *centre*
@@ -49,11 +50,11 @@ def resize_scene(scene: Scene, size) -> Scene:
         raise TypeError(f"scene must be a ddp_lite.Scene, got {type(scene).__name__}")
     if not scene.views:
         raise ValueError("scene has no views to resize")
-    H, W = _check_size(size)
+    H, W = check_optional_size(size)
     sx = W / scene.views[0].camera.width
 
     def view(v: View) -> View:
-        rgb, depth, camera = _resize(v.rgb, v.depth, v.camera, (H, W))
+        rgb, depth, camera = resize_view(v.rgb, v.depth, v.camera, (H, W))
         return View(rgb.copy(), depth.copy(), camera, v.name)
     labels = [cv2.resize(np.asarray(l), (W, H), interpolation=cv2.INTER_NEAREST_EXACT) for l in scene.labels]
     meta = {k: (float(v) * sx if k in _PIXEL_META else v) for k, v in scene.meta.items()}
@@ -61,7 +62,7 @@ def resize_scene(scene: Scene, size) -> Scene:
                  list(scene.sources))
 
 
-def _depth_range(depths) -> dict:
+def scene_depth_range(depths) -> dict:
     """``d_min``/``d_max`` for DDP's disparity transform, as ``make_scene`` sets them (empty if no depth)."""
     finite = np.concatenate([d[np.isfinite(d)] for d in depths])
     if finite.size == 0:
@@ -70,7 +71,7 @@ def _depth_range(depths) -> dict:
             "d_max": float(np.ceil(finite.max() * 100.0)) / 100.0}
 
 
-def _undistort(rgb: np.ndarray, depth: np.ndarray, K: np.ndarray, dist) -> tuple[np.ndarray, np.ndarray]:
+def undistort_rgbd(rgb: np.ndarray, depth: np.ndarray, K: np.ndarray, dist) -> tuple[np.ndarray, np.ndarray]:
     """Remove OpenCV lens distortion (k1, k2, p1, p2[, k3]) from an RGB-D pair, keeping K.
 
     Colour is resampled bilinearly, depth by the nearest pixel (no invented depths); a point's z
@@ -84,13 +85,13 @@ def _undistort(rgb: np.ndarray, depth: np.ndarray, K: np.ndarray, dist) -> tuple
     return rgb, np.where(raw > 0, raw, np.nan).astype(np.float32)
 
 
-def _finish(name: str, views: list[View], size, sources=()) -> Scene:
+def finish_scene(name: str, views: list[View], size, sources=()) -> Scene:
     """Resample the views to ``size`` (H, W) if given; d_min/d_max from the depths (as make_scene sets them);
     ``sources``: the folders and files the views were read from (``Scene.sources``)."""
     if size is not None:
-        resized = [(_resize(v.rgb, v.depth, v.camera, check_size(size)), v.name) for v in views]
+        resized = [(resize_view(v.rgb, v.depth, v.camera, check_size(size)), v.name) for v in views]
         views = [View(rgb.copy(), depth.copy(), camera, name) for (rgb, depth, camera), name in resized]
-    return Scene(name, views, [], _depth_range([v.depth for v in views]), [], _unique_paths(sources))
+    return Scene(name, views, [], scene_depth_range([v.depth for v in views]), [], _unique_paths(sources))
 
 
 def _unique_paths(paths) -> list:

@@ -30,30 +30,14 @@ import numpy as np
 from .camera import Camera, look_at
 from .checks import check_size
 from .neighbors import select_neighbors
-from .render import Box, Cylinder, Plane, Sphere, render
-from .textures import Texture
+from .organic import ORGANIC_SCENES
+from .render import Box, Cylinder, Plane, Sphere, render, sky_plane
+from .textures import Texture, seeded_texture
 from .views import LABEL_PLANKS, LABEL_SKY, LABEL_TEXTURED, LABEL_TEXTURELESS, LABELS, Scene, View
 
 __all__ = ["View", "Scene", "Texture", "Plane", "Box", "Sphere", "Cylinder", "render", "make_scene",
            "list_scenes", "register_scene", "select_neighbors", "check_size", "LABELS", "LABEL_SKY",
            "LABEL_TEXTURELESS", "LABEL_PLANKS", "LABEL_TEXTURED", "SCENES"]
-
-
-def jitter_colour(rng, colour, amount=0.08):
-    """A seeded variation of a base colour, so a new seed changes colours as well as patterns."""
-    return tuple(np.clip(np.asarray(colour) * (1.0 + rng.uniform(-amount, amount, 3)), 0.0, 1.0))
-
-
-def seeded_texture(rng, kind, color, color2=(0.0, 0.0, 0.0), scale=0.05):
-    """A :class:`Texture` whose two colours are seeded variations of ``color`` and ``color2``."""
-    return Texture(kind, jitter_colour(rng, color), jitter_colour(rng, color2), scale)
-
-
-def sky_plane(rng, distance, height):
-    """The sky: a plane facing the camera ``distance`` m away, textured at the scale ``height`` m."""
-    return Plane((0.0, 0.0, distance), (0, 0, -1), (1, 0, 0),
-                 Texture("sky", jitter_colour(rng, (0.82, 0.88, 0.95), 0.03), jitter_colour(rng, (0.42, 0.6, 0.88), 0.03),
-                         height))
 
 
 def _house(rng):
@@ -129,6 +113,7 @@ SCENES = {
     "desk": (_desk, "objects on a table against a plain wall: many occlusion edges, 0.5–2.2 m"),
     "room": (_room, "indoor, Kinect-like (use kinect_noise): tiled floor, plain walls, furniture, 1.5–6 m"),
     "street": (_street, "KITTI-like rectified stereo rig: road, cars, poles, facades, sky at 150 m"),
+    **ORGANIC_SCENES,  # the curved, photo-textured scenes of ddp_lite.organic
 }
 
 
@@ -209,7 +194,3 @@ def make_scene(name: str, size=(96, 128), n_views: int = 5, seed: int = 0, fov_x
             "baseline": float(baseline), "fov_x_deg": float(fov), "seed": float(seed),
             "sky_depth": float(rig["sky"] or 0.0), "path_step": float(step)}
     return Scene(name, views, right, meta, labels)
-
-# The curved, photo-textured scenes register themselves in SCENES; importing them here makes them
-# available wherever SCENES is (the package no longer imports every module up front).
-from . import organic  # noqa: E402,F401  (organic imports this module's helpers, defined above)

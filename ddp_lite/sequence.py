@@ -35,10 +35,10 @@ import time
 
 import numpy as np
 
-from .fit import FitConfig
+from .config import FitConfig
 from .runner import run_jobs
 from .sequence_cost import estimate_sequence, format_estimate, measure_fit_cost
-from .sequence_files import (MANIFEST, _files, _finished, _fuse, _write_manifest, _write_view, check_out_folder,
+from .sequence_files import (MANIFEST, view_files, view_finished, fuse_views, write_manifest, write_view, check_out_folder,
                              read_manifest)
 from .sequence_jobs import VARIANT, ViewJob, fit_view, plan_jobs
 from .sequence_jobs import N_NEIGHBORS  # re-exported: its old home
@@ -75,17 +75,17 @@ def run_sequence(scene: Scene, out, config: FitConfig | None = None, views=None,
                      "config": json.loads(json.dumps(dataclasses.asdict(config), default=str))})
     todo, skipped = {}, []
     for job in jobs:
-        if _finished(out, manifest["views"].get(job.name), job):
+        if view_finished(out, manifest["views"].get(job.name), job):
             skipped.append(job.name)
             continue
         manifest["views"][job.name] = {
             "index": job.index, "key": job.key, "status": "running", "neighbors": job.neighbor_names,
             "inputs": {"size": list(job.depth.shape), "valid_fraction": round(float(np.isfinite(job.depth).mean()), 6),
                        "K": job.camera.K.tolist(), "cam_from_world": job.camera.cam_from_world.tolist()},
-            "files": _files(job), "started": time.strftime("%Y-%m-%dT%H:%M:%S")}
+            "files": view_files(job), "started": time.strftime("%Y-%m-%dT%H:%M:%S")}
         todo[f"ddp-view-{job.stem}-{job.key}"] = job
     out.mkdir(parents=True, exist_ok=True)
-    _write_manifest(out, manifest)
+    write_manifest(out, manifest)
     log(f"{len(jobs)} views: {len(skipped)} already done, {len(todo)} to fit"
         + (f" on {len(client.scheduler_info()['workers'])} Dask workers" if client is not None and todo else ""))
     computed, failed = [], {}
@@ -97,18 +97,18 @@ def run_sequence(scene: Scene, out, config: FitConfig | None = None, views=None,
             failed[job.name] = entry["error"]
             log(f"  view {job.name}: FAILED ({entry['error']})")
         else:
-            overflow = _write_view(out, job, outcome)
+            overflow = write_view(out, job, outcome)
             entry.update(status="done", iterations=outcome["iterations"], seconds=round(outcome["seconds"], 3),
                          png_overflow_pixels=overflow, finished=time.strftime("%Y-%m-%dT%H:%M:%S"))
             entry.pop("error", None)
             computed.append(job.name)
             log(f"  view {job.name}: {outcome['iterations']} iterations, {outcome['seconds']:.1f} s")
-        _write_manifest(out, manifest)
+        write_manifest(out, manifest)
     fused, points = None, 0
     if fuse:
-        fused, points, used = _fuse(out, scene, manifest)
+        fused, points, used = fuse_views(out, scene, manifest)
         manifest["fused"] = {"file": "fused.ply" if fused else None, "points": points, "views": used}
-        _write_manifest(out, manifest)
+        write_manifest(out, manifest)
         if fused:
             log(f"fused {len(used)} views → {fused} ({points} points)")
     return {"computed": computed, "skipped": skipped, "failed": failed, "fused": fused, "points": points,

@@ -12,7 +12,9 @@ import time
 import torch
 from torch.utils.flop_counter import FlopCounterMode
 
-from .fit import FitConfig, complete_depth, estimate_peak_memory_gb
+from .config import FitConfig
+from .fit import complete_depth
+from .loop import estimate_peak_memory_gb
 from .scenes import make_scene
 from .sequence_jobs import N_NEIGHBORS, VARIANT
 

@@ -14,8 +14,9 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure  # no pyplot: no global figure state in a long run
 
-from .atomic import write_bytes_atomic
-from .fileio import depth_png_bytes, load_npy, npy_bytes, regular_file
+from data_fetch.atomic import write_bytes_atomic
+from data_fetch.files import regular_file
+from .fileio import depth_png_bytes, load_npy, npy_bytes
 from .fusion import fuse_depths, save_ply
 from .sequence_jobs import ViewJob
 from .viz import save_figure, show_depth, show_image
@@ -70,22 +71,24 @@ def check_out_folder(out, inputs) -> Path:
     return out
 
 
-def _write_manifest(out: Path, manifest: dict) -> None:
+def write_manifest(out: Path, manifest: dict) -> None:
+    """Write the run's manifest (JSON) into ``out`` atomically."""
     write_bytes_atomic(out / MANIFEST, (json.dumps(manifest, indent=1, sort_keys=False) + "\n").encode("utf-8"))
 
 
-def _files(job: ViewJob) -> dict:
+def view_files(job: ViewJob) -> dict:
+    """{kind: path relative to the output folder} of one view's result files (npy, png, preview)."""
     return {"npy": f"depth/{job.stem}.npy", "png": f"depth/{job.stem}.png", "preview": f"preview/{job.stem}.png"}
 
 
-def _finished(out: Path, entry: dict | None, job: ViewJob) -> bool:
+def view_finished(out: Path, entry: dict | None, job: ViewJob) -> bool:
     """Done under the same key, every file there, and the depth ``.npy`` readable with the view's shape
     (a corrupt one is redone, not read by the fusion)."""
     if not (entry is not None and entry.get("status") == "done" and entry.get("key") == job.key
-            and all((out / f).is_file() for f in _files(job).values())):
+            and all((out / f).is_file() for f in view_files(job).values())):
         return False
     try:
-        return _load_depth(out / _files(job)["npy"]).shape == job.depth.shape
+        return _load_depth(out / view_files(job)["npy"]).shape == job.depth.shape
     except ValueError:
         return False
 
@@ -99,9 +102,9 @@ def _load_depth(path: Path) -> np.ndarray:
     return depth
 
 
-def _write_view(out: Path, job: ViewJob, result: dict) -> int:
+def write_view(out: Path, job: ViewJob, result: dict) -> int:
     """Write a finished view's files atomically; → the number of pixels a 16-bit mm PNG cannot hold."""
-    files = _files(job)
+    files = view_files(job)
     write_bytes_atomic(out / files["npy"], npy_bytes(result["depth"]))
     png, overflow = depth_png_bytes(result["depth"])  # millimetres
     write_bytes_atomic(out / files["png"], png)
@@ -121,7 +124,7 @@ def _write_preview(path: Path, job: ViewJob, completed: np.ndarray) -> None:
     save_figure(fig, path, dpi=80)
 
 
-def _fuse(out: Path, scene: Scene, manifest: dict):
+def fuse_views(out: Path, scene: Scene, manifest: dict):
     """Fuse every finished view's depth into ``fused.ply``; → (path or None, point count, views used)."""
     by_name = {v.name: v for v in scene.views}
     # views of this scene only: a manifest may also list views of an earlier run that this scene lacks

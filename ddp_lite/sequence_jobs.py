@@ -20,7 +20,9 @@ import torch
 
 from .camera import Camera
 from .disparity import DisparityTransform
-from .fit import FitConfig, _check_fit_inputs, complete_depth
+from .config import FitConfig
+from .fit import complete_depth
+from .fit_inputs import check_fit_inputs
 from .neighbors import select_neighbors
 from .views import Scene
 
@@ -102,7 +104,7 @@ def plan_jobs(scene: Scene, config: FitConfig, views=None, threads: int = 1) -> 
         neighbors = [scene[j] for j in select_neighbors(scene, i, n)]
         pairs = [(v.rgb, v.camera) for v in neighbors]
         try:  # every check complete_depth makes, here, before the first fit
-            _check_fit_inputs(view.rgb, view.depth, view.camera, pairs, VARIANT, config, None, transform)
+            check_fit_inputs(view.rgb, view.depth, view.camera, pairs, VARIANT, config, None, transform)
         except ValueError as error:
             raise ValueError(f"view {i} ({view.name!r}): {error}") from None
         jobs.append(ViewJob(view.name, stems[i], i, view.rgb, view.depth, view.camera, pairs,

@@ -76,7 +76,7 @@ class Ellipsoid:
         R, c, r = self._frame()
         local = (x - c) @ R  # (M, 3) object frame
         p = local / r  # (M, 3) on the unit sphere
-        normal = _normalise((local / r ** 2) @ R.T)  # gradient of |local / r|²
+        normal = normalise_rows((local / r ** 2) @ R.T)  # gradient of |local / r|²
         if self.inside:
             normal = -normal
         around = 0.5 * (r[1] + r[2]) * _angle_coord(p[:, 2], -p[:, 1])  # arc about x, 0 on top
@@ -84,7 +84,8 @@ class Ellipsoid:
         return local, np.stack([around, along], 1), normal
 
 
-def _normalise(v: np.ndarray) -> np.ndarray:
+def normalise_rows(v: np.ndarray) -> np.ndarray:
+    """(N, 3) vectors → the same, each scaled to unit length."""
     return v / np.linalg.norm(v, axis=1, keepdims=True)
 
 
@@ -171,7 +172,7 @@ class Cone:
         local = np.stack([u1, u2, h], 1)  # (M, 3) in the (e1, e2, w) frame
         # gradient of |radial|² - r(h)²: radial/ρ - k·w, up to a positive factor
         with np.errstate(divide="ignore", invalid="ignore"):
-            normal = _normalise(radial / np.maximum(rho, 1e-12)[:, None] - k * w[None])
+            normal = normalise_rows(radial / np.maximum(rho, 1e-12)[:, None] - k * w[None])
         st = np.stack([0.5 * (self.radius_a + self.radius_b) * _angle_coord(u2, u1), h], 1)
         on_cap = rho < r_h * (1.0 - 1e-6)  # strictly inside the side: must be a cap
         cap_b = on_cap & (h > 0.5 * L)
@@ -206,7 +207,7 @@ class Capsule:
         q = x - a  # (M, 3)
         h = q @ w  # (M,)
         nearest = a + np.clip(h, 0.0, L)[:, None] * w  # (M, 3) closest point on the segment
-        normal = _normalise(x - nearest)
+        normal = normalise_rows(x - nearest)
         u1, u2 = q @ e1, q @ e2
         st = np.stack([self.radius * _angle_coord(u2, u1), h], 1)
         return np.stack([u1, u2, h], 1), st, normal

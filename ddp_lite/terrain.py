@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .render import EPS
-from .solids import _normalise
+from .solids import normalise_rows
 
 
 @dataclass(frozen=True)
@@ -135,7 +135,7 @@ class HeightField:
 
     def surface(self, x):
         gx, gz = self.gradient(x[:, 0], x[:, 2])
-        normal = _normalise(np.stack([-gx, -np.ones(len(x)), -gz], 1))  # up (-y), away from the ground
+        normal = normalise_rows(np.stack([-gx, -np.ones(len(x)), -gz], 1))  # up (-y), away from the ground
         return x.copy(), x[:, [0, 2]].copy(), normal
 
 

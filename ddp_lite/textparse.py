@@ -2,8 +2,8 @@
 
 The readers of TUM lists and trajectories, COLMAP models and the kit's ``intrinsics.txt`` share
 these: ``#`` starts a comment; lines are numbered from 1; a fault raises ``ValueError`` with
-``"<path>, line <n>: <what was wrong>"`` (``_fail``), before anything runs. Quaternions are
-(x, y, z, w) here; a reader whose file writes w first reorders before calling ``_rotation``.
+``"<path>, line <n>: <what was wrong>"`` (``parse_error``), before anything runs. Quaternions are
+(x, y, z, w) here; a reader whose file writes w first reorders before calling ``quaternion_rotation``.
 """
 from __future__ import annotations
 
@@ -13,18 +13,19 @@ from scipy.spatial.transform import Rotation
 from data_fetch.files import regular_file
 
 
-def _fail(path, line: int | None, message: str) -> ValueError:
+def parse_error(path, line: int | None, message: str) -> ValueError:
+    """A ``ValueError`` naming the file and, when known, the 1-based line of a parse problem."""
     where = f"{path}, line {line}" if line is not None else f"{path}"
     return ValueError(f"{where}: {message}")
 
 
-def _text_lines(path, keep_blank: bool = False) -> list[tuple[int, str]]:
+def text_lines(path, keep_blank: bool = False) -> list[tuple[int, str]]:
     """(1-based line number, stripped text) of a text file, ``#`` comments dropped (blank lines too unless asked)."""
     path = regular_file(path, "path")
     try:
         text = path.read_text(encoding="utf-8")
     except UnicodeDecodeError as error:
-        raise _fail(path, None, f"not a UTF-8 text file (byte {error.start}); is it the right file?") from None
+        raise parse_error(path, None, f"not a UTF-8 text file (byte {error.start}); is it the right file?") from None
     lines = []
     for number, line in enumerate(text.splitlines(), 1):
         line = line.strip()
@@ -34,19 +35,20 @@ def _text_lines(path, keep_blank: bool = False) -> list[tuple[int, str]]:
     return lines
 
 
-def _floats(tokens, path, line: int, what: str) -> np.ndarray:
+def parse_floats(tokens, path, line: int, what: str) -> np.ndarray:
+    """Text tokens → a float64 array; a token that is not a number → :func:`parse_error` naming ``what``."""
     try:
         values = np.array([float(t) for t in tokens], dtype=np.float64)
     except ValueError:
-        raise _fail(path, line, f"{what} must be numbers, got {' '.join(tokens)!r}") from None
+        raise parse_error(path, line, f"{what} must be numbers, got {' '.join(tokens)!r}") from None
     if not np.all(np.isfinite(values)):
-        raise _fail(path, line, f"{what} must be finite numbers, got {' '.join(tokens)!r}")
+        raise parse_error(path, line, f"{what} must be finite numbers, got {' '.join(tokens)!r}")
     return values
 
 
-def _rotation(quat_xyzw: np.ndarray, path, line: int) -> np.ndarray:
+def quaternion_rotation(quat_xyzw: np.ndarray, path, line: int) -> np.ndarray:
     """A (nearly) unit quaternion (x, y, z, w) → 3×3 rotation; refuse zero or far-from-unit ones."""
     norm = float(np.linalg.norm(quat_xyzw))
     if not abs(norm - 1.0) < 1e-3:
-        raise _fail(path, line, f"the quaternion must have unit length, got length {norm:.6g}")
+        raise parse_error(path, line, f"the quaternion must have unit length, got length {norm:.6g}")
     return Rotation.from_quat(quat_xyzw / norm).as_matrix()

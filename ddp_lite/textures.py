@@ -123,3 +123,13 @@ class Texture:
             colour = np.where((i % 2 == 0)[:, None], c1[None], c2[None])
             return colour * (0.85 + 0.3 * fbm(local / (0.1 * scale), seed, 2))[:, None]
         raise ValueError(f"texture kind must be flat, sky, planks, noise, bricks or tiles, got {self.kind!r}")
+
+
+def jitter_colour(rng, colour, amount=0.08):
+    """A seeded variation of a base colour, so a new seed changes colours as well as patterns."""
+    return tuple(np.clip(np.asarray(colour) * (1.0 + rng.uniform(-amount, amount, 3)), 0.0, 1.0))
+
+
+def seeded_texture(rng, kind, color, color2=(0.0, 0.0, 0.0), scale=0.05):
+    """A :class:`Texture` whose two colours are seeded variations of ``color`` and ``color2``."""
+    return Texture(kind, jitter_colour(rng, color), jitter_colour(rng, color2), scale)

@@ -20,11 +20,11 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation, Slerp
 
-from .atomic import write_bytes_atomic
+from data_fetch.atomic import write_bytes_atomic
 from .camera import Camera
-from .fileio import _depth_png_bytes, _png_bytes, _read_depth_file, _read_rgb
-from .resample import _finish, _undistort
-from .textparse import _fail, _floats, _rotation, _text_lines
+from .fileio import checked_depth_png_bytes, rgb_png_bytes, read_depth_file, read_rgb
+from .resample import finish_scene, undistort_rgbd
+from .textparse import parse_error, parse_floats, quaternion_rotation, text_lines
 from .views import Scene, View
 
 
@@ -53,36 +53,36 @@ def read_tum_list(path) -> list[tuple[float, str]]:
         [(1.0, 'rgb/1.0.png')]
     """
     entries, lines = [], {}
-    for line, text in _text_lines(path):
+    for line, text in text_lines(path):
         tokens = text.split()
         if len(tokens) != 2:
-            raise _fail(path, line, f"expected 'timestamp filename', got {text!r}")
-        stamp = float(_floats(tokens[:1], path, line, "the timestamp")[0])
+            raise parse_error(path, line, f"expected 'timestamp filename', got {text!r}")
+        stamp = float(parse_floats(tokens[:1], path, line, "the timestamp")[0])
         if stamp in lines:  # two frames at one instant: the association would keep one at random
-            raise _fail(path, line, f"timestamp {tokens[0]} was already listed on line {lines[stamp]}; "
+            raise parse_error(path, line, f"timestamp {tokens[0]} was already listed on line {lines[stamp]}; "
                                     f"every frame needs its own timestamp")
         lines[stamp] = line
         entries.append((stamp, tokens[1]))
     if not entries:
-        raise _fail(path, None, "lists no frames")
+        raise parse_error(path, None, "lists no frames")
     return entries
 
 
 def read_tum_trajectory(path) -> tuple[np.ndarray, np.ndarray]:
     """``groundtruth.txt`` → timestamps (N,) s, sorted, and ``world_from_cam`` poses (N, 4, 4)."""
     stamps, poses = [], []
-    for line, text in _text_lines(path):
+    for line, text in text_lines(path):
         tokens = text.split()
         if len(tokens) != 8:
-            raise _fail(path, line, f"expected 'timestamp tx ty tz qx qy qz qw' (8 numbers), got {len(tokens)}")
-        values = _floats(tokens, path, line, "the pose")
+            raise parse_error(path, line, f"expected 'timestamp tx ty tz qx qy qz qw' (8 numbers), got {len(tokens)}")
+        values = parse_floats(tokens, path, line, "the pose")
         pose = np.eye(4)
-        pose[:3, :3] = _rotation(values[4:8], path, line)
+        pose[:3, :3] = quaternion_rotation(values[4:8], path, line)
         pose[:3, 3] = values[1:4]
         stamps.append(values[0])
         poses.append(pose)
     if not stamps:
-        raise _fail(path, None, "holds no poses")
+        raise parse_error(path, None, "holds no poses")
     order = np.argsort(stamps, kind="stable")
     return np.asarray(stamps)[order], np.asarray(poses)[order]
 
@@ -131,10 +131,10 @@ def _tum_intrinsics(folder: Path, intrinsics):
     ``intrinsics.txt`` (the kit's addition for your own captures: one line ``fx fy cx cy``, pixels,
     pixel (0, 0) = centre of the top-left pixel), else the TUM camera its name says (``freiburg1`` …)."""
     if intrinsics is None and (folder / "intrinsics.txt").is_file():
-        lines = _text_lines(folder / "intrinsics.txt")
+        lines = text_lines(folder / "intrinsics.txt")
         if len(lines) != 1 or len(lines[0][1].split()) != 4:
-            raise _fail(folder / "intrinsics.txt", lines[0][0] if lines else None, "expected one line 'fx fy cx cy'")
-        fx, fy, cx, cy = _floats(lines[0][1].split(), folder / "intrinsics.txt", lines[0][0], "fx fy cx cy")
+            raise parse_error(folder / "intrinsics.txt", lines[0][0] if lines else None, "expected one line 'fx fy cx cy'")
+        fx, fy, cx, cy = parse_floats(lines[0][1].split(), folder / "intrinsics.txt", lines[0][0], "fx fy cx cy")
         intrinsics = np.array([[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]])
     if intrinsics is None:
         found = re.search(r"freiburg([123])", folder.name)
@@ -200,21 +200,21 @@ def read_tum(folder, intrinsics=None, every: int = 1, max_frames: int | None = N
         if world_from_cam is None:
             dropped += 1
             continue
-        rgb = _read_rgb(folder / rgb_path, "folder")
-        depth = _read_depth_file(folder / depth_list[j][1], 1.0 / float(depth_factor))
+        rgb = read_rgb(folder / rgb_path, "folder")
+        depth = read_depth_file(folder / depth_list[j][1], 1.0 / float(depth_factor))
         read += [(folder / rgb_path).parent, (folder / depth_list[j][1]).parent]
         if rgb.shape[:2] != depth.shape:
             raise ValueError(f"folder: {rgb_path} is {rgb.shape[1]}×{rgb.shape[0]} but {depth_list[j][1]} is "
                              f"{depth.shape[1]}×{depth.shape[0]}; TUM pairs must be registered 1:1")
         if undistort and np.any(dist != 0):
-            rgb, depth = _undistort(rgb, depth, K, dist)
+            rgb, depth = undistort_rgbd(rgb, depth, K, dist)
         camera = Camera(K, np.linalg.inv(world_from_cam), rgb.shape[1], rgb.shape[0])
         views.append(View(rgb, depth, camera, f"{stamp:.6f}"))
     if dropped:
         warnings.warn(f"{folder}: {dropped} frame(s) had no ground-truth pose within {max_difference} s and were left out")
     if not views:
         raise ValueError(f"folder: no frame of {folder} has a ground-truth pose within {max_difference} s")
-    return _finish(name or folder.name, views, size, read)
+    return finish_scene(name or folder.name, views, size, read)
 
 
 def write_tum(scene: Scene, folder, depths=None, start: float = 1_000_000_000.0, fps: float = 30.0,
@@ -240,8 +240,8 @@ def write_tum(scene: Scene, folder, depths=None, start: float = 1_000_000_000.0,
     for k, (view, depth) in enumerate(zip(scene.views, depths)):
         stamp, depth_stamp = start + k / fps, start + k / fps + depth_delay
         rgb_name, depth_name = f"rgb/{stamp:.6f}.png", f"depth/{depth_stamp:.6f}.png"
-        write_bytes_atomic(folder / rgb_name, _png_bytes(view.rgb))
-        write_bytes_atomic(folder / depth_name, _depth_png_bytes(np.asarray(depth), TUM_DEPTH_FACTOR, folder / depth_name))
+        write_bytes_atomic(folder / rgb_name, rgb_png_bytes(view.rgb))
+        write_bytes_atomic(folder / depth_name, checked_depth_png_bytes(np.asarray(depth), TUM_DEPTH_FACTOR, folder / depth_name))
         pose = view.camera.world_from_cam
         q = Rotation.from_matrix(pose[:3, :3]).as_quat()  # x, y, z, w
         rgb_lines.append(f"{stamp:.6f} {rgb_name}")

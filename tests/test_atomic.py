@@ -8,7 +8,7 @@ import pytest
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from ddp_lite.atomic import atomic_path, write_bytes_atomic  # noqa: E402
+from data_fetch.atomic import atomic_path, write_bytes_atomic  # noqa: E402
 from ddp_lite.viz import save_figure  # noqa: E402
 
 

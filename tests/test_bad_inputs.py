@@ -34,11 +34,14 @@ import torch  # noqa: E402
 from data_fetch import Dataset, FetchError, RemoteFile, fetch, safe_extract  # noqa: E402
 from data_fetch.__main__ import main as fetch_main  # noqa: E402
 from ddp_lite import datasets as ds  # noqa: E402
-from ddp_lite.atomic import write_bytes_atomic  # noqa: E402
+from data_fetch.atomic import write_bytes_atomic  # noqa: E402
 from ddp_lite.camera import Camera, look_at  # noqa: E402
 from ddp_lite.cli import main as cli_main  # noqa: E402
 from ddp_lite.disparity import DisparityTransform  # noqa: E402
-from ddp_lite.fit import FitConfig, complete_depth, complete_depth_coarse_to_fine, fit_image, merge  # noqa: E402
+from ddp_lite.coarse_to_fine import complete_depth_coarse_to_fine  # noqa: E402
+from ddp_lite.config import FitConfig  # noqa: E402
+from ddp_lite.dip import fit_image  # noqa: E402
+from ddp_lite.fit import complete_depth, merge  # noqa: E402
 from ddp_lite.views import View  # noqa: E402
 
 H, W = 24, 32
@@ -596,10 +599,10 @@ def test_accepted_on_purpose(tmp_path):
     tiny(lr_gamma=2.0, iterations=np.int64(2), lr_milestones=(np.int32(1),)).validate()
     # KITTI's testing split has no ground truth: all-NaN depth is the truth there
     # one blind neighbour among seeing ones: a warning, the fit goes on
-    from ddp_lite.fit import _check_fit_inputs
+    from ddp_lite.fit_inputs import check_fit_inputs
     away = camera(look_at((0, 0, 0), (0, 0, -1)))
     with pytest.warns(UserWarning, match=r"neighbors\[1\]"):
-        _check_fit_inputs(rgb(), depth(), camera(), [(rgb(), camera(look_at((0.1, 0, 0), (0.1, 0, 1)))), (rgb(), away)],
+        check_fit_inputs(rgb(), depth(), camera(), [(rgb(), camera(look_at((0.1, 0, 0), (0.1, 0, 1)))), (rgb(), away)],
                           "rgbd+warp", tiny(), None, None)
 
 

@@ -31,7 +31,9 @@ from ddp_lite import fileio  # noqa: E402
 from ddp_lite.camera import Camera, look_at  # noqa: E402
 from ddp_lite.checks import check_depth  # noqa: E402
 from ddp_lite.disparity import DisparityTransform  # noqa: E402
-from ddp_lite.fit import FitConfig, complete_depth, fit_image, merge  # noqa: E402
+from ddp_lite.config import FitConfig  # noqa: E402
+from ddp_lite.dip import fit_image  # noqa: E402
+from ddp_lite.fit import complete_depth, merge  # noqa: E402
 from ddp_lite.formats import read_colmap, read_scene, read_tum, write_colmap, write_tum  # noqa: E402
 from ddp_lite.scenes import make_scene  # noqa: E402
 from ddp_lite.sequence import run_sequence  # noqa: E402
@@ -190,7 +192,7 @@ case("float64 depth beyond float32", ValueError, "depth")(
                                         variant="d", config=tiny())))
 case("8-bit picture as depth", ValueError, "8-bit")(
     lambda tmp: (cv2.imwrite(str(tmp / "vis.png"), np.full((H, W), 128, np.uint8)),
-                 lambda: fileio._read_depth_file(tmp / "vis.png", 0.001))[1])
+                 lambda: fileio.read_depth_file(tmp / "vis.png", 0.001))[1])
 
 
 # --------------------------------------------------------------------------- neighbours that add nothing
@@ -371,14 +373,14 @@ def test_unpaired_tum_frames_are_reported(tmp_path):
 
 def test_neighbour_without_parallax_is_warned():
     """Depth in millimetres with poses in metres: 2000 "m" away, a 0.2 m baseline shifts < 0.5 px."""
-    from ddp_lite.fit import _check_fit_inputs
+    from ddp_lite.fit_inputs import check_fit_inputs
     ref = camera(look_at((0, 0, 0), (0, 0, 2)))
     millimetres = depth() * 1000.0
     with pytest.warns(UserWarning, match=r"neighbors\[0\].*px of parallax.*same unit"):
-        _check_fit_inputs(rgb(), millimetres, ref, [_neighbour(_SIDE)], "rgbd+warp", tiny(), None, None)
+        check_fit_inputs(rgb(), millimetres, ref, [_neighbour(_SIDE)], "rgbd+warp", tiny(), None, None)
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # the same views in metres: parallax of pixels, no warning
-        _check_fit_inputs(rgb(), depth(), ref, [_neighbour(_SIDE)], "rgbd+warp", tiny(), None, None)
+        check_fit_inputs(rgb(), depth(), ref, [_neighbour(_SIDE)], "rgbd+warp", tiny(), None, None)
 
 
 def test_conventions_that_are_accepted():

@@ -6,7 +6,7 @@ from scipy.interpolate import griddata
 
 from ddp_lite import (Camera, FitConfig, SkipNet, UNet, complete_depth, disparity_loss, fit_image, look_at, merge,
                       warp_loss, warp_to_reference)
-from ddp_lite.fit import PlateauStopper
+from ddp_lite.loop import PlateauStopper
 from conftest import TINY, tilted_plane
 
 

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from ddp_lite.cli import main
-from ddp_lite.fit import FitConfig
+from ddp_lite.config import FitConfig
 from ddp_lite.formats import read_tum, write_tum
 from ddp_lite.holes import random_holes
 from ddp_lite.runner import open_client, run_jobs

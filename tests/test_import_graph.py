@@ -1,0 +1,137 @@
+"""The package's import graph, read from the source: no cycle, no private name used across
+modules, every name imported from the module that defines it."""
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+PACKAGE = Path(__file__).resolve().parents[1] / "ddp_lite"
+
+
+def module_name(path: Path) -> str:
+    """``ddp_lite/a/b.py`` → ``ddp_lite.a.b``; ``ddp_lite/a/__init__.py`` → ``ddp_lite.a``."""
+    parts = list(path.relative_to(PACKAGE.parent).with_suffix("").parts)
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def modules() -> dict[str, Path]:
+    return {module_name(p): p for p in sorted(PACKAGE.rglob("*.py"))}
+
+
+def resolve(importer: str, is_package: bool, level: int, target: str | None) -> str:
+    """The absolute name of ``from <level dots><target> import ...`` written in ``importer``."""
+    if level == 0:
+        return target or ""
+    base = importer.split(".")
+    base = base if is_package else base[:-1]
+    base = base[: len(base) - (level - 1)]
+    return ".".join(base + ([target] if target else []))
+
+
+def imports(name: str, path: Path, known: dict[str, Path]):
+    """(imported module, names taken from it) for every import of a package module in ``path``,
+    at any depth (imports inside functions count too)."""
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    is_package = path.name == "__init__.py"
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                if alias.name in known:
+                    yield alias.name, ()
+        elif isinstance(node, ast.ImportFrom):
+            source = resolve(name, is_package, node.level, node.module)
+            if source not in known:
+                continue
+            taken = []
+            for alias in node.names:
+                if f"{source}.{alias.name}" in known:  # ``from . import losses``: a module, not a name
+                    yield f"{source}.{alias.name}", ()
+                else:
+                    taken.append(alias.name)
+            if taken:
+                yield source, tuple(taken)
+
+
+def graph() -> dict[str, dict[str, set[str]]]:
+    """importer → {imported module → names taken} over the package (a package's ``__init__``,
+    which only hands names on lazily, is left out as an importer)."""
+    known = modules()
+    edges: dict[str, dict[str, set[str]]] = {}
+    for name, path in known.items():
+        out = edges.setdefault(name, {})
+        for target, names in imports(name, path, known):
+            if target != name and target != "ddp_lite":
+                out.setdefault(target, set()).update(names)
+    return edges
+
+
+def cycles(edges: dict[str, dict[str, set[str]]]) -> list[list[str]]:
+    """The strongly connected components with more than one module (Tarjan)."""
+    index, low, stack, on_stack, found = {}, {}, [], set(), []
+
+    def visit(v):
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on_stack.add(v)
+        for w in edges.get(v, {}):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            component = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                component.append(w)
+                if w == v:
+                    break
+            if len(component) > 1:
+                found.append(sorted(component))
+
+    for v in sorted(edges):
+        if v not in index:
+            visit(v)
+    return found
+
+
+def defined_names(path: Path) -> set[str]:
+    """Names a module defines at its top level (functions, classes, assignments), not those it imports."""
+    names = set()
+    for node in ast.parse(path.read_text(encoding="utf-8")).body:
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            names.add(node.name)
+        elif isinstance(node, (ast.Assign, ast.AnnAssign)):
+            for target in node.targets if isinstance(node, ast.Assign) else [node.target]:
+                names.update(n.id for n in ast.walk(target) if isinstance(n, ast.Name))
+    return names
+
+
+def test_the_package_has_no_import_cycle():
+    assert cycles(graph()) == []
+
+
+def test_no_private_name_is_imported_from_another_module():
+    crossing = [f"{importer} takes {name} from {source}" for importer, out in graph().items()
+                for source, names in out.items() for name in names if name.startswith("_")]
+    assert crossing == []
+
+
+def test_every_name_is_imported_from_the_module_that_defines_it():
+    known = modules()
+    defined = {name: defined_names(path) for name, path in known.items()}
+    second_hand = [f"{importer} takes {name} from {source}" for importer, out in graph().items()
+                   for source, names in out.items() for name in names
+                   if not source.endswith("ddp_lite") and name not in defined[source]]
+    assert second_hand == []
+
+
+def test_the_checks_see_what_they_must():
+    # a cycle through an import inside a function, and a relative import one level up, are found
+    edges = {"p.a": {"p.b": set()}, "p.b": {"p.c": set()}, "p.c": {"p.a": set()}, "p.d": {"p.a": set()}}
+    assert cycles(edges) == [["p.a", "p.b", "p.c"]]
+    assert resolve("ddp_lite.x.y", False, 2, "z") == "ddp_lite.z"
+    assert resolve("ddp_lite.x", True, 1, "y") == "ddp_lite.x.y"
+    late = ast.parse("def f():\n    from .fit import complete_depth\n")
+    assert any(isinstance(n, ast.ImportFrom) and n.module == "fit" for n in ast.walk(late))
