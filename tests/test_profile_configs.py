@@ -1,0 +1,160 @@
+"""Profiles and recipes build exactly the configs they built when a profile still carried the
+method: every (profile, recipe, variant, net) pinned field by field, and the notebooks' first line."""
+import dataclasses
+
+import pytest
+
+from ddp_lite.config import FitConfig
+from ddp_lite.profiles import PROFILES
+
+DEFAULTS = dict(net='unet', channels=None, down='stride', up='bilinear', pad='reflect', noise_channels=16, net_input='noise',
+                image_input=0.0, image_blur=1.0, fill_input=0.0, lr=5e-05, schedule='step', iterations=None,
+                lr_milestones=(12000, 15000), lr_gamma=0.01, lambda_z=0.8, lambda_i=0.5, lambda_w=0.5,
+                gammas=None, reg_noise_std=0.0, average_outputs=0.0, ensemble=1, smoothness=0.0,
+                smoothness_edge=10.0, edge_guide='grey', flatness=0.0, affinity=0.0, flatness_reach=None,
+                disparity_margin=1.25, auto_stop=False, holdout_fraction=0.05, holdout='pixels', patience=200,
+                plateau_decays=0, eval_every=10, seed=0, device=None, bf16=False, channels_last=False,
+                progress=True, callback_every=0, max_memory_gb=None)
+
+# (profile, recipe, variant, net) → the fields that differ from DEFAULTS
+EXPECTED = {
+    ('ci', 'kit', 'd', 'unet'): dict(
+        channels=(16, 32, 64, 128), image_input=1.0, image_blur=0.5, lr=0.01, iterations=150, lr_milestones=(90,
+        128), lr_gamma=0.3, smoothness=1.0, smoothness_edge=100.0, flatness=0.6, patience=60),
+    ('ci', 'kit', 'd', 'skip'): dict(
+        net='skip', channels=(32, 32, 32, 32), image_input=1.0, image_blur=0.5, lr=0.01, iterations=150,
+        lr_milestones=(90, 128), lr_gamma=0.3, smoothness=1.0, smoothness_edge=100.0, flatness=0.6, patience=60),
+    ('ci', 'kit', 'rgbd', 'unet'): dict(
+        channels=(16, 32, 64, 128), image_input=1.0, image_blur=0.5, lr=0.01, iterations=150, lr_milestones=(90,
+        128), lr_gamma=0.3, smoothness=1.0, smoothness_edge=100.0, flatness=0.6, patience=60),
+    ('ci', 'kit', 'rgbd', 'skip'): dict(
+        net='skip', channels=(32, 32, 32, 32), image_input=1.0, image_blur=0.5, lr=0.01, iterations=150,
+        lr_milestones=(90, 128), lr_gamma=0.3, smoothness=1.0, smoothness_edge=100.0, flatness=0.6, patience=60),
+    ('ci', 'kit', 'rgbd+warp', 'unet'): dict(
+        channels=(16, 32, 64, 128), image_input=1.0, image_blur=0.5, lr=0.01, iterations=150, lr_milestones=(90,
+        128), lr_gamma=0.3, smoothness=1.0, smoothness_edge=100.0, flatness=0.6, patience=60),
+    ('ci', 'kit', 'rgbd+warp', 'skip'): dict(
+        net='skip', channels=(32, 32, 32, 32), image_input=1.0, image_blur=0.5, lr=0.01, iterations=150,
+        lr_milestones=(90, 128), lr_gamma=0.3, smoothness=1.0, smoothness_edge=100.0, flatness=0.6, patience=60),
+    ('ci', 'paper', 'd', 'unet'): dict(
+        channels=(16, 32, 64, 128), image_blur=0.5, lr=0.01, iterations=150, lr_milestones=(90, 128),
+        lr_gamma=0.3, smoothness_edge=100.0, patience=60),
+    ('ci', 'paper', 'd', 'skip'): dict(
+        net='skip', channels=(32, 32, 32, 32), image_blur=0.5, lr=0.01, iterations=150, lr_milestones=(90, 128),
+        lr_gamma=0.3, smoothness_edge=100.0, patience=60),
+    ('ci', 'paper', 'rgbd', 'unet'): dict(
+        channels=(16, 32, 64, 128), image_blur=0.5, lr=0.01, iterations=150, lr_milestones=(90, 128),
+        lr_gamma=0.3, smoothness_edge=100.0, patience=60),
+    ('ci', 'paper', 'rgbd', 'skip'): dict(
+        net='skip', channels=(32, 32, 32, 32), image_blur=0.5, lr=0.01, iterations=150, lr_milestones=(90, 128),
+        lr_gamma=0.3, smoothness_edge=100.0, patience=60),
+    ('ci', 'paper', 'rgbd+warp', 'unet'): dict(
+        channels=(16, 32, 64, 128), image_blur=0.5, lr=0.01, iterations=150, lr_milestones=(90, 128),
+        lr_gamma=0.3, smoothness_edge=100.0, patience=60),
+    ('ci', 'paper', 'rgbd+warp', 'skip'): dict(
+        net='skip', channels=(32, 32, 32, 32), image_blur=0.5, lr=0.01, iterations=150, lr_milestones=(90, 128),
+        lr_gamma=0.3, smoothness_edge=100.0, patience=60),
+    ('class', 'kit', 'd', 'unet'): dict(
+        channels=(16, 32, 64, 128, 256), noise_channels=2, net_input='meshgrid', image_input=1.0, lr=0.01,
+        iterations=600, lr_milestones=(), lr_gamma=0.3, smoothness=1.0, smoothness_edge=300.0, flatness=0.6,
+        auto_stop=True, patience=50, plateau_decays=1, bf16=None),
+    ('class', 'kit', 'd', 'skip'): dict(
+        net='skip', channels=(128, 128, 128, 128, 128), noise_channels=2, net_input='meshgrid', image_input=1.0,
+        lr=0.01, iterations=600, lr_milestones=(), lr_gamma=0.3, smoothness=1.0, smoothness_edge=300.0,
+        flatness=0.6, auto_stop=True, patience=50, plateau_decays=1, bf16=None),
+    ('class', 'kit', 'rgbd', 'unet'): dict(
+        channels=(16, 32, 64, 128, 256), noise_channels=2, net_input='meshgrid', image_input=1.0, lr=0.01,
+        iterations=600, lr_milestones=(), lr_gamma=0.3, smoothness=1.0, smoothness_edge=300.0, flatness=0.6,
+        auto_stop=True, patience=50, plateau_decays=1, bf16=None),
+    ('class', 'kit', 'rgbd', 'skip'): dict(
+        net='skip', channels=(128, 128, 128, 128, 128), noise_channels=2, net_input='meshgrid', image_input=1.0,
+        lr=0.01, iterations=600, lr_milestones=(), lr_gamma=0.3, smoothness=1.0, smoothness_edge=300.0,
+        flatness=0.6, auto_stop=True, patience=50, plateau_decays=1, bf16=None),
+    ('class', 'kit', 'rgbd+warp', 'unet'): dict(
+        channels=(16, 32, 64, 128, 256), noise_channels=2, net_input='meshgrid', image_input=1.0, lr=0.01,
+        iterations=600, lr_milestones=(), lr_gamma=0.3, smoothness=1.0, smoothness_edge=300.0, flatness=0.6,
+        auto_stop=True, patience=50, plateau_decays=1, bf16=None),
+    ('class', 'kit', 'rgbd+warp', 'skip'): dict(
+        net='skip', channels=(128, 128, 128, 128, 128), noise_channels=2, net_input='meshgrid', image_input=1.0,
+        lr=0.01, iterations=600, lr_milestones=(), lr_gamma=0.3, smoothness=1.0, smoothness_edge=300.0,
+        flatness=0.6, auto_stop=True, patience=50, plateau_decays=1, bf16=None),
+    ('class', 'paper', 'd', 'unet'): dict(
+        channels=(16, 32, 64, 128, 256), lr=0.01, iterations=600, lr_milestones=(), lr_gamma=0.3,
+        smoothness_edge=300.0, auto_stop=True, patience=50, plateau_decays=1, bf16=None),
+    ('class', 'paper', 'd', 'skip'): dict(
+        net='skip', channels=(128, 128, 128, 128, 128), lr=0.01, iterations=600, lr_milestones=(), lr_gamma=0.3,
+        smoothness_edge=300.0, auto_stop=True, patience=50, plateau_decays=1, bf16=None),
+    ('class', 'paper', 'rgbd', 'unet'): dict(
+        channels=(16, 32, 64, 128, 256), lr=0.01, iterations=600, lr_milestones=(), lr_gamma=0.3,
+        smoothness_edge=300.0, auto_stop=True, patience=50, plateau_decays=1, bf16=None),
+    ('class', 'paper', 'rgbd', 'skip'): dict(
+        net='skip', channels=(128, 128, 128, 128, 128), lr=0.01, iterations=600, lr_milestones=(), lr_gamma=0.3,
+        smoothness_edge=300.0, auto_stop=True, patience=50, plateau_decays=1, bf16=None),
+    ('class', 'paper', 'rgbd+warp', 'unet'): dict(
+        channels=(16, 32, 64, 128, 256), lr=0.01, iterations=600, lr_milestones=(), lr_gamma=0.3,
+        smoothness_edge=300.0, auto_stop=True, patience=50, plateau_decays=1, bf16=None),
+    ('class', 'paper', 'rgbd+warp', 'skip'): dict(
+        net='skip', channels=(128, 128, 128, 128, 128), lr=0.01, iterations=600, lr_milestones=(), lr_gamma=0.3,
+        smoothness_edge=300.0, auto_stop=True, patience=50, plateau_decays=1, bf16=None),
+    ('paper', 'kit', 'd', 'unet'): dict(
+        channels=(32, 64, 128, 256, 512), iterations=6000, lr_milestones=(), patience=2000, eval_every=100),
+    ('paper', 'kit', 'd', 'skip'): dict(
+        net='skip', channels=(128, 128, 128, 128, 128), iterations=6000, lr_milestones=(), patience=2000,
+        eval_every=100),
+    ('paper', 'kit', 'rgbd', 'unet'): dict(
+        channels=(32, 64, 128, 256, 512), iterations=16000, patience=2000, eval_every=100),
+    ('paper', 'kit', 'rgbd', 'skip'): dict(
+        net='skip', channels=(128, 128, 128, 128, 128), iterations=16000, patience=2000, eval_every=100),
+    ('paper', 'kit', 'rgbd+warp', 'unet'): dict(
+        channels=(32, 64, 128, 256, 512), iterations=16000, patience=2000, eval_every=100),
+    ('paper', 'kit', 'rgbd+warp', 'skip'): dict(
+        net='skip', channels=(128, 128, 128, 128, 128), iterations=16000, patience=2000, eval_every=100),
+    ('paper', 'paper', 'd', 'unet'): dict(
+        channels=(32, 64, 128, 256, 512), iterations=6000, lr_milestones=(), patience=2000, eval_every=100),
+    ('paper', 'paper', 'd', 'skip'): dict(
+        net='skip', channels=(128, 128, 128, 128, 128), iterations=6000, lr_milestones=(), patience=2000,
+        eval_every=100),
+    ('paper', 'paper', 'rgbd', 'unet'): dict(
+        channels=(32, 64, 128, 256, 512), iterations=16000, patience=2000, eval_every=100),
+    ('paper', 'paper', 'rgbd', 'skip'): dict(
+        net='skip', channels=(128, 128, 128, 128, 128), iterations=16000, patience=2000, eval_every=100),
+    ('paper', 'paper', 'rgbd+warp', 'unet'): dict(
+        channels=(32, 64, 128, 256, 512), iterations=16000, patience=2000, eval_every=100),
+    ('paper', 'paper', 'rgbd+warp', 'skip'): dict(
+        net='skip', channels=(128, 128, 128, 128, 128), iterations=16000, patience=2000, eval_every=100),
+}
+
+DESCRIBED = {
+    "ci": "profile 'ci': 48×64 images, UNet 16-32-64-128, 150 iterations (depth-only 150), lr 0.01, auto-stop off, "
+          "hole curvature weight 1, hole flatness weight 0.6 (relaxed at colour edges by exp(-100·|∇grey|)) + the "
+          "colour image (blurred, σ 0.5 px; not for depth-only)",
+    "class": "profile 'class': 96×128 images, UNet 16-32-64-128-256, ≤ 600 iterations (depth-only 600), lr 0.01, "
+             "auto-stop on, hole curvature weight 1, hole flatness weight 0.6 (relaxed at colour edges by "
+             "exp(-300·|∇grey|)), input: the pixel coordinates + the colour image (blurred, σ 1 px; not for depth-only)",
+    "paper": "profile 'paper': 512×960 images, UNet 32-64-128-256-512, 16000 iterations (depth-only 6000), lr 5e-05, "
+             "auto-stop off",
+}
+
+
+def fields(config: FitConfig) -> dict:
+    return {f.name: getattr(config, f.name) for f in dataclasses.fields(config)}
+
+
+def test_the_defaults_are_the_papers_and_unchanged():
+    assert fields(FitConfig()) == DEFAULTS
+
+
+@pytest.mark.parametrize("key", sorted(EXPECTED))
+def test_every_profile_recipe_variant_and_net_builds_its_pinned_config(key, monkeypatch):
+    monkeypatch.delenv("DDP_PROFILE", raising=False)
+    monkeypatch.delenv("DDP_RECIPE", raising=False)
+    profile, recipe, variant, net = key
+    config = fields(FitConfig.for_profile(profile, variant=variant, recipe=recipe, net=net))
+    expected = {**DEFAULTS, **EXPECTED[key]}
+    assert config == expected
+    assert {name: type(value) for name, value in config.items()} == {n: type(v) for n, v in expected.items()}
+
+
+@pytest.mark.parametrize("name", sorted(PROFILES))
+def test_a_notebooks_first_line_is_unchanged(name):
+    assert PROFILES[name].describe() == DESCRIBED[name]
