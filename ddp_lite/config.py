@@ -101,11 +101,13 @@ class FitConfig:
     def for_profile(cls, profile=None, variant: str = "rgbd+warp", recipe=None, **overrides) -> "FitConfig":
         """The config of a profile (name, :class:`Profile` or None for ``DDP_PROFILE``) for ``variant``,
         running ``recipe`` (name, :class:`~ddp_lite.recipes.Recipe` or None for ``DDP_RECIPE``; ``"kit"``,
-        the default, is the profile's own method, ``"paper"`` the paper's), then ``overrides``.
+        the default, is the paper's losses plus the kit's additions at that profile, ``"paper"`` the
+        paper's method), then ``overrides``.
 
-        Every :class:`Profile` field that is also a FitConfig field is copied, so a setting added to
-        both flows through; three are derived: ``channels`` (the UNet's or the SkipNet's widths, by
-        ``net``), ``iterations`` (the variant's count) and ``lr_milestones`` (those the variant's run reaches).
+        The profile gives size and budget: every :class:`Profile` field that is also a FitConfig field
+        is copied, and three are derived: ``channels`` (the UNet's or the SkipNet's widths, by ``net``),
+        ``iterations`` (the variant's count) and ``lr_milestones`` (those the variant's run reaches).
+        The recipe gives the method: its :meth:`~ddp_lite.recipes.Recipe.settings` at the profile's name.
 
         Example:
             >>> config = FitConfig.for_profile("ci", variant="rgbd", recipe="paper")
@@ -118,7 +120,7 @@ class FitConfig:
         values = {name: getattr(profile, name) for name in _COPIED_FROM_PROFILE}
         values.update(net=net, channels=profile.channels if net == "unet" else profile.skip_channels,
                       iterations=iterations, lr_milestones=profile.milestones(iterations))
-        values.update(get_recipe(recipe).overrides)
+        values.update(get_recipe(recipe).settings(profile.name))
         values.update(overrides)
         return cls(**values)
 

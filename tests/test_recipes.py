@@ -36,7 +36,7 @@ def test_ddp_recipe_selects_the_default_and_bad_names_are_refused(monkeypatch):
     monkeypatch.setenv("DDP_RECIPE", "paper")
     assert FitConfig.for_profile("class", variant="rgbd").smoothness == 0.0
     monkeypatch.setenv("DDP_RECIPE", "kit")
-    assert FitConfig.for_profile("class", variant="rgbd").smoothness == PROFILES["class"].smoothness > 0
+    assert FitConfig.for_profile("class", variant="rgbd").smoothness == RECIPES["kit"].at["class"]["smoothness"] > 0
     monkeypatch.setenv("DDP_RECIPE", "papr")
     with pytest.raises(ValueError, match="DDP_RECIPE must be one of"):
         FitConfig.for_profile("class", variant="rgbd")
