@@ -112,7 +112,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     demo = _subparser(sub, "demo", "fill the holes of a synthetic scene with DDP; compare with classical fills",
-                      "ddp_lite.cli_demo:_demo")
+                      "ddp_lite.cli_demo:demo_command")
     demo.add_argument("--out", default="ddp_demo.png", help="figure path: .png, .pdf, .svg, ... (default: ddp_demo.png)")
     demo.add_argument("--scene", default="house", help="a built-in scene (list them: ddp-lite scenes; default house)")
     demo.add_argument("--holes", choices=("edge", "sgm", "random"), default="edge",
@@ -128,10 +128,10 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--max-memory-gb", type=_number(float, 0.0, "--max-memory-gb"), default=None,
                       help="refuse fits estimated to need more (default: 75%% of RAM); raise it to override")
 
-    _subparser(sub, "scenes", "list the built-in synthetic scenes", "ddp_lite.cli_demo:_scenes")
+    _subparser(sub, "scenes", "list the built-in synthetic scenes", "ddp_lite.cli_demo:scenes_command")
 
     complete = _subparser(sub, "complete", "fill the holes of your own RGB-D image (no neighbours)",
-                          "ddp_lite.cli_complete:_complete")
+                          "ddp_lite.cli_complete:complete_command")
     complete.add_argument("--rgb", required=True, help="the colour image (any file OpenCV reads), same size as --depth")
     complete.add_argument("--depth", required=True, help=".npy (metres), .pfm, or 16-bit PNG (see --depth-scale); "
                                                          "0, inf and NaN are holes")
@@ -166,7 +166,7 @@ def build_parser() -> argparse.ArgumentParser:
     complete.add_argument("--device", default=None, help="cpu, cuda or mps (default: cpu)")
 
     seq = _subparser(sub, "sequence", "complete every view of a sequence (TUM, COLMAP, saved scene) and fuse them",
-                     "ddp_lite.cli_sequence:_sequence")
+                     "ddp_lite.cli_sequence:sequence_command")
     seq.add_argument("path", help="a TUM RGB-D folder, a COLMAP workspace, or a Scene.save .npz (or its folder)")
     seq.add_argument("--format", required=True, choices=("tum", "colmap", "scene"), help="how PATH is laid out")
     seq.add_argument("--out", required=True, help="output folder: depth/, preview/, fused.ply, manifest.json")
@@ -197,12 +197,12 @@ def build_parser() -> argparse.ArgumentParser:
                      help="--dry-run: the sustained GPU rate to assume (default 5 TFLOP/s)")
 
     student = _subparser(sub, "student", "write the student copies of the notebooks (solutions and outputs removed)",
-                         "ddp_lite.cli_classroom:_student")
+                         "ddp_lite.cli_classroom:student_command")
     student.add_argument("--source", default="notebooks", help="the instructor notebooks (default: notebooks)")
     student.add_argument("--out", default="build/student",
                          help="folder for the student copies, outside --source (default: build/student)")
     solutions = _subparser(sub, "solutions", "execute the instructor notebooks and keep their outputs",
-                           "ddp_lite.cli_classroom:_solutions")
+                           "ddp_lite.cli_classroom:solutions_command")
     solutions.add_argument("--source", default="notebooks", help="the instructor notebooks (default: notebooks)")
     solutions.add_argument("--out", default="build/solutions",
                            help="folder for the executed copies, outside --source (default: build/solutions)")
@@ -210,7 +210,7 @@ def build_parser() -> argparse.ArgumentParser:
     solutions.add_argument("--only", nargs="+", default=None, metavar="NN", help="only these notebooks (01 05 ...)")
     solutions.add_argument("--timeout", type=_number(int, 1, "--timeout"), default=3600, help="seconds per cell")
     grade = _subparser(sub, "grade", "run submitted notebooks and score their exercise checks",
-                       "ddp_lite.cli_classroom:_grade")
+                       "ddp_lite.cli_classroom:grade_command")
     grade.add_argument("submissions", help="a folder with one sub-folder per student holding their .ipynb files")
     grade.add_argument("--source", default="notebooks", help="the instructor notebooks the checks come from")
     grade.add_argument("--csv", default="grades.csv", help="per-exercise scores (default: grades.csv)")

@@ -11,14 +11,16 @@ import os
 from .outpaths import check_not_overlapping, check_output_file, check_output_folder
 
 
-def _student(args) -> int:
+def student_command(args) -> int:
+    """``ddp-lite student``: the student copies of the notebooks (exercise answers removed)."""
     from .classroom import build_student
     for path in build_student(args.source, args.out):
         print(f"wrote {path}")
     return 0
 
 
-def _solutions(args) -> int:
+def solutions_command(args) -> int:
+    """``ddp-lite solutions``: the notebooks executed with their answers, for the instructor."""
     from .classroom import build_solutions
 
     def log(message):
@@ -29,7 +31,8 @@ def _solutions(args) -> int:
     return 0
 
 
-def _grade(args) -> int:
+def grade_command(args) -> int:
+    """``ddp-lite grade``: score the students' submitted notebooks into a CSV."""
     check_output_file(args.csv, "--csv", suffixes=(".csv",), example="grades.csv")
     for flag, folder in (("--executed", args.executed), ("--feedback", args.feedback)):
         if folder is not None:

@@ -42,7 +42,7 @@ def _exr_available() -> bool:
 
 def _writers() -> dict:
     """Output writers by suffix: filled depth (H, W) float32 metres → bytes."""
-    def png(depth):  # 16-bit millimetres, 0 = no value; _complete refuses depth beyond PNG_MAX_METRES first
+    def png(depth):  # 16-bit millimetres, 0 = no value; complete_command refuses depth beyond PNG_MAX_METRES first
         return depth_png_bytes(depth)[0]
 
     def exr(depth):
@@ -187,7 +187,8 @@ def _comparison(depth, rgb, filled, gt) -> str:
             + ", ".join(f"{name} {value:.4g} m" for name, value in rmse.items()))
 
 
-def _complete(args) -> int:
+def complete_command(args) -> int:
+    """``ddp-lite complete``: fill the holes of one depth map from its files."""
     start = time.perf_counter()
     writers = _writers()
     _check_outputs(args, writers)

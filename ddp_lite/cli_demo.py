@@ -39,7 +39,8 @@ def figure_suffixes() -> tuple[str, ...]:
     return tuple(f".{kind}" for kind in Figure().canvas.get_supported_filetypes())
 
 
-def _demo(args) -> int:
+def demo_command(args) -> int:
+    """``ddp-lite demo``: complete one synthetic scene's depth and save the figure."""
     start = time.perf_counter()
     check_output_file(args.out, "--out", suffixes=figure_suffixes(), example="ddp_demo.png")
     if args.scene not in SCENES:
@@ -84,7 +85,8 @@ def _demo(args) -> int:
     return 0
 
 
-def _scenes(args) -> int:
+def scenes_command(args) -> int:
+    """``ddp-lite scenes``: list the built-in synthetic scenes."""
     scenes = list_scenes()
     width = max(len(name) for name in scenes)
     for name, description in scenes.items():

@@ -80,7 +80,8 @@ def _workers(requested: int) -> int:
     return requested
 
 
-def _sequence(args) -> int:
+def sequence_command(args) -> int:
+    """``ddp-lite sequence``: complete every view of a sequence into a folder."""
     profile = get_profile(args.profile)  # a bad --profile fails here, before the data is read
     options = _sequence_options(args)
     check_output_folder(args.out, "--out")

@@ -3,9 +3,11 @@ modules, every name imported from the module that defines it."""
 from __future__ import annotations
 
 import ast
+import re
 from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parents[1] / "ddp_lite"
+HANDLER = re.compile(r"ddp_lite(\.\w+)+:\w+")
 
 
 def module_name(path: Path) -> str:
@@ -30,11 +32,16 @@ def resolve(importer: str, is_package: bool, level: int, target: str | None) -> 
 
 def imports(name: str, path: Path, known: dict[str, Path]):
     """(imported module, names taken from it) for every import of a package module in ``path``,
-    at any depth (imports inside functions count too)."""
+    at any depth (imports inside functions count too), and every ``"ddp_lite.module:name"`` string
+    (a handler the command line imports by name)."""
     tree = ast.parse(path.read_text(encoding="utf-8"))
     is_package = path.name == "__init__.py"
     for node in ast.walk(tree):
-        if isinstance(node, ast.Import):
+        if isinstance(node, ast.Constant) and isinstance(node.value, str) and HANDLER.fullmatch(node.value):
+            module, taken = node.value.split(":")
+            if module in known:
+                yield module, (taken,)
+        elif isinstance(node, ast.Import):
             for alias in node.names:
                 if alias.name in known:
                     yield alias.name, ()
@@ -135,3 +142,4 @@ def test_the_checks_see_what_they_must():
     assert resolve("ddp_lite.x", True, 1, "y") == "ddp_lite.x.y"
     late = ast.parse("def f():\n    from .fit import complete_depth\n")
     assert any(isinstance(n, ast.ImportFrom) and n.module == "fit" for n in ast.walk(late))
+    assert HANDLER.fullmatch("ddp_lite.cli_demo:demo_command") and not HANDLER.fullmatch("ddp_lite.cli_demo")
