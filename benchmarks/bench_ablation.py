@@ -17,7 +17,7 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 from _common import add_profile_args, profile_from_args  # noqa: E402
 
-from ddp_lite.experiments import TABLE2_CONFIGS, ablation, format_mean_spread  # noqa: E402
+from ddp_lite.evaluation.experiments import TABLE2_CONFIGS, ablation, format_mean_spread  # noqa: E402
 
 
 def main() -> None:

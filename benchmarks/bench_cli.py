@@ -26,13 +26,13 @@ def _seconds(argv, repeat: int) -> float:
     runs = []
     for _ in range(repeat):
         start = time.perf_counter()
-        subprocess.run([sys.executable, "-m", "ddp_lite.cli", *argv], env=env, capture_output=True)
+        subprocess.run([sys.executable, "-m", "ddp_lite.interface.cli", *argv], env=env, capture_output=True)
         runs.append(time.perf_counter() - start)
     return statistics.median(runs)
 
 
 def _imported(argv) -> list[str]:
-    code = (f"import sys; from ddp_lite.cli import main\ntry: main({list(argv)!r})\nexcept SystemExit: pass\n"
+    code = (f"import sys; from ddp_lite.interface.cli import main\ntry: main({list(argv)!r})\nexcept SystemExit: pass\n"
             f"print('HEAVY:' + ','.join(m for m in {HEAVY!r} if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], env={**os.environ, "PYTHONPATH": str(ROOT)},
                          capture_output=True, text=True).stdout

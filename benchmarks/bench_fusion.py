@@ -12,11 +12,11 @@ from __future__ import annotations
 import time
 
 
-from ddp_lite.baselines import BASELINES
-from ddp_lite.fusion import fuse_depths, tsdf_fuse
-from ddp_lite.holes import random_holes
-from ddp_lite.metrics import hole_rmse
-from ddp_lite.scenes import make_scene
+from ddp_lite.classical.baselines import BASELINES
+from ddp_lite.evaluation.fusion import fuse_depths, tsdf_fuse
+from ddp_lite.classical.holes import random_holes
+from ddp_lite.evaluation.metrics import hole_rmse
+from ddp_lite.world.scenes import make_scene
 
 
 def _best_of(fn, repeats: int = 3) -> float:

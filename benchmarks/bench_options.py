@@ -8,7 +8,7 @@
 Absolute s/it move with the machine's load, so every option runs its rounds in turn (A, B, C, A, B,
 C, ...) in one process and the table gives the median per option and its ratio to float32. Each
 option's net, noise and loss closure are built once by ``complete_depth`` (bench_fit's case,
-rgbd+warp) and then stepped by ``ddp_lite.loop.run`` (``ddp_lite.fit._run`` before it moved), the fit's own loop.
+rgbd+warp) and then stepped by ``ddp_lite.method.loop.run`` (``ddp_lite.fit._run`` before it moved), the fit's own loop.
 
 ``--errors``: the options that change numbers (bf16, zero padding) against float32 on real cases
 (``make_case(scene, "ci", holes="sgm")``, 48×64, ci net, rgbd, the ci schedule), seeds 0, 1, 2:
@@ -46,14 +46,15 @@ def load_package(path: str, name: str):
 
 def prepare(package, size, channels, variant: str, options: dict, compile_mode=None):
     """Build one fit's pieces with ``package.complete_depth`` and return a function that runs n iterations."""
-    fit = sys.modules[package.__name__ + ".fit"]
+    package.complete_depth  # imports the fit; its module is .fit (flat packages) or .method.fit
+    fit = sys.modules.get(package.__name__ + ".method.fit") or sys.modules[package.__name__ + ".fit"]
     rgb, depth, ref, nbrs = case(*size)
     as_own = lambda cam: package.Camera(cam.K, cam.cam_from_world, cam.width, cam.height)  # noqa: E731
     ref, nbrs = as_own(ref), [(image, as_own(cam)) for image, cam in nbrs]
     kwargs = dict(camera=ref, neighbors=nbrs) if variant == "rgbd+warp" else {}
-    config = fit.FitConfig(channels=channels, lr=1e-2, progress=False, eval_every=10 ** 9, iterations=1, **options)
-    # the loop is ddp_lite.loop.run; packages from before the split have it as ddp_lite.fit._run
-    owner = sys.modules.get(package.__name__ + ".loop")
+    config = package.FitConfig(channels=channels, lr=1e-2, progress=False, eval_every=10 ** 9, iterations=1, **options)
+    # the loop is ddp_lite.method.loop.run (ddp_lite.loop.run in flat packages; ddp_lite.fit._run before that)
+    owner = sys.modules.get(package.__name__ + ".method.loop") or sys.modules.get(package.__name__ + ".loop")
     owner, name = (owner, "run") if owner is not None else (fit, "_run")
     pieces, run = {}, getattr(owner, name)
 
@@ -84,7 +85,7 @@ ERROR_OPTIONS = ("float32", "bf16", "pad zeros", "bf16+zeros")
 def hole_errors(scenes=("house", "desk"), seeds=(0, 1, 2)) -> None:
     """Print hole RMSE ×100 per scene, seed and option, and each fit's s/it (options run in turn)."""
     from ddp_lite import FitConfig, complete_depth
-    from ddp_lite.experiments import make_case
+    from ddp_lite.evaluation.experiments import make_case
     print(f"\n== hole RMSE ×100 (final iteration), rgbd, ci profile 48×64, UNet 16-32-64-128, holes='sgm'")
     print(f"{'scene':<7} {'seed':>4} " + " ".join(f"{o:>11}" for o in ERROR_OPTIONS) + "   s/it per option")
     for scene in scenes:

@@ -1,4 +1,4 @@
-"""Does DDP beat the classical fills? Hole error of DDP recipes vs every fill in ``ddp_lite.baselines``.
+"""Does DDP beat the classical fills? Hole error of DDP recipes vs every fill in ``ddp_lite.classical.baselines``.
 
     python benchmarks/bench_quality.py --quick                           # a few cases, the profile's recipe
     python benchmarks/bench_quality.py --recipes default ens3 --seeds 0 1 --out q.jsonl --lane 0/2 &
@@ -8,10 +8,10 @@
 The suite is fixed (cases are never dropped because DDP loses on them):
 - the four named scenes (piecewise planar: linear interpolation is exact in disparity on a plane),
   each with OpenCV SGM holes of both parameter sets and with large Depthcomp-like blob holes;
-- the curved, photo-textured scenes of ``ddp_lite.organic`` (when present), with the same holes;
+- the curved, photo-textured scenes of ``ddp_lite.world.organic`` (when present), with the same holes;
 - notebook 09's Middlebury-format fixture: SGM holes on the left view, the right view as the
   warp loss's neighbour;
-- the real Middlebury Motorcycle pair (``ddp_lite.real_cases``) pooled to 125×185 (``motorcycle-4``)
+- the real Middlebury Motorcycle pair (``ddp_lite.evaluation.real_cases``) pooled to 125×185 (``motorcycle-4``)
   and 250×370 (``motorcycle-2``): three blob patterns, real SGBM holes, left-right-check (occlusion)
   holes; the right view as the warp loss's neighbour. These keep their own size whatever the profile.
 SGM runs at 3× the working size below 96 rows and keeps each block's centre (as the notebooks do).
@@ -42,13 +42,13 @@ import numpy as np  # noqa: E402
 
 import ddp_lite as ddp  # noqa: E402
 from ddp_lite import baselines  # noqa: E402
-from ddp_lite.experiments import Case, make_case, sgm_depth_at_scale  # noqa: E402
-from ddp_lite.holes import random_holes  # noqa: E402
-from ddp_lite.middlebury import load_middlebury, make_middlebury_fixture  # noqa: E402
-from ddp_lite.real_cases import REAL_HOLES, make_real_case  # noqa: E402
-from ddp_lite.recipes import RECIPES as KIT_RECIPES, STUDY  # noqa: E402
-from ddp_lite.resample import resize_scene  # noqa: E402
-from ddp_lite.scenes import SCENES  # noqa: E402
+from ddp_lite.evaluation.experiments import Case, make_case, sgm_depth_at_scale  # noqa: E402
+from ddp_lite.classical.holes import random_holes  # noqa: E402
+from ddp_lite.data.middlebury import load_middlebury, make_middlebury_fixture  # noqa: E402
+from ddp_lite.evaluation.real_cases import REAL_HOLES, make_real_case  # noqa: E402
+from ddp_lite.method.recipes import RECIPES as KIT_RECIPES, STUDY  # noqa: E402
+from ddp_lite.data.resample import resize_scene  # noqa: E402
+from ddp_lite.world.scenes import SCENES  # noqa: E402
 from _common import add_profile_args, profile_from_args  # noqa: E402
 
 NAMED = ("house", "desk", "room", "street")
@@ -56,12 +56,12 @@ HOLES = ("sgm-dense", "sgm-sparse", "blobs")
 QUICK = ("desk/sgm-dense", "house/blobs", "fixture/sgm-dense")
 
 # name → FitConfig overrides on top of the profile's config: the default (the kit), the paper's
-# method, and the study's other recipes (ddp_lite.recipes.STUDY, each with its one-line why)
+# method, and the study's other recipes (ddp_lite.method.recipes.STUDY, each with its one-line why)
 RECIPES = {"default": {}, "paper": KIT_RECIPES["paper"].overrides, **STUDY}
 
 
 def organic_scenes() -> tuple[str, ...]:
-    """The curved scenes registered by ``ddp_lite.organic`` (empty if it is not there)."""
+    """The curved scenes registered by ``ddp_lite.world.organic`` (empty if it is not there)."""
     return tuple(name for name in SCENES if name not in NAMED)
 
 

@@ -12,8 +12,8 @@ import time
 
 import numpy as np
 
-from ddp_lite.scenes import list_scenes, make_scene
-from ddp_lite.stereo import sgm_depth
+from ddp_lite.world.scenes import list_scenes, make_scene
+from ddp_lite.classical.stereo import sgm_depth
 
 
 def main() -> None:

@@ -19,14 +19,14 @@ from pathlib import Path
 import numpy as np
 
 from ddp_lite import FitConfig, get_profile, make_scene
-from ddp_lite.experiments import cloud_scores, sgm_depth_at_scale
-from ddp_lite.formats import load_sequence
-from ddp_lite.fusion import fuse_depths, points_from_depth
-from ddp_lite.runner import open_client
-from ddp_lite.sequence import run_sequence
-from ddp_lite.sequence_cost import estimate_sequence, format_estimate
-from ddp_lite.sequence_files import read_manifest
-from ddp_lite.tum import write_tum
+from ddp_lite.evaluation.experiments import cloud_scores, sgm_depth_at_scale
+from ddp_lite.data.formats import load_sequence
+from ddp_lite.evaluation.fusion import fuse_depths, points_from_depth
+from ddp_lite.sequences.runner import open_client
+from ddp_lite.sequences.sequence import run_sequence
+from ddp_lite.sequences.sequence_cost import estimate_sequence, format_estimate
+from ddp_lite.sequences.sequence_files import read_manifest
+from ddp_lite.data.tum import write_tum
 
 
 def _depths(out: Path) -> dict:

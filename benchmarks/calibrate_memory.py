@@ -3,7 +3,7 @@
     OMP_NUM_THREADS=1 python benchmarks/calibrate_memory.py
 
 Each fit runs in a fresh subprocess so that its ru_maxrss is its own. The constants in
-``ddp_lite/fit.py`` (MEMORY_BASE_GB, FLOATS_PER_UNIT, BYTES_PER_PARAMETER) come from this table
+``ddp_lite/method/loop.py`` (MEMORY_BASE_GB, FLOATS_PER_UNIT, BYTES_PER_PARAMETER) come from this table
 (2-core CPU, torch eager, float32): measured 0.54 / 0.74 / 1.66 GiB for the 32–512 UNet at
 96×128 / 192×256 / 384×512 (rgbd), 0.73 GiB at 192×256 (d), 1.00 GiB for the 16–128 net at 384×512.
 """
@@ -22,8 +22,8 @@ CASES = [(96, 128, "rgbd", (32, 64, 128, 256, 512)), (192, 256, "rgbd", (32, 64,
 def one(H: int, W: int, variant: str, channels) -> dict:
     import numpy as np
 
-    from ddp_lite.config import FitConfig
-    from ddp_lite.fit import complete_depth
+    from ddp_lite.method.config import FitConfig
+    from ddp_lite.method.fit import complete_depth
     depth = np.full((H, W), 2.0, np.float32)
     depth[H // 4:H // 2, W // 4:W // 2] = np.nan
     rgb = np.random.default_rng(0).random((H, W, 3)).astype(np.float32)
@@ -33,8 +33,8 @@ def one(H: int, W: int, variant: str, channels) -> dict:
 
 
 def main() -> None:
-    from ddp_lite.config import FitConfig
-    from ddp_lite.loop import estimate_peak_memory_gb
+    from ddp_lite.method.config import FitConfig
+    from ddp_lite.method.loop import estimate_peak_memory_gb
     print(f"{'size':>9} {'variant':>7} {'net':>20} {'measured GiB':>12} {'estimate':>9}")
     for H, W, variant, channels in CASES:
         out = subprocess.run([sys.executable, __file__, json.dumps([H, W, variant, channels])], check=True,

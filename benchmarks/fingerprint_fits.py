@@ -23,7 +23,7 @@ import numpy as np  # noqa: E402
 import torch  # noqa: E402
 
 import ddp_lite as ddp  # noqa: E402
-from ddp_lite.config import FitConfig  # noqa: E402
+from ddp_lite.method.config import FitConfig  # noqa: E402
 
 SIZE = (32, 32)
 ITERATIONS = 20

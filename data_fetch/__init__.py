@@ -5,7 +5,7 @@
     python -m data_fetch fetch kitti2015                        # prints what to download by hand
 
 Where data goes: ``--dest DIR``, else ``$DDP_DATA``, else platformdirs' ``user_data_dir("ddp-lite")``;
-each dataset in its own folder. Loaders in ``ddp_lite.datasets`` read what lands there.
+each dataset in its own folder. Loaders in ``ddp_lite.data.datasets`` read what lands there.
 
 How files are trusted (the honest part). Every file in ``registry.py`` carries a SHA-256, or
 ``None`` = *unverified*. The kit was written on machines that cannot reach the dataset servers,

@@ -4,7 +4,7 @@ A FIFO, a device or a socket under a file's name makes a reader block forever (h
 waits for a writer that never comes) or read endless bytes; a folder where a file is expected
 fails later with an error that names neither. :func:`regular_file` refuses all of them before a
 byte is read, naming the argument the path came from. Standard library only, so ``data_fetch``
-uses it without torch; ``ddp_lite.fileio`` re-exports it for the kit's readers.
+uses it without torch; ``ddp_lite.data.fileio`` re-exports it for the kit's readers.
 
 Example:
     >>> import tempfile, os

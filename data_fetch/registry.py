@@ -86,7 +86,7 @@ from a stable URL, so fetch it by hand:
      Ignatius, Meetingroom, Truck) download the image set <Scene>.zip. Optional, for the P/R/F
      evaluation: the ground truth <Scene>.ply, camera poses <Scene>_COLMAP_SfM.log, alignment
      <Scene>_trans.txt and crop <Scene>.json (kept as they are; fetch does not hash them).
-  3. For cameras in MVSNet format (``cams/<id>_cam.txt``, read by ddp_lite.datasets.load_tnt),
+  3. For cameras in MVSNet format (``cams/<id>_cam.txt``, read by ddp_lite.data.datasets.load_tnt),
      use the MVSNet authors' preprocessed "tankandtemples" folder (see github.com/YoYo000/MVSNet).
   4. Put the zips, unchanged, in {dest}
   5. Run this command again (with --only '<Scene>.zip' for a subset): it hashes the zips, records

@@ -19,36 +19,49 @@ __version__ = "0.1.0"
 # Names are imported on first use (PEP 562), not with the package: torch and the rest of the stack take
 # seconds to import, and `ddp-lite --help` (whose module lives in this package) must not wait for them.
 # Building blocks stay importable from here as before; new code imports them from their modules
-# (ddp_lite.losses, ddp_lite.nets, ddp_lite.warp, ...), where their documentation lives.
+# (ddp_lite.method.losses, ddp_lite.method.nets, ...), where their documentation lives. The modules sit
+# in sub-packages by concern: core, world, classical, method, data, evaluation, sequences, interface.
 _HOMES = {
-    "camera": ("Camera", "look_at", "backproject", "pixel_grid", "project", "relative_pose"),
-    "config": ("FitConfig",),
-    "dip": ("ImageResult", "fit_image"),
-    "disparity": ("DisparityTransform",),
-    "fit": ("DepthResult", "complete_depth", "merge"),
-    "holes": ("random_holes", "edge_band_holes", "kinect_noise"),
-    "profiles": ("PROFILES", "Profile", "get_profile"),
-    "scenes": ("list_scenes", "make_scene", "register_scene"),
-    "stereo": ("sgm_depth", "sgm_disparity"),
-    "variants": ("VARIANTS",),
-    "views": ("Scene", "View"),
-    "coarse_to_fine": ("complete_depth_coarse_to_fine",),
-    "losses": ("disparity_loss", "masked_l1", "rgb_loss", "ssim", "warp_loss"),
-    "nets": ("SkipNet", "UNet", "build_net", "make_noise"),
-    "neighbors": ("select_neighbors",),
-    "warp": ("Warper", "warp_to_reference"),
+    "core.camera": ("Camera", "look_at", "backproject", "pixel_grid", "project", "relative_pose"),
+    "method.config": ("FitConfig",),
+    "method.dip": ("ImageResult", "fit_image"),
+    "method.disparity": ("DisparityTransform",),
+    "method.fit": ("DepthResult", "complete_depth", "merge"),
+    "classical.holes": ("random_holes", "edge_band_holes", "kinect_noise"),
+    "method.profiles": ("PROFILES", "Profile", "get_profile"),
+    "world.scenes": ("list_scenes", "make_scene", "register_scene"),
+    "classical.stereo": ("sgm_depth", "sgm_disparity"),
+    "method.variants": ("VARIANTS",),
+    "core.views": ("Scene", "View"),
+    "method.coarse_to_fine": ("complete_depth_coarse_to_fine",),
+    "method.losses": ("disparity_loss", "masked_l1", "rgb_loss", "ssim", "warp_loss"),
+    "method.nets": ("SkipNet", "UNet", "build_net", "make_noise"),
+    "world.neighbors": ("select_neighbors",),
+    "method.warp": ("Warper", "warp_to_reference"),
 }
 _HOME_OF = {name: module for module, names in _HOMES.items() for name in names}
-_SUBMODULES = ("baselines", "datasets", "fusion", "metrics", "organic")
+_PACKAGES = {  # sub-package → its modules, each one concern (the sub-package's docstring says which)
+    "core": ('checks', 'camera', 'views', 'progress', 'outpaths'),
+    "world": ('scenes', 'render', 'textures', 'photo_texture', 'solids', 'terrain', 'organic', 'neighbors'),
+    "classical": ('baselines', 'stereo', 'holes', 'kinect'),
+    "method": ('config', 'variants', 'disparity', 'losses', 'paper_method', 'hole_terms', 'nets', 'warp', 'loop',
+               'fit', 'fit_inputs', 'ensemble', 'coarse_to_fine', 'dip', 'profiles', 'recipes', 'cache'),
+    "data": ('datasets', 'fileio', 'formats', 'colmap', 'tum', 'middlebury', 'textparse', 'resample'),
+    "evaluation": ('metrics', 'fusion', 'experiments', 'mvs_kinect_experiments', 'real_cases', 'viz', 'plane_sweep'),
+    "sequences": ('sequence', 'sequence_cost', 'sequence_files', 'sequence_jobs', 'runner', 'working_size'),
+    "interface": ('cli', 'cli_classroom', 'cli_complete', 'cli_demo', 'cli_sequence', 'classroom', 'exercises'),
+}
+_PACKAGE_OF = {module: package for package, modules in _PACKAGES.items() for module in modules}
 
 
 def __getattr__(name: str):
     import importlib
-    import importlib.util
     if name in _HOME_OF:
         value = getattr(importlib.import_module(f".{_HOME_OF[name]}", __name__), name)
-    elif name in _SUBMODULES or (not name.startswith("_") and importlib.util.find_spec(f"{__name__}.{name}")):
-        value = importlib.import_module(f".{name}", __name__)  # any submodule, as when the package imported them all
+    elif name in _PACKAGE_OF:  # a module by its own name (ddp.metrics), as when the package was flat
+        value = importlib.import_module(f".{_PACKAGE_OF[name]}.{name}", __name__)
+    elif name in _PACKAGES:
+        value = importlib.import_module(f".{name}", __name__)
     else:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
     globals()[name] = value  # once: later look-ups do not come here
@@ -56,4 +69,4 @@ def __getattr__(name: str):
 
 
 def __dir__():
-    return sorted(set(globals()) | set(_HOME_OF) | set(_SUBMODULES))
+    return sorted(set(globals()) | set(_HOME_OF) | set(_PACKAGES) | set(_PACKAGE_OF))

@@ -9,7 +9,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 from data_fetch.atomic import atomic_path, write_bytes_atomic  # noqa: E402
-from ddp_lite.viz import save_figure  # noqa: E402
+from ddp_lite.evaluation.viz import save_figure  # noqa: E402
 
 
 def test_replaces_the_target_and_leaves_nothing_else(tmp_path):

@@ -35,14 +35,14 @@ from data_fetch import Dataset, FetchError, RemoteFile, fetch, safe_extract  # n
 from data_fetch.__main__ import main as fetch_main  # noqa: E402
 from ddp_lite import datasets as ds  # noqa: E402
 from data_fetch.atomic import write_bytes_atomic  # noqa: E402
-from ddp_lite.camera import Camera, look_at  # noqa: E402
-from ddp_lite.cli import main as cli_main  # noqa: E402
-from ddp_lite.disparity import DisparityTransform  # noqa: E402
-from ddp_lite.coarse_to_fine import complete_depth_coarse_to_fine  # noqa: E402
-from ddp_lite.config import FitConfig  # noqa: E402
-from ddp_lite.dip import fit_image  # noqa: E402
-from ddp_lite.fit import complete_depth, merge  # noqa: E402
-from ddp_lite.views import View  # noqa: E402
+from ddp_lite.core.camera import Camera, look_at  # noqa: E402
+from ddp_lite.interface.cli import main as cli_main  # noqa: E402
+from ddp_lite.method.disparity import DisparityTransform  # noqa: E402
+from ddp_lite.method.coarse_to_fine import complete_depth_coarse_to_fine  # noqa: E402
+from ddp_lite.method.config import FitConfig  # noqa: E402
+from ddp_lite.method.dip import fit_image  # noqa: E402
+from ddp_lite.method.fit import complete_depth, merge  # noqa: E402
+from ddp_lite.core.views import View  # noqa: E402
 
 H, W = 24, 32
 BAD = (TypeError, ValueError)
@@ -599,7 +599,7 @@ def test_accepted_on_purpose(tmp_path):
     tiny(lr_gamma=2.0, iterations=np.int64(2), lr_milestones=(np.int32(1),)).validate()
     # KITTI's testing split has no ground truth: all-NaN depth is the truth there
     # one blind neighbour among seeing ones: a warning, the fit goes on
-    from ddp_lite.fit_inputs import check_fit_inputs
+    from ddp_lite.method.fit_inputs import check_fit_inputs
     away = camera(look_at((0, 0, 0), (0, 0, -1)))
     with pytest.warns(UserWarning, match=r"neighbors\[1\]"):
         check_fit_inputs(rgb(), depth(), camera(), [(rgb(), camera(look_at((0.1, 0, 0), (0.1, 0, 1)))), (rgb(), away)],
@@ -622,7 +622,7 @@ def test_umask_is_respected(tmp_path):
 
 def test_non_finite_output_raises(monkeypatch):
     """A diverged fit raises; it never returns NaN that merged() would hide among the valid pixels."""
-    import ddp_lite.loop as loop
+    import ddp_lite.method.loop as loop
 
     real_run = loop.run
 

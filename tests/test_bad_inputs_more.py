@@ -28,17 +28,17 @@ import cv2  # noqa: E402
 
 from data_fetch import Dataset, FetchError, RemoteFile, fetch  # noqa: E402
 from ddp_lite import fileio  # noqa: E402
-from ddp_lite.camera import Camera, look_at  # noqa: E402
-from ddp_lite.checks import check_depth  # noqa: E402
-from ddp_lite.disparity import DisparityTransform  # noqa: E402
-from ddp_lite.config import FitConfig  # noqa: E402
-from ddp_lite.dip import fit_image  # noqa: E402
-from ddp_lite.fit import complete_depth, merge  # noqa: E402
-from ddp_lite.formats import read_colmap, read_scene, read_tum, write_colmap, write_tum  # noqa: E402
-from ddp_lite.scenes import make_scene  # noqa: E402
-from ddp_lite.sequence import run_sequence  # noqa: E402
+from ddp_lite.core.camera import Camera, look_at  # noqa: E402
+from ddp_lite.core.checks import check_depth  # noqa: E402
+from ddp_lite.method.disparity import DisparityTransform  # noqa: E402
+from ddp_lite.method.config import FitConfig  # noqa: E402
+from ddp_lite.method.dip import fit_image  # noqa: E402
+from ddp_lite.method.fit import complete_depth, merge  # noqa: E402
+from ddp_lite.data.formats import read_colmap, read_scene, read_tum, write_colmap, write_tum  # noqa: E402
+from ddp_lite.world.scenes import make_scene  # noqa: E402
+from ddp_lite.sequences.sequence import run_sequence  # noqa: E402
 from ddp_lite import sequence_files  # noqa: E402
-from ddp_lite.sequence_files import MANIFEST, read_manifest  # noqa: E402
+from ddp_lite.sequences.sequence_files import MANIFEST, read_manifest  # noqa: E402
 
 from test_bad_inputs import Case, _WATCHED, camera, depth, rgb, snapshot, tiny, watch  # noqa: E402
 
@@ -373,7 +373,7 @@ def test_unpaired_tum_frames_are_reported(tmp_path):
 
 def test_neighbour_without_parallax_is_warned():
     """Depth in millimetres with poses in metres: 2000 "m" away, a 0.2 m baseline shifts < 0.5 px."""
-    from ddp_lite.fit_inputs import check_fit_inputs
+    from ddp_lite.method.fit_inputs import check_fit_inputs
     ref = camera(look_at((0, 0, 0), (0, 0, 2)))
     millimetres = depth() * 1000.0
     with pytest.warns(UserWarning, match=r"neighbors\[0\].*px of parallax.*same unit"):

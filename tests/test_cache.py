@@ -1,4 +1,4 @@
-"""The fit cache (ddp_lite.cache): a hit returns what is stored, and every input that decides a fit misses."""
+"""The fit cache (ddp_lite.method.cache): a hit returns what is stored, and every input that decides a fit misses."""
 import pickle
 import subprocess
 import sys

@@ -266,9 +266,9 @@ def test_hand_points_merge_into_the_scores_and_open_answers_go_to_one_file_per_s
 
 
 def test_exercise_10_3s_command_prints_what_its_expected_answer_says(tmp_path, capsys):
-    from ddp_lite.cli import main
-    from ddp_lite.formats import write_tum
-    from ddp_lite.scenes import make_scene
+    from ddp_lite.interface.cli import main
+    from ddp_lite.data.formats import write_tum
+    from ddp_lite.world.scenes import make_scene
     nb = nbformat.read(NOTEBOOKS / "10_your_own_data.ipynb", as_version=4)
     listed = next(c.source for c in nb.cells if "## Exercises" in c.source).split("3. Run `", 1)[1]
     command = listed.split("`", 1)[0].split()

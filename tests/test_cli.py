@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from ddp_lite import cli
-from ddp_lite.cli import build_parser, main
+from ddp_lite.interface.cli import build_parser, main
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -48,7 +48,7 @@ def test_every_option_has_help_every_command_examples_and_profile_is_one_list(ca
 
 
 def test_help_imports_nothing_heavy():
-    code = ("import sys; from ddp_lite.cli import main\n"
+    code = ("import sys; from ddp_lite.interface.cli import main\n"
             "try: main(['complete', '--help'])\nexcept SystemExit: pass\n"
             "print(sorted(m for m in ('torch', 'open3d', 'cv2', 'matplotlib', 'nbformat', 'scipy') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
@@ -72,7 +72,7 @@ def test_usage_errors_exit_2_and_failures_at_run_time_exit_1(tmp_path, capsys):
 def test_ctrl_c_prints_one_line_exits_130_and_leaves_no_file(tmp_path):
     out = tmp_path / "demo.png"
     env = {**os.environ, "PYTHONPATH": str(ROOT), "DDP_PROFILE": "ci", "OMP_NUM_THREADS": "1", "MPLBACKEND": "Agg"}
-    process = subprocess.Popen([sys.executable, "-u", "-c", "import sys; from ddp_lite.cli import main; sys.exit(main())",
+    process = subprocess.Popen([sys.executable, "-u", "-c", "import sys; from ddp_lite.interface.cli import main; sys.exit(main())",
                                 "demo", "--iterations", "100000", "--out", str(out)], cwd=tmp_path, env=env,
                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 120
@@ -111,16 +111,16 @@ def test_scenes_keeps_its_columns(capsys):
 
 
 def test_sequence_workers_capped_at_the_cpu_count(capsys):
-    from ddp_lite.cli_sequence import _workers
+    from ddp_lite.interface.cli_sequence import _workers
     cores = os.cpu_count()
     assert _workers(1000) == cores and f"{cores} CPU cores" in capsys.readouterr().err
     assert _workers(1) == 1
 
 
 def test_sequence_tum_reads_a_millimetre_capture_with_depth_scale(tmp_path):
-    from ddp_lite.cli_sequence import _sequence_options
-    from ddp_lite.formats import load_sequence, write_tum
-    from ddp_lite.scenes import make_scene
+    from ddp_lite.interface.cli_sequence import _sequence_options
+    from ddp_lite.data.formats import load_sequence, write_tum
+    from ddp_lite.world.scenes import make_scene
     scene = make_scene("desk", size=(24, 32), n_views=2)
     folder = write_tum(scene, tmp_path / "rgbd_dataset_freiburg3_desk")
     for png in (folder / "depth").glob("*.png"):  # TUM's 1/5000 m → millimetres, as a RealSense stores them
@@ -135,8 +135,8 @@ def test_sequence_tum_reads_a_millimetre_capture_with_depth_scale(tmp_path):
 
 
 def test_sequence_refuses_a_view_index_out_of_range(tmp_path, capsys):
-    from ddp_lite.formats import write_tum
-    from ddp_lite.scenes import make_scene
+    from ddp_lite.data.formats import write_tum
+    from ddp_lite.world.scenes import make_scene
     folder = write_tum(make_scene("desk", size=(24, 32), n_views=3), tmp_path / "rgbd_dataset_freiburg3_desk")
     assert main(["sequence", str(folder), "--format", "tum", "--out", str(tmp_path / "o"), "--views", "0", "99",
                  "--dry-run"]) == 2
@@ -183,7 +183,7 @@ def _plane(H=60, W=90):
 
 
 def _pair(tmp_path, H=60, W=90):
-    from ddp_lite.holes import random_holes
+    from ddp_lite.classical.holes import random_holes
     gt = _plane(H, W)
     depth, _ = random_holes(gt, fraction=0.1, seed=3)
     depth[20:35, 30:50] = np.nan  # and one known hole
@@ -238,7 +238,7 @@ def test_complete_refuses_an_implausible_scale_before_fitting_and_names_a_better
 
 
 def test_working_size_keeps_a_plane_a_plane_in_disparity():
-    from ddp_lite.working_size import fill_holes_at_full_size, shrink, working_shape
+    from ddp_lite.sequences.working_size import fill_holes_at_full_size, shrink, working_shape
     assert working_shape((500, 741), 128) == (86, 128) and working_shape((40, 30), 128) == (40, 30)
     gt = _plane(64, 96)
     depth = gt.copy()
@@ -266,7 +266,7 @@ class _Terminal(__import__("io").StringIO):
 
 def test_a_terminal_bar_shows_the_whole_commands_share_and_time_left(monkeypatch):
     from ddp_lite import progress as progress_module
-    from ddp_lite.progress import command_progress, progress
+    from ddp_lite.core.progress import command_progress, progress
     clock_now = [0.0]
     monkeypatch.setattr(progress_module.time, "perf_counter", lambda: clock_now[0])
     screen = _Terminal()
@@ -319,7 +319,7 @@ def test_complete_reads_a_jpeg_with_exif_orientation_as_stored_like_its_depth(tm
     import cv2
     from PIL import Image
 
-    from ddp_lite.cli_complete import _read_rgb
+    from ddp_lite.interface.cli_complete import _read_rgb
     rgb = np.zeros((8, 12, 3), np.uint8)
     rgb[:, :6] = 200  # left half bright: a rotation would put it on top
     image = Image.fromarray(rgb)

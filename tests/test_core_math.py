@@ -6,7 +6,7 @@ from skimage import data
 from skimage.metrics import structural_similarity
 
 from ddp_lite import Camera, DisparityTransform, look_at, relative_pose, ssim, warp_to_reference
-from ddp_lite.camera import backproject, project
+from ddp_lite.core.camera import backproject, project
 
 
 def skimage_ssim(x, y):

@@ -1,17 +1,17 @@
-"""Offline tests of ddp_lite.datasets: PFM, Middlebury calib/loader/fixture, KITTI, TnT cams, NYU depth."""
+"""Offline tests of ddp_lite.data.datasets: PFM, Middlebury calib/loader/fixture, KITTI, TnT cams, NYU depth."""
 import struct
 
 import cv2
 import numpy as np
 import pytest
 
-from ddp_lite.datasets import (NYU_K, load_kitti, load_middlebury, load_nyu, load_tnt,
+from ddp_lite.data.datasets import (NYU_K, load_kitti, load_middlebury, load_nyu, load_tnt,
                                make_middlebury_fixture, parse_middlebury_calib, read_depth_image, resize_scene,
                                read_kitti_calib, read_kitti_disparity, read_mvsnet_cam, read_pfm, write_pfm)
-from ddp_lite.camera import Camera
-from ddp_lite.scenes import make_scene
-from ddp_lite.stereo import disparity_to_depth
-from ddp_lite.views import Scene, View
+from ddp_lite.core.camera import Camera
+from ddp_lite.world.scenes import make_scene
+from ddp_lite.classical.stereo import disparity_to_depth
+from ddp_lite.core.views import Scene, View
 
 
 @pytest.mark.parametrize("shape", [(5, 7), (5, 7, 3)])

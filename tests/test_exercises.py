@@ -132,7 +132,7 @@ def test_the_kit_ssim_is_a_right_answer_too():
 
 def test_d1_cases_agree_with_the_hand_computed_definition():
     """The D1 check's reference for the random case is the kit's metric; both agree with _d1 here."""
-    from ddp_lite.metrics import d1_error
+    from ddp_lite.evaluation.metrics import d1_error
     rng = np.random.default_rng(0)
     gt = rng.uniform(5, 80, (10, 10))
     pred = gt + rng.normal(0, 4, gt.shape)
@@ -196,7 +196,7 @@ def test_resize_calibration_check(capsys):
 
 
 def test_resize_calibration_agrees_with_the_kits_camera():
-    from ddp_lite.camera import Camera
+    from ddp_lite.core.camera import Camera
     K = np.array([[994.978, 0, 369.0], [0, 994.978, 247.0], [0, 0, 1.0]])
     small = Camera(K, np.eye(4), 741, 500).resized(64, 48)  # the kit's own resize, independently written
     got, _ = _resize()(K, 31.086, 64 / 741, 48 / 500)
@@ -230,7 +230,7 @@ def _quantise(round_depth=False, zero_is_reading=False, copy=True):
 
 
 def test_kinect_quantisation_check_agrees_with_the_kits_sensor_model():
-    from ddp_lite.kinect import quantise_depth
+    from ddp_lite.classical.kinect import quantise_depth
     depth = np.linspace(0.5, 4.5, 40).reshape(5, 8)
     assert np.allclose(_quantise()(depth, 580.0, 0.075, 8), quantise_depth(depth), rtol=1e-6)
 

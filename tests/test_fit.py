@@ -6,7 +6,7 @@ from scipy.interpolate import griddata
 
 from ddp_lite import (Camera, FitConfig, SkipNet, UNet, complete_depth, disparity_loss, fit_image, look_at, merge,
                       warp_loss, warp_to_reference)
-from ddp_lite.loop import PlateauStopper
+from ddp_lite.method.loop import PlateauStopper
 from conftest import TINY, tilted_plane
 
 
@@ -212,8 +212,8 @@ def test_bfloat16_and_channels_last_still_fill_the_hole():
 
 def test_variant_table_is_the_papers():
     """Every per-variant difference comes from one record: γ, output channels, needs, iterations."""
-    from ddp_lite.profiles import get_profile
-    from ddp_lite.variants import VARIANTS, get_variant
+    from ddp_lite.method.profiles import get_profile
+    from ddp_lite.method.variants import VARIANTS, get_variant
     assert VARIANTS == ("d", "rgbd", "rgbd+warp")
     d, rgbd, warp = (get_variant(name) for name in VARIANTS)
     assert d.loss_weights((0.5, 0.5)) == (1.0, 0.0, 0.0) and d.out_channels == 1
@@ -232,7 +232,7 @@ def test_variant_table_is_the_papers():
 def test_for_profile_copies_every_shared_field_and_derives_the_rest():
     """One source of fit settings: a Profile field named like a FitConfig field reaches the config."""
     import dataclasses
-    from ddp_lite.profiles import PROFILES
+    from ddp_lite.method.profiles import PROFILES
     for profile in PROFILES.values():
         for variant in ("d", "rgbd+warp"):
             config = FitConfig.for_profile(profile, variant=variant)

@@ -1,16 +1,16 @@
-"""ddp_lite.formats: TUM RGB-D, COLMAP and saved-scene readers, round trips against the scene they were
+"""ddp_lite.data.formats: TUM RGB-D, COLMAP and saved-scene readers, round trips against the scene they were
 written from, and refusals of malformed files that name the file and the line."""
 import cv2
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from ddp_lite.camera import Camera
-from ddp_lite.formats import (associate, load_sequence, read_colmap, read_colmap_cameras, read_colmap_depth,
+from ddp_lite.core.camera import Camera
+from ddp_lite.data.formats import (associate, load_sequence, read_colmap, read_colmap_cameras, read_colmap_depth,
                               read_colmap_images, read_scene, read_tum, read_tum_list, read_tum_trajectory,
                               write_colmap, write_colmap_depth, write_tum)
-from ddp_lite.holes import random_holes
-from ddp_lite.scenes import make_scene
+from ddp_lite.classical.holes import random_holes
+from ddp_lite.world.scenes import make_scene
 
 
 @pytest.fixture(scope="module")

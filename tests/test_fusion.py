@@ -6,10 +6,10 @@ import numpy as np
 import open3d as o3d
 import pytest
 
-from ddp_lite.camera import Camera
-from ddp_lite.fusion import fuse_depths, points_from_depth, render_point_cloud, save_ply, tsdf_fuse
-from ddp_lite.metrics import point_cloud_prf
-from ddp_lite.scenes import make_scene
+from ddp_lite.core.camera import Camera
+from ddp_lite.evaluation.fusion import fuse_depths, points_from_depth, render_point_cloud, save_ply, tsdf_fuse
+from ddp_lite.evaluation.metrics import point_cloud_prf
+from ddp_lite.world.scenes import make_scene
 
 
 @pytest.fixture(scope="module")

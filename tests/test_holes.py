@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from ddp_lite.holes import edge_band_holes, kinect_noise, random_holes
-from ddp_lite.scenes import make_scene
-from ddp_lite.stereo import (disparity_to_depth, gt_disparity, pixel_disparity, sgm_depth, sgm_depth_subsampled,
+from ddp_lite.classical.holes import edge_band_holes, kinect_noise, random_holes
+from ddp_lite.world.scenes import make_scene
+from ddp_lite.classical.stereo import (disparity_to_depth, gt_disparity, pixel_disparity, sgm_depth, sgm_depth_subsampled,
                              sgm_disparity)
 
 

@@ -142,4 +142,33 @@ def test_the_checks_see_what_they_must():
     assert resolve("ddp_lite.x", True, 1, "y") == "ddp_lite.x.y"
     late = ast.parse("def f():\n    from .fit import complete_depth\n")
     assert any(isinstance(n, ast.ImportFrom) and n.module == "fit" for n in ast.walk(late))
-    assert HANDLER.fullmatch("ddp_lite.cli_demo:demo_command") and not HANDLER.fullmatch("ddp_lite.cli_demo")
+    assert HANDLER.fullmatch("ddp_lite.interface.cli_demo:demo_command") and not HANDLER.fullmatch("ddp_lite.interface.cli_demo")
+
+
+def allowed_imports(package: Path) -> set[str] | None:
+    """The sub-packages ``package``'s docstring says it may import ("May import: a, b." / "Imports no
+    other part" / "every other part"); None: every one."""
+    doc = ast.get_docstring(ast.parse((package / "__init__.py").read_text(encoding="utf-8"))) or ""
+    if "every other part" in doc:
+        return None
+    if "Imports no other part" in doc:
+        return set()
+    found = re.search(r"May import: ([\w, ]+)\.", doc)
+    assert found, f"{package.name}/__init__.py must say what it may import"
+    return {name.strip() for name in found.group(1).split(",")}
+
+
+def test_each_sub_package_imports_only_what_its_docstring_allows():
+    packages = sorted(p.parent for p in PACKAGE.glob("*/__init__.py"))
+    assert packages, "ddp_lite has sub-packages"
+    breaches = []
+    for importer, out in graph().items():
+        parts = importer.split(".")
+        if len(parts) < 3:
+            continue
+        allowed = allowed_imports(PACKAGE / parts[1])
+        for target in out:
+            other = target.split(".")
+            if len(other) >= 2 and other[1] != parts[1] and allowed is not None and other[1] not in allowed:
+                breaches.append(f"{importer} imports {target}")
+    assert breaches == []

@@ -2,9 +2,9 @@
 import numpy as np
 import pytest
 
-from ddp_lite.camera import Camera
-from ddp_lite.kinect import KINECT, grazing_mask, kinect_depth, kinect_holes, projector_shadow, quantise_depth
-from ddp_lite.scenes import make_scene
+from ddp_lite.core.camera import Camera
+from ddp_lite.classical.kinect import KINECT, grazing_mask, kinect_depth, kinect_holes, projector_shadow, quantise_depth
+from ddp_lite.world.scenes import make_scene
 
 H, W = 20, 80
 

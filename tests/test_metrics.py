@@ -4,7 +4,7 @@ import open3d as o3d
 import pytest
 from skimage.metrics import peak_signal_noise_ratio
 
-from ddp_lite.metrics import d1_error, hole_rmse, mae, point_cloud_prf, psnr, rmse
+from ddp_lite.evaluation.metrics import d1_error, hole_rmse, mae, point_cloud_prf, psnr, rmse
 
 
 def test_rmse_and_mae_on_a_2x2_example():

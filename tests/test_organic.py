@@ -3,12 +3,12 @@ photo texture's view consistency, and the registered scenes (finite, labelled, s
 import numpy as np
 import pytest
 
-from ddp_lite.camera import Camera, look_at
-from ddp_lite.organic import Capsule, Cone, Ellipsoid, HeightField, PhotoTexture
-from ddp_lite.render import Cylinder, Plane, Sphere, render
-from ddp_lite.scenes import SCENES, list_scenes, make_scene, register_scene
-from ddp_lite.textures import Texture
-from ddp_lite.views import LABELS
+from ddp_lite.core.camera import Camera, look_at
+from ddp_lite.world.organic import Capsule, Cone, Ellipsoid, HeightField, PhotoTexture
+from ddp_lite.world.render import Cylinder, Plane, Sphere, render
+from ddp_lite.world.scenes import SCENES, list_scenes, make_scene, register_scene
+from ddp_lite.world.textures import Texture
+from ddp_lite.core.views import LABELS
 
 NEW = ("hills", "sculpture", "logs")
 FLAT = Texture("flat")
@@ -266,4 +266,4 @@ def test_register_scene_refuses_to_shadow_a_scene():
         register_scene("hills", _hills, "an impostor")
     with pytest.raises(ValueError, match="name"):
         register_scene("Not A Name", _hills, "x")
-    assert SCENES["hills"][0].__module__ == "ddp_lite.organic"
+    assert SCENES["hills"][0].__module__ == "ddp_lite.world.organic"

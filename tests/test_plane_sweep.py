@@ -2,10 +2,10 @@
 import numpy as np
 import pytest
 
-from ddp_lite.camera import Camera, look_at
-from ddp_lite.neighbors import select_neighbors
-from ddp_lite.plane_sweep import inverse_depth_planes, plane_sweep
-from ddp_lite.scenes import make_scene
+from ddp_lite.core.camera import Camera, look_at
+from ddp_lite.world.neighbors import select_neighbors
+from ddp_lite.evaluation.plane_sweep import inverse_depth_planes, plane_sweep
+from ddp_lite.world.scenes import make_scene
 
 H, W = 48, 64
 

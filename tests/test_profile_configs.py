@@ -4,8 +4,8 @@ import dataclasses
 
 import pytest
 
-from ddp_lite.config import FitConfig
-from ddp_lite.profiles import PROFILES
+from ddp_lite.method.config import FitConfig
+from ddp_lite.method.profiles import PROFILES
 
 DEFAULTS = dict(net='unet', channels=None, down='stride', up='bilinear', pad='reflect', noise_channels=16, net_input='noise',
                 image_input=0.0, image_blur=1.0, fill_input=0.0, lr=5e-05, schedule='step', iterations=None,

@@ -4,7 +4,7 @@ import io
 import pytest
 from tqdm import tqdm as tqdm_class
 
-from ddp_lite.progress import LineProgress, progress
+from ddp_lite.core.progress import LineProgress, progress
 
 
 class FakeTerminal(io.StringIO):

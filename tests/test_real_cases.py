@@ -5,11 +5,11 @@ import numpy as np
 import pytest
 from skimage import data
 
-from ddp_lite.camera import Camera
-from ddp_lite.middlebury import load_motorcycle
-from ddp_lite.real_cases import REAL_HOLES, make_real_case, pool_scene
-from ddp_lite.views import Scene, View
-from ddp_lite.warp import warp_to_reference
+from ddp_lite.core.camera import Camera
+from ddp_lite.data.middlebury import load_motorcycle
+from ddp_lite.evaluation.real_cases import REAL_HOLES, make_real_case, pool_scene
+from ddp_lite.core.views import Scene, View
+from ddp_lite.method.warp import warp_to_reference
 
 
 @pytest.fixture(scope="module")
@@ -91,7 +91,7 @@ def test_occlusion_holes_lie_beside_a_nearer_surface_on_their_right():
 
 
 def test_the_pair_written_in_middlebury_format_reads_back_as_loaded(tmp_path, motorcycle):
-    from ddp_lite.middlebury import load_middlebury, write_motorcycle_folder
+    from ddp_lite.data.middlebury import load_middlebury, write_motorcycle_folder
     folder = write_motorcycle_folder(tmp_path / "Motorcycle")
     assert "doffs=31.086" in (folder / "calib.txt").read_text() and "baseline=193.001" in (folder / "calib.txt").read_text()
     read = load_middlebury(folder)

@@ -3,9 +3,9 @@ import numpy as np
 import pytest
 
 import ddp_lite as ddp
-from ddp_lite.config import FitConfig
-from ddp_lite.profiles import PROFILES
-from ddp_lite.recipes import RECIPES, get_recipe
+from ddp_lite.method.config import FitConfig
+from ddp_lite.method.profiles import PROFILES
+from ddp_lite.method.recipes import RECIPES, get_recipe
 
 
 @pytest.mark.parametrize("profile", sorted(PROFILES))

@@ -6,12 +6,12 @@ import pytest
 from scipy import ndimage
 
 from ddp_lite import datasets, holes, neighbors, render as render_module, scenes, stereo, textures, views
-from ddp_lite.camera import Camera, look_at
-from ddp_lite.neighbors import select_neighbors
-from ddp_lite.render import Box, Plane, Sphere, render
-from ddp_lite.scenes import list_scenes, make_scene
-from ddp_lite.textures import Texture
-from ddp_lite.views import LABELS, Scene, View
+from ddp_lite.core.camera import Camera, look_at
+from ddp_lite.world.neighbors import select_neighbors
+from ddp_lite.world.render import Box, Plane, Sphere, render
+from ddp_lite.world.scenes import list_scenes, make_scene
+from ddp_lite.world.textures import Texture
+from ddp_lite.core.views import LABELS, Scene, View
 
 NOISE = Texture("noise", (0.9, 0.6, 0.3), (0.1, 0.2, 0.4), 0.05)
 
@@ -121,7 +121,7 @@ def test_warping_a_neighbour_with_true_depth_reproduces_the_reference(desk):
 
 
 def test_warp_module_agrees_on_the_scene(desk):
-    from ddp_lite.warp import warp_to_reference
+    from ddp_lite.method.warp import warp_to_reference
     ref, nbr = desk[0], desk[2]
     warped, valid = warp_to_reference(nbr.rgb, ref.depth, ref.camera, nbr.camera)
     _, mu, mv, z = _inverse_warp(nbr.rgb, ref.depth, ref.camera, nbr.camera)

@@ -14,13 +14,13 @@ import time
 import numpy as np
 import pytest
 
-from ddp_lite.cli import main
-from ddp_lite.config import FitConfig
-from ddp_lite.formats import read_tum, write_tum
-from ddp_lite.holes import random_holes
-from ddp_lite.runner import open_client, run_jobs
-from ddp_lite.scenes import make_scene
-from ddp_lite.sequence import VARIANT, plan_jobs, read_manifest, run_sequence
+from ddp_lite.interface.cli import main
+from ddp_lite.method.config import FitConfig
+from ddp_lite.data.formats import read_tum, write_tum
+from ddp_lite.classical.holes import random_holes
+from ddp_lite.sequences.runner import open_client, run_jobs
+from ddp_lite.world.scenes import make_scene
+from ddp_lite.sequences.sequence import VARIANT, plan_jobs, read_manifest, run_sequence
 
 N_VIEWS, ITERATIONS = 6, 15
 
@@ -86,7 +86,7 @@ def test_an_interrupted_run_resumes_with_only_the_missing_views(serial, tum, tmp
     _, reference = serial
     # a real interruption: the CLI in its own process, killed once the manifest shows a finished view
     env = dict(os.environ, OMP_NUM_THREADS="1", DDP_PROFILE="ci")
-    process = subprocess.Popen([sys.executable, "-m", "ddp_lite.cli", *_cli(tum, tmp_path)], env=env,
+    process = subprocess.Popen([sys.executable, "-m", "ddp_lite.interface.cli", *_cli(tum, tmp_path)], env=env,
                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     try:
         done = []

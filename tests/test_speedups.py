@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from ddp_lite import Camera, FitConfig, look_at
-from ddp_lite.coarse_to_fine import (_downsample_camera, _downsample_depth, _downsample_image,
+from ddp_lite.method.coarse_to_fine import (_downsample_camera, _downsample_depth, _downsample_image,
                                      complete_depth_coarse_to_fine)
 from conftest import TINY, tilted_plane
 

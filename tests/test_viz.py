@@ -3,7 +3,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 
-from ddp_lite.viz import HOLE_RGB, error_vmax, outline, overlay_holes, show_error
+from ddp_lite.evaluation.viz import HOLE_RGB, error_vmax, outline, overlay_holes, show_error
 
 
 def test_error_vmax_is_the_percentile_of_all_maps_together():

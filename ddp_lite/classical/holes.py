@@ -1,0 +1,121 @@
+"""Holes and noise: how real depth sensors fail, applied to exact synthetic depth.
+
+Every model here takes a depth map (H, W) in metres and returns ``(depth_with_nans, mask)``:
+a float32 copy with NaN where the sensor gives no answer, and the bool mask (True = valid).
+The input is never modified. Randomness comes only from ``seed``.
+
+Stereo (SGM) holes come from a real matcher and live in ``stereo.py`` (``sgm_depth``; re-exported
+here under their old names).
+
+**Synthetic holes.** ``random_holes`` removes smooth random blobs (a thresholded, blurred
+noise field), ``edge_band_holes`` removes a band across a depth discontinuity (where
+depth-only completion bleeds foreground into background), and ``kinect_noise`` imitates a
+structured-light sensor: noise growing as z², disparity quantised to 1/8 px, no reading out
+of range, and dropouts along the far side of depth edges (the projector's shadow).
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy import ndimage
+
+from ..core.checks import check_depth, check_int
+from .stereo import SGM_PARAMS, gt_disparity, sgm_depth, sgm_disparity  # re-exported: their old home
+
+__all__ = ["random_holes", "edge_band_holes", "kinect_noise", "SGM_PARAMS", "sgm_disparity", "sgm_depth",
+           "gt_disparity"]
+
+
+def _check_depth(depth) -> np.ndarray:
+    """The depth contract (``checks.check_depth``) for a hole model: any number of valid pixels."""
+    return check_depth(depth, "depth", min_valid=0)
+
+
+def random_holes(depth, fraction: float = 0.15, seed: int = 0, blob_size: float | None = None):
+    """Remove smooth random blobs covering ``fraction`` of the (H, W) depth (metres) → (depth, mask);
+    ``blob_size`` (px, default min(H, W)/16) is the blur scale of the noise field."""
+    out = _check_depth(depth)
+    if not 0.0 <= fraction < 1.0:
+        raise ValueError(f"fraction must be in [0, 1), got {fraction!r}")
+    H, W = out.shape
+    blob_size = max(1.0, min(H, W) / 16.0) if blob_size is None else float(blob_size)
+    if not np.isfinite(blob_size) or blob_size <= 0:
+        raise ValueError(f"blob_size must be a positive number of pixels, got {blob_size!r}")
+    rng = np.random.default_rng(check_int(seed, "seed", minimum=0))
+    field = ndimage.gaussian_filter(rng.standard_normal((H, W)), blob_size, mode="wrap")  # (H, W) smooth
+    if fraction > 0:
+        out[field <= np.quantile(field, fraction)] = np.nan
+    return out, np.isfinite(out)
+
+
+def _depth_edges(depth: np.ndarray, threshold: float) -> np.ndarray:
+    """(H, W) bool: pixels with a 4-neighbour whose depth differs by more than ``threshold`` (relative)."""
+    edges = np.zeros(depth.shape, bool)
+    for a, b, sa, sb in ((depth[:, 1:], depth[:, :-1], np.s_[:, 1:], np.s_[:, :-1]),
+                         (depth[1:], depth[:-1], np.s_[1:], np.s_[:-1])):
+        with np.errstate(invalid="ignore"):
+            jump = np.abs(a - b) > threshold * np.fmin(a, b)  # NaN → False
+        edges[sa] |= jump
+        edges[sb] |= jump
+    return edges
+
+
+def edge_band_holes(depth, width: int | None = None, seed: int = 0, length: int | None = None,
+                    n_bands: int = 1, threshold: float = 0.05):
+    """Remove ``n_bands`` bands ``width`` px wide across depth edges (relative jump > ``threshold``),
+    each along ``length`` px of edge, from (H, W) depth in metres → (depth, mask)."""
+    out = _check_depth(depth)
+    H, W = out.shape
+    width = max(3, round(min(H, W) / 16)) if width is None else width
+    length = max(8, min(H, W) // 3) if length is None else length
+    for name, value in (("width", width), ("length", length), ("n_bands", n_bands)):
+        if isinstance(value, bool) or int(value) != value or value < 1:
+            raise ValueError(f"{name} must be a positive integer, got {value!r}")
+    if not threshold > 0:
+        raise ValueError(f"threshold must be positive, got {threshold!r}")
+    rng = np.random.default_rng(check_int(seed, "seed", minimum=0))
+    edges = _depth_edges(out, threshold)
+    margin = int(width) // 2 + 1
+    candidates = np.argwhere(edges[margin:H - margin, margin:W - margin]) + margin  # (M, 2) rows, cols
+    if len(candidates) == 0:
+        raise ValueError(f"depth has no depth edge (relative jump > threshold={threshold}) away from the border")
+    rows, cols = np.mgrid[0:H, 0:W]
+    band = np.zeros((H, W), bool)
+    for _ in range(int(n_bands)):
+        r, c = candidates[rng.integers(len(candidates))]
+        segment = edges & ((rows - r) ** 2 + (cols - c) ** 2 <= (length / 2.0) ** 2)  # part of the edge
+        band |= ndimage.distance_transform_edt(~segment) <= width / 2.0
+    out[band] = np.nan
+    return out, np.isfinite(out)
+
+
+def kinect_noise(depth, seed: int = 0, sigma_coef: float = 1.5e-3, focal_px: float = 580.0,
+                 baseline: float = 0.075, subpixel: int = 8, depth_range=(0.5, 8.0), edge_dropout: float = 0.6,
+                 edge_width: int = 2, threshold: float = 0.05):
+    """Kinect-v1-like reading of (H, W) depth in metres → (depth, mask): noise σ = sigma_coef·z²,
+    disparity f·B/z quantised to 1/``subpixel`` px, NaN out of ``depth_range`` and, with
+    probability ``edge_dropout``, within ``edge_width`` px on the far side of depth edges."""
+    clean = _check_depth(depth).astype(np.float64)
+    if not (sigma_coef >= 0 and focal_px > 0 and baseline > 0 and 0 <= edge_dropout <= 1):
+        raise ValueError("need sigma_coef >= 0, focal_px > 0, baseline > 0 and edge_dropout in [0, 1]; got "
+                         f"{sigma_coef}, {focal_px}, {baseline}, {edge_dropout}")
+    if isinstance(subpixel, bool) or int(subpixel) != subpixel or subpixel < 1:
+        raise ValueError(f"subpixel must be a positive integer, got {subpixel!r}")
+    if int(edge_width) != edge_width or edge_width < 0:
+        raise ValueError(f"edge_width must be a non-negative integer, got {edge_width!r}")
+    near, far = depth_range
+    if not 0 < near < far:
+        raise ValueError(f"depth_range must be (near, far) with 0 < near < far, got {depth_range!r}")
+    rng = np.random.default_rng(check_int(seed, "seed", minimum=0))
+    noisy = clean + rng.standard_normal(clean.shape) * sigma_coef * clean ** 2  # axial noise ∝ z²
+    fb = focal_px * baseline
+    with np.errstate(divide="ignore", invalid="ignore"):
+        disparity = np.round(fb / noisy * subpixel) / subpixel  # the sensor's 1/8-px disparity steps
+        out = fb / disparity
+    out[~((out >= near) & (out <= far))] = np.nan  # also NaN, inf from disparity 0
+    if edge_width > 0 and edge_dropout > 0:
+        filled = np.where(np.isfinite(clean), clean, np.inf)
+        nearest = ndimage.minimum_filter(filled, size=2 * int(edge_width) + 1)  # (H, W) nearest neighbour depth
+        shadow = nearest < clean * (1.0 - threshold)  # a much nearer surface is close by: far side of an edge
+        out[shadow & (rng.random(clean.shape) < edge_dropout)] = np.nan
+    out = out.astype(np.float32)
+    return out, np.isfinite(out)

@@ -1,0 +1,5 @@
+"""Real data and file formats: dataset loaders (``datasets``, ``middlebury``, ``colmap``, ``tum``,
+``formats``), file reading and writing (``fileio``, ``textparse``) and resampling (``resample``).
+
+May import: core, world, classical.
+"""

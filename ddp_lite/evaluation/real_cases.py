@@ -1,0 +1,181 @@
+"""Real completion cases: the Middlebury *Motorcycle* pair (``middlebury.load_motorcycle``) with holes.
+
+The synthetic scenes flatter DDP: their colour edges are depth edges and their surfaces are clean.
+A real photograph has texture everywhere, soft shading, and depth edges without colour edges. These
+cases put the real image, its real ground truth and real stereo failures in front of every fill.
+
+The pair is pooled from 500×740 (one column cropped) by an integer ``factor`` (8: 62×92, 4: 125×185,
+2: 250×370, 1: full size; ``factor_for_profile`` picks the one nearest a profile's size):
+colour by the block mean, depth by the block mean of *inverse* depth (so of disparity: the block's
+mean disparity), valid where at least 3/4 of the block is known. Pooling, not sub-sampling, keeps the
+colour and the depth of a pixel averaged over the same block. Hole kinds (``REAL_HOLES``):
+
+- ``blobs-1``, ``blobs-2``, ``blobs-3``: Depthcomp-style smooth blobs (20 % of the pixels, three fixed
+  patterns) cut into the ground truth;
+- ``sgbm``: OpenCV SGBM (``stereo.sgm_disparity``, dense parameters, left-right checked) on the
+  full-size pair, pooled: the input is SGBM's own depth, with its errors, where it answered;
+- ``occlusion``: the ground truth with holes where SGBM's left-right check fails (pixels the right
+  view does not see, mostly), pooled as a hole wherever a block has one.
+
+The truth's unknown pixels are holes in every input and are never scored (``RealCase.scored_holes``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import ndimage
+from ..classical.baselines import BASELINES
+from .experiments import Case
+from ..method.config import FitConfig
+from ..method.fit import complete_depth
+from ..classical.holes import random_holes
+from ..data.middlebury import load_motorcycle
+from ..method.profiles import get_profile
+from ..classical.stereo import sgm_disparity, sgm_left_right_failures
+from ..core.views import Scene, View
+
+__all__ = ["REAL_HOLES", "REAL_FACTORS", "make_real_case", "pool_scene", "RealCase", "factor_for_profile",
+           "compare_fills"]
+
+REAL_HOLES = ("blobs-1", "blobs-2", "blobs-3", "sgbm", "occlusion")
+REAL_FACTORS = {8: "62x92", 4: "125x185", 2: "250x370", 1: "500x740"}
+_CROP_WIDTH = 740  # 741 columns: one dropped so that 4 divides the width
+
+
+@dataclass
+class RealCase(Case):
+    """A :class:`~ddp_lite.evaluation.experiments.Case` on a real image: ``gt`` has NaN where the truth is unknown,
+    ``fb`` = f·B (px · m) at the working size, so disparity (px) = fb / depth − doffs."""
+
+    fb: float = 1.0
+
+    @property
+    def scored_holes(self) -> np.ndarray:
+        """(H, W) bool: holes of the input where the truth is known, the only pixels scored."""
+        return ~np.isfinite(self.depth) & np.isfinite(self.gt)
+
+    def rmse_px(self, depth, mask=None) -> float:
+        """Hole RMSE of ``depth`` (H, W) metres against the truth, in disparity pixels of the working size,
+        over the scored holes (or the part ``mask`` (H, W) bool of them; NaN if that is empty)."""
+        mask = self.scored_holes if mask is None else mask & self.scored_holes
+        if not mask.any():
+            return float("nan")
+        return float(np.sqrt(np.mean((self.fb / depth[mask] - self.fb / self.gt[mask]) ** 2)))
+
+    def regions(self) -> dict[str, np.ndarray]:
+        """Where in the scored holes an error comes from, (H, W) bool each: ``edges`` (within 2 px of a
+        depth edge of the truth: a disparity step > 1 px), ``textured`` / ``smooth`` (grey-level standard
+        deviation over 5×5 above / below 0.03), ``near`` / ``far`` (≤ / > 6 px from the nearest valid
+        input pixel)."""
+        disparity = np.nan_to_num(self.fb / self.gt, nan=0.0)
+        step = np.zeros(disparity.shape, bool)
+        step[:, 1:] |= np.abs(np.diff(disparity, axis=1)) > 1.0
+        step[1:] |= np.abs(np.diff(disparity, axis=0)) > 1.0
+        edges = ndimage.binary_dilation(step, iterations=2)
+        grey = self.rgb.mean(axis=2)
+        local_std = np.sqrt(np.maximum(ndimage.uniform_filter(grey ** 2, 5) - ndimage.uniform_filter(grey, 5) ** 2, 0))
+        distance = ndimage.distance_transform_edt(~np.isfinite(self.depth))
+        scored = self.scored_holes
+        return {"edges": scored & edges, "textured": scored & (local_std > 0.03), "smooth": scored & (local_std <= 0.03),
+                "near": scored & (distance <= 6), "far": scored & (distance > 6)}
+
+
+def _pool_mean(array: np.ndarray, factor: int) -> np.ndarray:
+    """Block means of (H·f, W·f, ...) → (H, W, ...), NaN-aware; NaN where < 3/4 of a block is finite."""
+    H, W = array.shape[0] // factor, array.shape[1] // factor
+    blocks = array[:H * factor, :W * factor].reshape(H, factor, W, factor, *array.shape[2:])
+    finite = np.isfinite(blocks)
+    total = np.where(finite, blocks, 0.0).sum(axis=(1, 3))
+    count = finite.sum(axis=(1, 3))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean = total / count
+    return np.where(count >= 0.75 * factor * factor, mean, np.nan).astype(np.float32)
+
+
+def _pool_depth(depth: np.ndarray, factor: int) -> np.ndarray:
+    """Depth (H·f, W·f) metres → (H, W): the block mean of inverse depth, inverted (NaN where unknown)."""
+    with np.errstate(divide="ignore"):
+        inverse = _pool_mean(1.0 / depth, factor)
+    return (1.0 / inverse).astype(np.float32)
+
+
+def pool_scene(scene: Scene, factor: int) -> Scene:
+    """A stereo ``scene`` pooled by an integer ``factor``: colour by block means, depth by block means of
+    inverse depth (valid where ≥ 3/4 of the block is), cameras and pixel ``meta`` scaled. The input is not
+    modified. Pixel (0, 0) stays the centre of the top-left (pooled) pixel: ``Camera.resized``."""
+    def pooled(view: View) -> View:
+        H, W = view.depth.shape[0] // factor, view.depth.shape[1] // factor
+        cropped = view.camera.__class__(view.camera.K, view.camera.cam_from_world, W * factor, H * factor)
+        return View(_pool_mean(view.rgb, factor), _pool_depth(view.depth, factor), cropped.resized(W, H), view.name)
+    meta = {k: (float(v) / factor if k in ("doffs", "ndisp", "focal") else v) for k, v in scene.meta.items()}
+    return Scene(scene.name, [pooled(v) for v in scene.views], [pooled(v) for v in scene.right], meta)
+
+
+def make_real_case(holes: str = "sgbm", factor: int = 4) -> RealCase:
+    """The Motorcycle pair pooled by ``factor`` (4 or 2) with holes of kind ``holes`` (one of
+    ``REAL_HOLES``) → :class:`RealCase` (the right view as the warp loss's neighbour). Deterministic.
+
+    Example:
+        >>> case = make_real_case("blobs-1", factor=4)
+        >>> case.depth.shape, round(float(np.isnan(case.depth).mean()), 2) >= 0.2
+        ((125, 185), True)
+    """
+    if holes not in REAL_HOLES:
+        raise ValueError(f"holes must be one of {REAL_HOLES}, got {holes!r}")
+    if factor not in REAL_FACTORS:
+        raise ValueError(f"factor must be one of {sorted(REAL_FACTORS)}, got {factor!r}")
+    full = _cropped(load_motorcycle())
+    scene = pool_scene(full, factor)
+    view, gt = scene[0], scene[0].depth
+    H, W = gt.shape
+    if holes.startswith("blobs"):
+        depth, _ = random_holes(gt, fraction=0.2, seed=int(holes.split("-")[1]), blob_size=min(H, W) / 10)
+    elif holes == "sgbm":
+        disparity, _ = sgm_disparity(full, 0, "dense")  # (500, 740) px, NaN holes
+        shifted = disparity + float(full.meta["doffs"])
+        with np.errstate(invalid="ignore", divide="ignore"):
+            sgbm = np.where(shifted > 0, float(full[0].camera.focal * full.meta["baseline"]) / shifted, np.nan)
+        depth = _pool_depth(sgbm.astype(np.float32), factor)
+    else:  # occlusion
+        failed = sgm_left_right_failures(full, 0, "dense")  # (500, 740) bool
+        blocks = failed[:H * factor, :W * factor].reshape(H, factor, W, factor).any(axis=(1, 3))
+        depth = np.where(blocks, np.nan, gt).astype(np.float32)
+    fb = float(view.camera.focal * scene.meta["baseline"])
+    return RealCase(f"motorcycle/{holes}", view.rgb, depth, gt, view.camera, [scene.right[0]], None, scene, 0,
+                    None, fb=fb)
+
+
+def factor_for_profile(profile=None) -> int:
+    """The pooling factor of the real cases for a profile: the smallest whose image has at most twice the
+    profile's pixels (``ci`` 48×64 → 8, ``class`` 96×128 → 4, ``paper`` → 1)."""
+    H, W = get_profile(profile).size
+    small_enough = [f for f in sorted(REAL_FACTORS) if (500 // f) * (_CROP_WIDTH // f) <= 2 * H * W]
+    return small_enough[0] if small_enough else max(REAL_FACTORS)
+
+
+def compare_fills(case: RealCase, profile=None, recipes=("paper", "kit"), variant: str = "rgbd", seed: int = 0,
+                  progress: bool = False) -> dict[str, np.ndarray]:
+    """Every classical fill (``baselines.BASELINES``) and DDP under each of ``recipes`` on ``case``
+    → {name: (H, W) disparity in px of the working size}, the input kept where it is valid.
+
+    The classical fills fill the disparity map (d = f·B/Z); DDP fits its own normalised disparity,
+    from the input depth's range, with the profile's size and budget (``rgbd+warp`` warps the right
+    view). Names: the fills' keys, then ``"DDP <recipe>"``.
+    """
+    disparity_in = case.fb / case.depth  # (H, W) px (plus doffs: a constant, it cancels in every error)
+    out = {name: fill(disparity_in, case.rgb) for name, fill in BASELINES.items()}
+    for recipe in recipes:
+        config = FitConfig.for_profile(profile, variant=variant, recipe=recipe, seed=seed, progress=progress)
+        neighbors = case.neighbors if variant == "rgbd+warp" else ()
+        result = complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant, config=config)
+        out[f"DDP {recipe}"] = case.fb / result.merged(case.depth)
+    return out
+
+
+def _cropped(scene: Scene) -> Scene:
+    """The full-size pair cropped to ``_CROP_WIDTH`` columns (the right-most dropped; K unchanged)."""
+    def crop(view: View) -> View:
+        camera = view.camera.__class__(view.camera.K, view.camera.cam_from_world, _CROP_WIDTH, view.camera.height)
+        return View(view.rgb[:, :_CROP_WIDTH], view.depth[:, :_CROP_WIDTH], camera, view.name)
+    return Scene(scene.name, [crop(v) for v in scene.views], [crop(v) for v in scene.right], dict(scene.meta))

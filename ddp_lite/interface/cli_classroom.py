@@ -1,0 +1,59 @@
+"""``ddp-lite student | solutions | grade``: the classroom commands, which call ``classroom``.
+
+Every output path is checked before the first notebook is read or run (a grading run takes
+minutes per student; a bad ``--csv`` found at the end would throw it away). Handlers take the
+parsed namespace and return the exit code; the parser is in ``cli``.
+"""
+from __future__ import annotations
+
+import os
+
+from ..core.outpaths import check_not_overlapping, check_output_file, check_output_folder
+
+
+def student_command(args) -> int:
+    """``ddp-lite student``: the student copies of the notebooks (exercise answers removed)."""
+    from .classroom import build_student
+    for path in build_student(args.source, args.out):
+        print(f"wrote {path}")
+    return 0
+
+
+def solutions_command(args) -> int:
+    """``ddp-lite solutions``: the notebooks executed with their answers, for the instructor."""
+    from .classroom import build_solutions
+
+    def log(message):
+        print(message, flush=True)
+    written = build_solutions(args.source, args.out, profile=args.profile, timeout=args.timeout, names=args.only,
+                              log=log)
+    print(f"{len(written)} executed notebooks in {os.path.abspath(args.out)} ({args.profile})")
+    return 0
+
+
+def grade_command(args) -> int:
+    """``ddp-lite grade``: score the students' submitted notebooks into a CSV."""
+    check_output_file(args.csv, "--csv", suffixes=(".csv",), example="grades.csv")
+    for flag, folder in (("--executed", args.executed), ("--feedback", args.feedback)):
+        if folder is not None:
+            check_output_folder(folder, flag)
+            check_not_overlapping(folder, flag, args.submissions, "SUBMISSIONS")
+            check_not_overlapping(folder, flag, args.source, "--source")
+    from .classroom import (format_grades, grade, merge_hand_points, read_hand_points, write_csv,
+                            write_feedback)
+    hand = read_hand_points(args.points) if args.points else None  # a bad file is refused before any run
+
+    def log(message):
+        print(message, flush=True)
+    scores = grade(args.submissions, args.source, timeout=args.timeout, profile=args.profile,
+                   executed_dir=args.executed, log=log, details=args.details)
+    if hand is not None:
+        scores = merge_hand_points(scores, hand, source=args.points)
+    print()
+    print(format_grades(scores))
+    write_csv(scores, args.csv)
+    print(f"per-exercise scores written to {os.path.abspath(args.csv)}")
+    if args.feedback:
+        for path in write_feedback(scores, args.feedback, args.submissions, args.source):
+            print(f"open answers: {path}")
+    return 0

@@ -1,0 +1,131 @@
+"""Fits done once: with ``DDP_CACHE`` set to a folder, a fit whose inputs were all seen before is read back.
+
+Re-running a notebook re-does every fit in it, minutes at ``class``. With the environment variable
+``DDP_CACHE`` naming a folder (``DDP_CACHE=~/.cache/ddp-lite make lab``), :func:`complete_depth` and
+:func:`fit_image` store each result there, under a hash of everything that decides it:
+
+- every argument: arrays by value, cameras and views by their fields, the ``FitConfig`` (its
+  ``progress`` flag aside: a progress bar changes no number), a warm start's weights;
+- the source code of ``ddp_lite`` itself, and the torch and NumPy versions: an edited library
+  never reads an old result;
+- torch's thread count, the CPU's vector instructions and whether a GPU is there: CPU reductions
+  may round differently with more threads or wider vectors, ``bf16=None`` means bfloat16 only where
+  the CPU computes it natively, and ``device=None`` means the GPU when there is one;
+- the profile ``DDP_PROFILE`` names: ``config=None`` means its config.
+
+So a cached result is the result the same call would compute now (fits are deterministic on a
+CPU: ``tests/test_fit.py::test_same_seed_same_numbers_and_inputs_untouched``), only without the
+wait; ``seconds`` is the time the fit took when it ran. A fit with a ``callback`` is never cached
+(the callback is what the caller wants to see), nor is a call whose arguments cannot be hashed,
+nor one that raises. Files are written
+atomically, so notebooks run side by side can share one folder. Unset (the default): no cache.
+Hashing is ``joblib.hash`` (MD5 of a pickle, arrays by their bytes).
+"""
+from __future__ import annotations
+
+import dataclasses
+import functools
+import hashlib
+import inspect
+import os
+import pickle
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from data_fetch.files import describe_kind, regular_file
+
+from data_fetch.atomic import write_bytes_atomic
+from .config import FitConfig
+from .profiles import current_profile_name
+from .recipes import current_recipe_name
+
+__all__ = ["ENV_VAR", "cache_folder", "cached"]
+
+ENV_VAR = "DDP_CACHE"
+
+
+def cache_folder() -> Path | None:
+    """The folder ``DDP_CACHE`` names (``~`` expanded), or None when it is unset or empty.
+
+    A name that exists but is not a folder is refused here, before any fit runs (``ValueError``):
+    otherwise the first store, after the whole fit, would fail."""
+    folder = os.environ.get(ENV_VAR, "").strip()
+    if not folder:
+        return None
+    path = Path(folder).expanduser()
+    if path.exists() and not path.is_dir():
+        raise ValueError(f"{ENV_VAR}={folder!r} names {path}, which is {describe_kind(path.stat().st_mode)}; "
+                         f"{ENV_VAR} must name a folder for the fit cache (or be unset)")
+    return path
+
+
+@functools.lru_cache(maxsize=1)
+def _library_digest() -> str:
+    """SHA-256 over the package's own source files (every sub-package), in path order."""
+    digest = hashlib.sha256()
+    root = Path(__file__).resolve().parents[1]  # ddp_lite/
+    for path in sorted(root.rglob("*.py")):
+        digest.update(path.relative_to(root).as_posix().encode() + b"\0" + path.read_bytes())
+    return digest.hexdigest()
+
+
+def _plain(value):
+    """``value`` with tensors as NumPy arrays and dataclasses as dicts, so that equal inputs hash
+    equally in any process (a pickled tensor does not: its bytes differ from run to run)."""
+    if isinstance(value, torch.Tensor):
+        return value.detach().cpu().numpy()
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        fields = {f.name: _plain(getattr(value, f.name)) for f in dataclasses.fields(value)}
+        if isinstance(value, FitConfig):
+            fields.pop("progress")
+        return (type(value).__qualname__, fields)
+    if isinstance(value, dict):
+        return {key: _plain(item) for key, item in value.items()}
+    if isinstance(value, (list, tuple)):
+        return type(value)(_plain(item) for item in value)
+    return value
+
+
+def _key(function, arguments: dict) -> str | None:
+    import joblib  # only when the cache is on
+
+    environment = (_library_digest(), torch.__version__, np.__version__, torch.get_num_threads(),
+                   torch.backends.cpu.get_cpu_capability(), torch.cuda.is_available(),
+                   current_profile_name(), current_recipe_name())  # config=None: the profile's config
+    try:
+        return joblib.hash((function.__module__, function.__qualname__, _plain(arguments), environment))
+    except Exception:  # an argument that does not pickle (the fit itself will say what is wrong with it)
+        return None
+
+
+def cached(function):
+    """Decorate a fit: when ``DDP_CACHE`` is set and no ``callback`` is given, return the stored result
+    of an identical earlier call, or compute, store and return it."""
+
+    signature = inspect.signature(function)
+
+    @functools.wraps(function)
+    def wrapper(*args, **kwargs):
+        folder = cache_folder()
+        if folder is None:
+            return function(*args, **kwargs)
+        try:  # positional or keyword, given or default: the same call hashes the same
+            bound = signature.bind(*args, **kwargs)
+        except TypeError:
+            return function(*args, **kwargs)  # let the call raise its own error
+        bound.apply_defaults()
+        key = None if bound.arguments.get("callback") is not None else _key(function, bound.arguments)
+        if key is None:
+            return function(*args, **kwargs)
+        path = folder / f"{function.__name__}-{key}.pkl"
+        try:
+            return pickle.loads(regular_file(path).read_bytes())
+        except Exception:  # not there yet, or unreadable (say, pickled by another version of a dependency)
+            pass
+        result = function(*args, **kwargs)
+        write_bytes_atomic(path, pickle.dumps(result, protocol=pickle.HIGHEST_PROTOCOL))
+        return result
+
+    return wrapper

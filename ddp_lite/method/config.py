@@ -1,0 +1,236 @@
+"""FitConfig: everything a fit needs besides the data; and the device and precision it runs on.
+
+Defaults are the paper's (supplement). A profile's sizes and schedules come from
+:meth:`FitConfig.for_profile`, the one place a :class:`~ddp_lite.method.profiles.Profile` becomes a config;
+what differs between the DDP variants comes from :mod:`ddp_lite.method.variants`.
+"""
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import functools
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+
+from ..core.checks import check_bool, check_choice, check_int, check_int_tuple, check_real
+from .losses import EDGE_GUIDES
+from .nets import DOWNSAMPLINGS, NET_INPUTS, NETS, PADDINGS, UPSAMPLINGS
+from .profiles import Profile, get_profile
+from .recipes import get_recipe
+from .variants import get_variant
+
+__all__ = ["FitConfig", "HOLDOUTS", "use_bf16", "resolve_device"]
+
+HOLDOUTS = ("pixels", "blobs")
+
+
+MAX_ITERATIONS = 1_000_000  # 60× the paper's 16000; more would only allocate (a loss history row per iteration)
+MAX_SEED = 2**63 - 1  # seeds are signed 64-bit wherever torch and NumPy take them
+
+
+@dataclass(slots=True)
+class FitConfig:
+    """Everything a fit needs besides the data. Defaults are the paper's (supplement).
+
+    ``iterations=None`` means 16000 (6000 for depth only); milestones are absolute iterations.
+    Use :meth:`for_profile` for the sizes and schedules of ``DDP_PROFILE``. Slotted: a field may be
+    changed (``config.lr = 1e-2``), a misspelt one (``config.lerning_rate``) raises ``AttributeError``
+    instead of being ignored. NumPy integers given for integer fields become Python ints.
+    """
+
+    net: str = "unet"  # "unet" or "skip"
+    channels: tuple | None = None  # encoder widths; None → the paper's
+    down: str = "stride"  # UNet down-sampling: "stride" (DIP) or "pool" (Ronneberger)
+    up: str = "bilinear"  # UNet up-sampling: "bilinear" or "nearest"
+    pad: str = "reflect"  # UNet conv padding: "reflect" (DIP) or "zeros"
+    noise_channels: int = 16  # channels of the fixed network input
+    net_input: str = "noise"  # "noise" (the paper) or "meshgrid" (x, y in the first two channels; nets.make_input)
+    image_input: float = 0.0  # > 0: the colour image × this joins the net input (variants with colour; nets.image_channels)
+    image_blur: float = 1.0  # σ in px of the Gaussian blur on that image (0: none)
+    fill_input: float = 0.0  # > 0: a classical fill of the input disparity × this joins the net input (nets.fill_channel)
+    lr: float = 5e-5
+    schedule: str = "step"  # "step" (lr × lr_gamma at each milestone) or "cosine" (to 0 at the last iteration)
+    iterations: int | None = None
+    lr_milestones: tuple = (12000, 15000)
+    lr_gamma: float = 0.01
+    lambda_z: float = 0.8  # L1 share of L_disp
+    lambda_i: float = 0.5  # L1 share of L_rgb
+    lambda_w: float = 0.5  # SSIM share of L_warp
+    gammas: tuple | None = None  # (γ1, γ2); None → (0.96, 0.02) with warp, (0.98, 0.01) without
+    reg_noise_std: float = 0.0  # DIP input jitter: n + σ·N(0, 1) every iteration
+    average_outputs: float = 0.0  # DIP output averaging: EMA weight (0.99 in DIP), 0 = off
+    ensemble: int = 1  # fits with seeds seed, seed+1, ...; their disparities are averaged
+    smoothness: float = 0.0  # weight of an edge-aware second-order smoothness of disparity in the holes (0: the paper)
+    smoothness_edge: float = 10.0  # how strongly colour edges relax both hole terms: exp(-edge · |∇I|)
+    edge_guide: str = "grey"  # |∇I| of the grey image, or "rgb": the largest over the three channels
+    flatness: float = 0.0  # weight of an edge-aware first-order smoothness in the holes (0: off)
+    affinity: float = 0.0  # weight of the colorization energy in the holes (losses.affinity_loss; 0: off)
+    flatness_reach: float | None = None  # enclosed holes: that term only within this many px of valid depth (None: everywhere)
+    disparity_margin: float = 1.25  # transform=None: d_min / margin … d_max × margin around the valid depth
+    auto_stop: bool = False
+    holdout_fraction: float = 0.05  # share of valid pixels held out when auto_stop is on
+    holdout: str = "pixels"  # their shape: "pixels" (scattered) or "blobs" (hole-like patches)
+    patience: int = 200  # iterations without held-out improvement that make a plateau
+    plateau_decays: int = 0  # auto-stop: cut lr by lr_gamma at the first this-many plateaus, stop at the next
+    eval_every: int = 10
+    seed: int = 0
+    device: str | None = None  # None → cuda or mps when available, else cpu
+    bf16: bool | None = False  # the network (not the losses) under bfloat16 autocast; None: where the hardware has it
+    channels_last: bool = False  # memory format of the network's activations
+    progress: bool = True
+    callback_every: int = 0
+    max_memory_gb: float | None = None  # refuse a fit whose estimated peak exceeds this; None → 75 % of RAM
+
+    def __post_init__(self):
+        for f in dataclasses.fields(self):  # np.int64(3) → 3: torch's seeding takes Python ints only
+            value = getattr(self, f.name)
+            if isinstance(value, np.integer):
+                setattr(self, f.name, int(value))
+
+    def __setattr__(self, name, value):
+        try:
+            object.__setattr__(self, name, value)
+        except AttributeError:  # not a field (the class is slotted): a typo must not pass in silence
+            close = difflib.get_close_matches(name, [f.name for f in dataclasses.fields(self)], n=1)
+            raise AttributeError(f"FitConfig has no field {name!r}" + (f"; did you mean {close[0]!r}?" if close else
+                                 "; see dataclasses.fields(FitConfig)")) from None
+
+    @classmethod
+    def for_profile(cls, profile=None, variant: str = "rgbd+warp", recipe=None, **overrides) -> "FitConfig":
+        """The config of a profile (name, :class:`Profile` or None for ``DDP_PROFILE``) for ``variant``,
+        running ``recipe`` (name, :class:`~ddp_lite.method.recipes.Recipe` or None for ``DDP_RECIPE``; ``"kit"``,
+        the default, is the paper's losses plus the kit's additions at that profile, ``"paper"`` the
+        paper's method), then ``overrides``.
+
+        The profile gives size and budget: every :class:`Profile` field that is also a FitConfig field
+        is copied, and three are derived: ``channels`` (the UNet's or the SkipNet's widths, by ``net``),
+        ``iterations`` (the variant's count) and ``lr_milestones`` (those the variant's run reaches).
+        The recipe gives the method: its :meth:`~ddp_lite.method.recipes.Recipe.settings` at the profile's name.
+
+        Example:
+            >>> config = FitConfig.for_profile("ci", variant="rgbd", recipe="paper")
+            >>> config.smoothness, config.net_input, config.image_input
+            (0.0, 'noise', 0.0)
+        """
+        profile = get_profile(profile)
+        iterations = profile.iterations_for(get_variant(variant))
+        net = overrides.get("net", "unet")
+        values = {name: getattr(profile, name) for name in _COPIED_FROM_PROFILE}
+        values.update(net=net, channels=profile.channels if net == "unet" else profile.skip_channels,
+                      iterations=iterations, lr_milestones=profile.milestones(iterations))
+        values.update(get_recipe(recipe).settings(profile.name))
+        values.update(overrides)
+        return cls(**values)
+
+    def replace(self, **changes) -> "FitConfig":
+        """A copy with some fields changed."""
+        return dataclasses.replace(self, **changes)
+
+    def resolved_iterations(self, variant: str) -> int:
+        """The iteration count this config runs for ``variant``: ``iterations``, or the paper's."""
+        if self.iterations is not None:
+            return int(self.iterations)
+        return get_variant(variant).paper_iterations
+
+    def validate(self) -> None:
+        """Raise ``TypeError``/``ValueError`` naming the first bad field: every number must be finite and
+        of its type (no bool for an int, no 2.7 for an iteration count), every choice one of its values."""
+        check_choice(self.net, "config.net", NETS)
+        if self.channels is not None:
+            check_int_tuple(self.channels, "config.channels", minimum=1, min_length=2 if self.net == "unet" else 1)
+        for name, choices in (("down", DOWNSAMPLINGS), ("up", UPSAMPLINGS), ("pad", PADDINGS),
+                              ("schedule", ("step", "cosine")), ("holdout", HOLDOUTS), ("net_input", NET_INPUTS),
+                              ("edge_guide", EDGE_GUIDES)):
+            check_choice(getattr(self, name), f"config.{name}", choices)
+        for name, minimum in (("noise_channels", 1), ("ensemble", 1), ("patience", 1), ("plateau_decays", 0),
+                              ("eval_every", 1), ("callback_every", 0)):
+            check_int(getattr(self, name), f"config.{name}", minimum=minimum)
+        check_int(self.seed, "config.seed", minimum=0, maximum=MAX_SEED - (self.ensemble - 1))
+        if self.net_input == "meshgrid" and self.noise_channels < 2:
+            raise ValueError(f"config.noise_channels must be at least 2 with net_input='meshgrid' (x and y), "
+                             f"got {self.noise_channels}")
+        if self.iterations is not None:
+            check_int(self.iterations, "config.iterations", minimum=1, maximum=MAX_ITERATIONS)
+        check_int_tuple(self.lr_milestones, "config.lr_milestones", minimum=1)
+        for name, low, high, low_open, high_open in (
+                ("lr", 0.0, None, True, False), ("lr_gamma", 0.0, None, True, False),
+                ("lambda_z", 0.0, 1.0, False, False), ("lambda_i", 0.0, 1.0, False, False),
+                ("lambda_w", 0.0, 1.0, False, False), ("reg_noise_std", 0.0, None, False, False),
+                ("average_outputs", 0.0, 1.0, False, True), ("smoothness", 0.0, None, False, False),
+                ("flatness", 0.0, None, False, False), ("affinity", 0.0, None, False, False), ("image_input", 0.0, None, False, False),
+                ("image_blur", 0.0, None, False, False), ("fill_input", 0.0, None, False, False),
+                ("smoothness_edge", 0.0, None, False, False), ("disparity_margin", 1.0, None, False, False),
+                ("holdout_fraction", 0.0, 0.5, True, True)):
+            check_real(getattr(self, name), f"config.{name}", low, high, low_open, high_open)
+        for name in ("auto_stop", "channels_last", "progress"):
+            check_bool(getattr(self, name), f"config.{name}")
+        if self.bf16 is not None:  # None: decided by the hardware (use_bf16)
+            check_bool(self.bf16, "config.bf16")
+        if self.gammas is not None:
+            if isinstance(self.gammas, (str, bytes)) or not isinstance(self.gammas, (tuple, list)) or len(self.gammas) != 2:
+                raise TypeError(f"config.gammas must be a pair (γ1, γ2), got {self.gammas!r}")
+            g1, g2 = (check_real(g, f"config.gammas[{i}]", 0.0, 1.0) for i, g in enumerate(self.gammas))
+            if g1 + g2 > 1.0:
+                raise ValueError(f"config.gammas must have γ1 + γ2 ≤ 1, got {self.gammas}")
+        if self.flatness_reach is not None:
+            check_real(self.flatness_reach, "config.flatness_reach", 0.0, None)
+        if self.max_memory_gb is not None:
+            check_real(self.max_memory_gb, "config.max_memory_gb", 0.0, None, low_open=True)
+        if self.device is not None:
+            resolve_device(self)  # a name torch knows and a device this machine has
+
+
+# the Profile fields for_profile copies as they are (channels, iterations, lr_milestones are derived)
+_COPIED_FROM_PROFILE = tuple(sorted({f.name for f in dataclasses.fields(Profile)}
+                                    & {f.name for f in dataclasses.fields(FitConfig)}
+                                    - {"channels", "iterations", "lr_milestones"}))
+
+
+def use_bf16(bf16: bool | None, device: torch.device) -> bool:
+    """Whether a fit runs its net in bfloat16: ``bf16`` itself, or for ``None`` whether ``device``
+    computes bfloat16 natively (a CPU with AVX-512 BF16 or AMX, a CUDA GPU with bf16). Where it
+    is emulated it is slower than float32 (0.84× on a CPU without it), where it is native 1.37×
+    faster at 96×128 with no worse hole error over 8 seeds (``benchmarks/README.md``)."""
+    if bf16 is not None:
+        return bool(bf16)
+    if device.type == "cuda":
+        return torch.cuda.is_bf16_supported()
+    return device.type == "cpu" and _cpu_has_native_bf16()
+
+
+@functools.lru_cache(maxsize=1)
+def _cpu_has_native_bf16() -> bool:
+    # oneDNN reports bf16 "supported" on any AVX-512 CPU, emulated or not: ask the CPU itself
+    try:
+        with open("/proc/cpuinfo") as handle:
+            flags = next((line.split(":", 1)[1].split() for line in handle if line.startswith("flags")), [])
+    except OSError:
+        return False
+    return "avx512_bf16" in flags or "amx_bf16" in flags
+
+
+def resolve_device(config: FitConfig) -> torch.device:
+    if config.device is not None:
+        if not isinstance(config.device, (str, torch.device)):
+            raise TypeError(f"config.device must be None or a name like 'cpu', 'cuda', 'cuda:0', 'mps', "
+                            f"got {type(config.device).__name__}")
+        try:
+            device = torch.device(config.device)
+        except RuntimeError:
+            raise ValueError(f"config.device must be None, 'cpu', 'cuda[:N]' or 'mps', got {config.device!r}") from None
+        mps = getattr(torch.backends, "mps", None)
+        available = {"cpu": True, "cuda": torch.cuda.is_available(),
+                     "mps": mps is not None and mps.is_available()}
+        if not available.get(device.type, False):
+            raise ValueError(f"config.device={config.device!r}: this machine has no usable {device.type} device; "
+                             f"use 'cpu' or None (picks cuda/mps when present)")
+        if device.type == "cuda" and device.index is not None and device.index >= torch.cuda.device_count():
+            raise ValueError(f"config.device={config.device!r}: only {torch.cuda.device_count()} CUDA device(s)")
+        return device
+    if torch.cuda.is_available():
+        return torch.device("cuda")
+    if getattr(torch.backends, "mps", None) is not None and torch.backends.mps.is_available():
+        return torch.device("mps")
+    return torch.device("cpu")

@@ -1,0 +1,90 @@
+"""Deep Image Prior on an image (paper Sec. 3.1; Ulyanov et al. 2018): denoising and inpainting.
+
+The same loop as DDP (:mod:`ddp_lite.method.loop`) with a masked MSE on three colour channels.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import loop
+from .cache import cached
+from ..core.checks import MIN_VALID_PIXELS, check_callback, check_image
+from .config import FitConfig, resolve_device
+from .loop import check_finite_output, check_memory, holdout_mask, to_tensor
+from .nets import check_input_size
+
+__all__ = ["ImageResult", "fit_image"]
+
+
+@dataclass
+class ImageResult:
+    """What :func:`fit_image` returns: the restored image (H, W, C) and the history."""
+
+    image: np.ndarray
+    history: dict
+    iterations: int
+    best_iteration: int
+    seconds: float
+
+
+@cached
+def fit_image(image, mask=None, config: FitConfig | None = None, clean=None, callback=None) -> ImageResult:
+    """Deep Image Prior on an image: fit ``image`` (H, W, 3) float [0, 1] where ``mask`` (H, W) bool
+    is True (default: everywhere) with a masked MSE; ``clean`` (H, W, 3), if given, is tracked as PSNR.
+
+    Denoising: pass the noisy image and no mask. Inpainting: pass the mask of known pixels.
+    """
+    # an image fit runs the RGBD schedule: the profile's ``iterations`` (the paper's 16000)
+    config = FitConfig.for_profile(variant="rgbd") if config is None else config
+    config.validate()
+    image = check_image(image, "image")
+    H, W, _ = image.shape
+    check_input_size(config.net, config.channels, H, W, "image")
+    check_callback(callback, config.callback_every)
+    mask = np.ones((H, W), bool) if mask is None else np.asarray(mask)
+    if mask.shape != (H, W) or mask.dtype != bool:
+        raise ValueError(f"mask must be bool (H, W) = {(H, W)}, got {mask.dtype} {mask.shape}")
+    if mask.sum() < MIN_VALID_PIXELS:
+        raise ValueError(f"mask has {int(mask.sum())} known pixels; need at least {MIN_VALID_PIXELS}")
+    clean = check_image(clean, "clean", (H, W)) if clean is not None else None
+    device = resolve_device(config)
+    heldout = holdout_mask(mask, config.holdout_fraction, config.seed) if config.auto_stop else np.zeros_like(mask)
+    target = to_tensor(image, device)
+    fit_mask = to_tensor(mask & ~heldout, device)
+    heldout_t = to_tensor(heldout, device)
+    n_fit = float(fit_mask.sum()) * 3
+
+    def loss_fn(output):
+        mse = (((output - target) ** 2) * fit_mask).sum() / n_fit
+        return mse, {"mse": mse}
+
+    heldout_error = None
+    if heldout.any():
+        def heldout_error(output):
+            return float((((output - target) ** 2) * heldout_t).sum() / (float(heldout.sum()) * 3))
+
+    evaluate = None
+    if clean is not None:
+        clean_t = to_tensor(clean, device)
+
+        def evaluate(output):
+            mse = float(((output.clamp(0, 1) - clean_t) ** 2).mean())
+            return {"psnr": 10.0 * np.log10(1.0 / max(mse, 1e-12))}
+
+    user_callback = None
+    if callback is not None:
+        def user_callback(iteration, output):
+            callback(iteration, output[0].permute(1, 2, 0).cpu().numpy())
+
+    check_memory(config, 3, H, W, 0, device)
+    net, noise = loop.build(config, 3, H, W, device)
+    start = time.perf_counter()
+    output, history, ran, best = loop.run(net, noise, loss_fn, config, config.resolved_iterations("rgbd"),
+                                          heldout_error, evaluate, user_callback, description="DIP")
+    restored = output[0].permute(1, 2, 0).cpu().numpy().astype(np.float32)
+    check_finite_output("image", restored)
+    return ImageResult(image=restored, history=history,
+                       iterations=ran, best_iteration=best, seconds=time.perf_counter() - start)

@@ -1,0 +1,73 @@
+"""The kit's terms in the holes: not in the paper, added to its loss by the ``kit`` recipe.
+
+    L = L_total (paper, :mod:`ddp_lite.method.paper_method`) + s·L_curv + f·L_flat + a·L_aff
+
+on the disparity Z in the *free* pixels (holes and held-out pixels), each relaxed at colour edges:
+
+- L_curv = Σ w·(|∂²Z/∂x²| + |∂²Z/∂y²|) / Σ w, curvature (``FitConfig.smoothness`` = s): zero on any
+  plane, it keeps a hole far from valid pixels from bending where nothing constrains it;
+- L_flat = Σ w'·(|∂Z/∂x| + |∂Z/∂y|) / Σ w, first order (``FitConfig.flatness`` = f): a hole that
+  reaches the border levels off instead of carrying the last slope outward; ``flatness_reach``
+  limits it, in enclosed holes, to a rim of that many px (w' = w there, 0 elsewhere);
+- w = exp(-edge·|∇I|) of the grey image, or the largest over R, G, B (``smoothness_edge``,
+  ``edge_guide``; :func:`~ddp_lite.method.losses.smoothness_weights`);
+- L_aff = Σ |Z_p - Σ_q w_pq Z_q| / #free, Levin et al.'s colorization energy
+  (``FitConfig.affinity`` = a; :func:`~ddp_lite.method.losses.affinity_loss`).
+
+Why these weights and what they bought on the quality suite: ``docs/tuning_history.md``.
+"""
+from __future__ import annotations
+
+import numpy as np
+import torch
+
+from ..classical.baselines import NEIGHBOUR_OFFSETS, colorization_affinities
+from .config import FitConfig
+from .loop import to_tensor
+from .losses import affinity_loss, flatness_loss, flatness_region, smoothness_loss, smoothness_weights
+
+__all__ = ["HoleTerms"]
+
+
+class HoleTerms:
+    """The kit's hole terms of one fit: ``add(disparity, total, terms)`` adds each that is on.
+
+    ``free`` (H, W) bool: the pixels no data term constrains (holes and held-out pixels);
+    ``rgb_t`` (1, 3, H, W) the colour the edges are measured on (None: no edges); ``rgb``
+    (H, W, 3) NumPy, for the colorization affinities (None: no affinity term).
+    """
+
+    def __init__(self, config: FitConfig, free: np.ndarray, rgb_t: torch.Tensor | None, rgb: np.ndarray | None,
+                 device):
+        self.config = config
+        H, W = free.shape
+        self.smooth_weights = self.flat_weights = self.weight_total = None
+        if config.smoothness > 0 or config.flatness > 0:
+            guide = rgb_t if rgb_t is not None else torch.zeros(1, 3, H, W, device=device)
+            self.smooth_weights = smoothness_weights(guide, to_tensor(free, device).bool(), config.smoothness_edge,
+                                                     config.edge_guide)  # (1, 2, H, W)
+            # both terms divide by the full weights' sum, also where flatness acts on part of the holes
+            self.weight_total = self.smooth_weights.sum()
+            self.flat_weights = self.smooth_weights
+            if config.flatness > 0 and config.flatness_reach is not None:
+                self.flat_weights = self.smooth_weights * to_tensor(flatness_region(free, config.flatness_reach), device)
+        self.affinities = self.affinity_region = self.affinity_total = None
+        if config.affinity > 0 and rgb is not None:
+            self.affinities = torch.from_numpy(colorization_affinities(rgb))[None].to(device)  # (1, 8, H, W)
+            self.affinity_region = to_tensor(free, device)  # (1, 1, H, W)
+            self.affinity_total = self.affinity_region.sum()
+
+    def add(self, disparity: torch.Tensor, total: torch.Tensor, terms: dict) -> torch.Tensor:
+        """``total`` plus each term that is on (weighted), each also recorded in ``terms``."""
+        config = self.config
+        if config.smoothness > 0:
+            terms["smooth"] = smoothness_loss(disparity, self.smooth_weights, self.weight_total)
+            total = total + config.smoothness * terms["smooth"]
+        if config.flatness > 0:
+            terms["flat"] = flatness_loss(disparity, self.flat_weights, self.weight_total)
+            total = total + config.flatness * terms["flat"]
+        if self.affinities is not None:
+            terms["affinity"] = affinity_loss(disparity, self.affinities, NEIGHBOUR_OFFSETS, self.affinity_region,
+                                              self.affinity_total)
+            total = total + config.affinity * terms["affinity"]
+        return total

@@ -1,0 +1,95 @@
+"""Profiles: how big and how long, the ``DDP_PROFILE`` switch (``ci``, ``class`` or ``paper``).
+
+- ``ci``: seconds per notebook on a 2-core CPU (what nbval runs): tiny images, a narrow net;
+- ``class`` (default): minutes per notebook on a laptop CPU, sizes where the effects show;
+- ``paper``: the paper's sizes and schedules (lr 5e-5, ×0.01 at 12000 and 15000 of 16000
+  iterations; depth-only 6000), meant for a GPU.
+
+A profile sets size and budget only: image size, net widths, iterations, learning-rate schedule,
+auto-stop, views per scene, seeds. What a fit optimises is the recipe (:mod:`ddp_lite.method.recipes`).
+The paper's rate fills nothing in 1000 iterations at our small sizes, so ``ci`` and ``class`` use
+1e-2: ``ci`` cuts it ×0.3 at iterations 90 and 128 of a fixed 150; ``class`` cuts it at the first
+plateau of a held-out error and stops at the second (:class:`~ddp_lite.method.loop.PlateauStopper`).
+How these settings were chosen: ``docs/tuning_history.md``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ..core.checks import env_choice, named_choice
+from .recipes import describe_method, get_recipe
+from .variants import get_variant
+
+__all__ = ["Profile", "PROFILES", "get_profile", "current_profile_name"]
+
+ENV_VAR = "DDP_PROFILE"
+DEFAULT = "class"
+
+
+@dataclass(frozen=True)
+class Profile:
+    """Sizes and schedules one profile uses everywhere. A field named like a ``FitConfig`` field is
+    copied into the configs :meth:`FitConfig.for_profile` builds (``channels``, ``iterations`` and
+    ``lr_milestones`` are derived per variant and net); the others size scenes, tables and DIP."""
+
+    name: str
+    size: tuple[int, int]  # (H, W) of scenes and images
+    channels: tuple[int, ...]  # UNet encoder widths
+    skip_channels: tuple[int, ...]  # SkipNet widths
+    iterations: int  # RGBD variants
+    iterations_depth_only: int
+    lr: float
+    lr_milestones: tuple[int, ...]  # iterations (as in FitConfig) where lr × lr_gamma; a shorter run skips them
+    lr_gamma: float
+    auto_stop: bool
+    patience: int
+    plateau_decays: int  # auto-stop: lr cuts on held-out plateaus before the stop
+    eval_every: int
+    n_views: int  # views per synthetic multi-view scene
+    seeds: tuple[int, ...]  # seeds for "mean and spread" tables
+    image_iterations: int  # Deep Image Prior on a natural image
+
+    def iterations_for(self, variant) -> int:
+        """The iteration count of ``variant`` (a name or :class:`~ddp_lite.method.variants.Variant`) here."""
+        return self.iterations_depth_only if get_variant(variant).depth_only else self.iterations
+
+    def milestones(self, iterations: int) -> tuple[int, ...]:
+        """The learning-rate decay iterations a run of ``iterations`` reaches (paper depth-only: none)."""
+        return tuple(m for m in self.lr_milestones if m < iterations)
+
+    def describe(self) -> str:
+        """One line for a notebook's first cell: the size and budget, and what the ``kit`` recipe adds here."""
+        H, W = self.size
+        return (f"profile '{self.name}': {H}×{W} images, UNet {'-'.join(map(str, self.channels))}, "
+                f"{'≤ ' if self.auto_stop else ''}{self.iterations} iterations (depth-only {self.iterations_depth_only}), "
+                f"lr {self.lr:g}, auto-stop {'on' if self.auto_stop else 'off'}"
+                + describe_method(get_recipe("kit").settings(self.name)))
+
+
+PROFILES = {
+    "ci": Profile("ci", size=(48, 64), channels=(16, 32, 64, 128), skip_channels=(32, 32, 32, 32),
+                  iterations=150, iterations_depth_only=150, lr=1e-2, lr_milestones=(90, 128),
+                  lr_gamma=0.3, auto_stop=False, patience=60, plateau_decays=0, eval_every=10, n_views=4, seeds=(0,),
+                  image_iterations=120),
+    "class": Profile("class", size=(96, 128), channels=(16, 32, 64, 128, 256), skip_channels=(128,) * 5,
+                     iterations=600, iterations_depth_only=600, lr=1e-2, lr_milestones=(),
+                     lr_gamma=0.3, auto_stop=True, patience=50, plateau_decays=1, eval_every=10, n_views=6, seeds=(0, 1),
+                     image_iterations=300),
+    "paper": Profile("paper", size=(512, 960), channels=(32, 64, 128, 256, 512), skip_channels=(128,) * 5,
+                     iterations=16000, iterations_depth_only=6000, lr=5e-5, lr_milestones=(12000, 15000),
+                     lr_gamma=0.01, auto_stop=False, patience=2000, plateau_decays=0, eval_every=100, n_views=8,
+                     seeds=(0, 1, 2), image_iterations=3000),
+}
+
+
+def current_profile_name() -> str:
+    """The profile named by ``DDP_PROFILE`` (default ``class``)."""
+    return env_choice(ENV_VAR, DEFAULT, PROFILES)
+
+
+def get_profile(name: str | Profile | None = None) -> Profile:
+    """The named profile, or the one ``DDP_PROFILE`` selects; a :class:`Profile` is returned as is
+    (so every function taking ``profile`` accepts a name, a Profile or None the same way)."""
+    if isinstance(name, Profile):
+        return name
+    return named_choice(name, PROFILES, "profile", current_profile_name)
