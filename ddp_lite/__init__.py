@@ -45,7 +45,7 @@ _PACKAGES = {  # sub-package → its modules, each one concern (the sub-package'
     "world": ('scenes', 'render', 'textures', 'photo_texture', 'solids', 'terrain', 'organic', 'neighbors'),
     "classical": ('baselines', 'stereo', 'holes', 'kinect'),
     "method": ('config', 'variants', 'disparity', 'losses', 'paper_method', 'hole_terms', 'nets', 'warp', 'loop',
-               'fit', 'fit_inputs', 'ensemble', 'coarse_to_fine', 'dip', 'profiles', 'recipes', 'cache'),
+               'device', 'fit', 'fit_inputs', 'ensemble', 'coarse_to_fine', 'dip', 'profiles', 'recipes', 'cache'),
     "data": ('datasets', 'fileio', 'formats', 'colmap', 'tum', 'middlebury', 'textparse', 'resample'),
     "evaluation": ('metrics', 'fusion', 'experiments', 'mvs_kinect_experiments', 'real_cases', 'viz', 'plane_sweep'),
     "sequences": ('sequence', 'sequence_cost', 'sequence_files', 'sequence_jobs', 'runner', 'working_size'),

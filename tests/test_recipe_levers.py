@@ -259,7 +259,7 @@ def test_smoothness_fills_a_hole_in_a_plane_better_than_without():
 
 
 def test_bf16_none_follows_the_cpu_flags():
-    from ddp_lite.method.config import _cpu_has_native_bf16, use_bf16
+    from ddp_lite.method.device import _cpu_has_native_bf16, use_bf16
     cpu = torch.device("cpu")
     assert use_bf16(True, cpu) is True and use_bf16(False, cpu) is False
     try:

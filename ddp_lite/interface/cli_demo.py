@@ -17,7 +17,7 @@ import numpy as np
 from matplotlib.figure import Figure  # no pyplot: no backend to choose, no global figure state
 
 from ..classical.baselines import fill_colorization, fill_linear
-from ..method.config import resolve_device
+from ..method.device import resolve_device
 from ..evaluation.experiments import error_table, format_table, make_case
 from ..method.config import FitConfig
 from ..method.fit import complete_depth

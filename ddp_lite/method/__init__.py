@@ -1,6 +1,6 @@
 """Deep Depth Prior itself. The paper's loss in one screen (``paper_method``) and its parts
 (``disparity``, ``losses``, ``warp``, ``nets``, ``variants``); the fit (``fit``, ``fit_inputs``,
-``loop``, ``config``); the kit's additions beside it (``hole_terms``, ``ensemble``,
+``loop``, ``config``, ``device``); the kit's additions beside it (``hole_terms``, ``ensemble``,
 ``coarse_to_fine``); Deep Image Prior (``dip``); size and method switches (``profiles``,
 ``recipes``); the fit cache (``cache``).
 

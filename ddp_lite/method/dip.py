@@ -12,7 +12,8 @@ import numpy as np
 from . import loop
 from .cache import cached
 from ..core.checks import MIN_VALID_PIXELS, check_callback, check_image
-from .config import FitConfig, resolve_device
+from .config import FitConfig
+from .device import resolve_device
 from .loop import check_finite_output, check_memory, holdout_mask, to_tensor
 from .nets import check_input_size
 

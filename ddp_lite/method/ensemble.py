@@ -13,7 +13,8 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 import torch
 
-from .config import FitConfig, resolve_device
+from .config import FitConfig
+from .device import resolve_device
 from .loop import estimate_peak_memory_gb, memory_limit_gb
 from .variants import get_variant
 

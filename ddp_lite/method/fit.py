@@ -22,7 +22,8 @@ import torch
 from . import loop
 from .cache import cached
 from ..core.checks import MIN_VALID_PIXELS, check_callback, check_depth
-from .config import FitConfig, resolve_device
+from .config import FitConfig
+from .device import resolve_device
 from .disparity import DisparityTransform
 from .ensemble import mean_outputs, parallel_members, run_members
 from .fit_inputs import check_fit_inputs

@@ -20,7 +20,8 @@ import numpy as np
 import torch
 from scipy import ndimage
 
-from .config import FitConfig, use_bf16
+from .config import FitConfig
+from .device import use_bf16
 from .nets import SKIP_CHANNELS, UNET_CHANNELS, build_net, count_parameters, make_input
 from ..core.progress import progress as tqdm
 

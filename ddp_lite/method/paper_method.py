@@ -17,7 +17,7 @@ W_nbr is a neighbour's image warped into the reference view through the predicte
 The kit's additions sit beside this, each in its own module and off in the ``paper`` recipe:
 terms in the holes (:mod:`ddp_lite.method.hole_terms`), other net inputs (:mod:`ddp_lite.method.nets`),
 auto-stop (:mod:`ddp_lite.method.loop`), ensembles (:mod:`ddp_lite.method.ensemble`), bfloat16
-(:func:`ddp_lite.method.config.use_bf16`).
+(:func:`ddp_lite.method.device.use_bf16`).
 """
 from __future__ import annotations
 

@@ -1,0 +1,64 @@
+"""Where and in what precision a fit runs: the device (CPU by default; CUDA or MPS when asked for or
+available) and bfloat16 for the net (``FitConfig.bf16``; not in the paper).
+
+    bf16 = config.bf16, or for None: the device computes bfloat16 natively (AVX-512 BF16 / AMX, CUDA)
+
+Only the net runs under bfloat16 autocast (:func:`ddp_lite.method.loop.run`); the losses stay in float32.
+"""
+from __future__ import annotations
+
+import functools
+
+import torch
+
+__all__ = ["use_bf16", "resolve_device"]
+
+
+def use_bf16(bf16: bool | None, device: torch.device) -> bool:
+    """Whether a fit runs its net in bfloat16: ``bf16`` itself, or for ``None`` whether ``device``
+    computes bfloat16 natively (a CPU with AVX-512 BF16 or AMX, a CUDA GPU with bf16). Where it
+    is emulated it is slower than float32 (0.84× on a CPU without it), where it is native 1.37×
+    faster at 96×128 with no worse hole error over 8 seeds (``benchmarks/README.md``)."""
+    if bf16 is not None:
+        return bool(bf16)
+    if device.type == "cuda":
+        return torch.cuda.is_bf16_supported()
+    return device.type == "cpu" and _cpu_has_native_bf16()
+
+
+@functools.lru_cache(maxsize=1)
+def _cpu_has_native_bf16() -> bool:
+    # oneDNN reports bf16 "supported" on any AVX-512 CPU, emulated or not: ask the CPU itself
+    try:
+        with open("/proc/cpuinfo") as handle:
+            flags = next((line.split(":", 1)[1].split() for line in handle if line.startswith("flags")), [])
+    except OSError:
+        return False
+    return "avx512_bf16" in flags or "amx_bf16" in flags
+
+
+def resolve_device(config) -> torch.device:
+    """The ``torch.device`` a :class:`~ddp_lite.method.config.FitConfig` runs on: ``config.device``, checked
+    against this machine, or for None CUDA, then MPS, then the CPU."""
+    if config.device is not None:
+        if not isinstance(config.device, (str, torch.device)):
+            raise TypeError(f"config.device must be None or a name like 'cpu', 'cuda', 'cuda:0', 'mps', "
+                            f"got {type(config.device).__name__}")
+        try:
+            device = torch.device(config.device)
+        except RuntimeError:
+            raise ValueError(f"config.device must be None, 'cpu', 'cuda[:N]' or 'mps', got {config.device!r}") from None
+        mps = getattr(torch.backends, "mps", None)
+        available = {"cpu": True, "cuda": torch.cuda.is_available(),
+                     "mps": mps is not None and mps.is_available()}
+        if not available.get(device.type, False):
+            raise ValueError(f"config.device={config.device!r}: this machine has no usable {device.type} device; "
+                             f"use 'cpu' or None (picks cuda/mps when present)")
+        if device.type == "cuda" and device.index is not None and device.index >= torch.cuda.device_count():
+            raise ValueError(f"config.device={config.device!r}: only {torch.cuda.device_count()} CUDA device(s)")
+        return device
+    if torch.cuda.is_available():
+        return torch.device("cuda")
+    if getattr(torch.backends, "mps", None) is not None and torch.backends.mps.is_available():
+        return torch.device("mps")
+    return torch.device("cpu")
