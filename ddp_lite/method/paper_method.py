@@ -14,10 +14,10 @@ W_nbr is a neighbour's image warped into the reference view through the predicte
 λz 0.8, λI 0.5, λw 0.5. Adam minimises it (:func:`ddp_lite.method.loop.run`), in the paper at lr 5e-5,
 ×0.01 at iterations 12000 and 15000 of 16000 (6000 for depth only).
 
-The kit's additions sit beside this, each in its own module and off in the ``paper`` recipe:
-terms in the holes (:mod:`ddp_lite.method.hole_terms`), other net inputs (:mod:`ddp_lite.method.nets`),
-auto-stop (:mod:`ddp_lite.method.loop`), ensembles (:mod:`ddp_lite.method.ensemble`), bfloat16
-(:func:`ddp_lite.method.device.use_bf16`).
+The kit's additions sit beside this, each in its own module: terms in the holes
+(:mod:`ddp_lite.method.hole_terms`) and other net inputs (:mod:`ddp_lite.method.nets`), both off in
+the ``paper`` recipe; auto-stop (:mod:`ddp_lite.method.loop`, a profile's budget), ensembles
+(:mod:`ddp_lite.method.ensemble`, off unless asked for), bfloat16 (:func:`ddp_lite.method.device.use_bf16`).
 """
 from __future__ import annotations
 
