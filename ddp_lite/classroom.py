@@ -33,6 +33,8 @@ from pathlib import Path
 
 import nbformat
 
+from data_fetch.files import regular_file
+
 from .atomic import write_bytes_atomic
 from .outpaths import check_not_overlapping, check_output_folder
 
@@ -64,9 +66,9 @@ def _nbgrader_meta(cell) -> dict:
 
 def _read(path) -> nbformat.NotebookNode:
     path = Path(path)
-    if not path.is_file():
+    if not path.exists():
         raise ValueError(f"notebook {str(path)!r} does not exist")
-    return nbformat.read(path, as_version=4)
+    return nbformat.read(regular_file(path, "notebook"), as_version=4)  # a FIFO would block the read
 
 
 def _write(nb, path) -> None:
@@ -296,7 +298,7 @@ def grade(submissions_dir, source_dir="notebooks", timeout: int = 600, profile: 
             submission = None
             if path is not None:
                 try:
-                    submission = nbformat.read(path, as_version=4)
+                    submission = nbformat.read(regular_file(path, "notebook"), as_version=4)  # a FIFO: scored, not read
                 except Exception as error:  # the student's file is not a notebook: score it 0, go on
                     log(f"{student.name}/{path.name}: unreadable, scored 0 ({type(error).__name__}: {error})")
                     mine.extend(replace(s, status="unreadable")
@@ -324,8 +326,12 @@ def read_hand_points(path) -> dict:
     naming the row) if a column is missing, a value is not a finite number ≥ 0, or a pair repeats.
     """
     path = Path(path)
-    if not path.is_file():
+    if not path.exists():
         raise ValueError(f"points {str(path)!r}: no such file")
+    try:
+        regular_file(path, "points")  # a folder or a FIFO: said as it is, before anything is opened
+    except IsADirectoryError as error:
+        raise ValueError(str(error)) from None
     with open(path, newline="", encoding="utf-8-sig") as handle:
         rows = list(csv.DictReader(handle))
     if not rows:
@@ -443,7 +449,7 @@ def write_feedback(scores: list[Score], out_dir, submissions_dir, source_dir="no
         answers = {}
         for name, path in handed_in.items():
             try:
-                answers.update(open_answers(nbformat.read(path, as_version=4)))
+                answers.update(open_answers(nbformat.read(regular_file(path, "notebook"), as_version=4)))
             except Exception:  # unreadable: already reported by grade(); its answers show as missing
                 pass
         lines = [f"# Open answers: {student}", ""]
