@@ -332,3 +332,19 @@ def test_complete_reads_a_jpeg_with_exif_orientation_as_stored_like_its_depth(tm
         warnings.simplefilter("always")
         read = _read_rgb(str(path))
     assert read.shape == (8, 12, 3) and read[:, :6].mean() > read[:, 6:].mean() + 0.5
+
+
+def test_complete_says_what_an_input_that_is_no_file_is(tmp_path, capsys):
+    """A FIFO or a folder given as --rgb, --depth or --gt is named as such (not "no such file"), exit 2."""
+    _pair(tmp_path)
+    os.mkfifo(tmp_path / "pipe.png")
+    (tmp_path / "folder.npy").mkdir()
+    base = {"--rgb": tmp_path / "rgb.png", "--depth": tmp_path / "depth.npy"}
+    for flag, path, kind in (("--rgb", tmp_path / "pipe.png", "FIFO"), ("--depth", tmp_path / "folder.npy", "folder"),
+                             ("--gt", tmp_path / "pipe.png", "FIFO"), ("--depth", tmp_path / "none.npy", "no such file")):
+        argv = {**base, flag: path}
+        assert main(["complete", *[str(a) for item in argv.items() for a in item],
+                     "--out", str(tmp_path / "f.npy"), "--profile", "ci"]) == 2
+        err = capsys.readouterr().err
+        assert flag in err and kind in err, err
+    assert not (tmp_path / "f.npy").exists()
