@@ -445,3 +445,35 @@ if __name__ == "__main__":
     for verdict, id_, note in rows:
         print(f"{verdict:8} {id_:55} {note}")
     print(counts, "of", len(CASES))
+
+
+def test_masked_arrays_are_honoured_wherever_depth_is_scored_or_warped():
+    """A masked array's mask means unknown everywhere, not only in the fit: every metric, the disparity
+    range and the warp give exactly what they give for the same array with NaN under the mask."""
+    from ddp_lite import metrics
+    from ddp_lite.warp import warp_to_reference
+    raw = np.full((H, W), 2.0)
+    raw[:, W // 2:] = 3.0  # a depth edge, so edge_band and texture_leakage have something to see
+    masked = np.ma.masked_array(raw.copy(), mask=np.zeros((H, W), bool))
+    masked[:5] = np.ma.masked
+    masked.data[:5] = 99.0  # garbage under the mask
+    nan = raw.copy()
+    nan[:5] = np.nan  # the reference: the kit's own hole marker
+    pred = np.full((H, W), 2.5)
+    transform = DisparityTransform(1.0, 4.0)
+    assert DisparityTransform.from_depth(masked) == DisparityTransform.from_depth(nan)
+    assert metrics.rmse(pred, masked) == metrics.rmse(pred, nan)
+    assert metrics.mae(masked, nan, mask=np.isfinite(nan)) == 0.0
+    assert metrics.psnr(pred, masked, data_range=1.0) == metrics.psnr(pred, nan, data_range=1.0)
+    assert metrics.disparity_rmse(pred, masked, np.ones((H, W), bool), transform) == \
+        metrics.disparity_rmse(pred, nan, np.ones((H, W), bool), transform)
+    filled = np.where(np.isnan(nan), 2.0, nan)
+    assert metrics.texture_leakage(filled, np.ma.masked_array(filled, mask=masked.mask), transform) == \
+        metrics.texture_leakage(filled, filled, transform)
+    ref, nbr = camera(), camera(_SIDE)
+    image = rgb()
+    for a, b in zip(warp_to_reference(image, masked, ref, nbr), warp_to_reference(image, nan, ref, nbr)):
+        np.testing.assert_array_equal(a, b)
+    with pytest.raises(TypeError, match="nbr_image"):
+        warp_to_reference(np.ma.masked_less(image, 0.5), nan, ref, nbr)
+    assert (masked.data[:5] == 99.0).all()  # the caller's array untouched
