@@ -477,3 +477,23 @@ def test_masked_arrays_are_honoured_wherever_depth_is_scored_or_warped():
     with pytest.raises(TypeError, match="nbr_image"):
         warp_to_reference(np.ma.masked_less(image, 0.5), nan, ref, nbr)
     assert (masked.data[:5] == 99.0).all()  # the caller's array untouched
+
+
+def test_an_empty_file_or_an_exr_opencv_cannot_decode_is_a_clear_refusal(tmp_path, capsys):
+    """OpenCV raises its own cv2.error (a traceback from the command line) for an empty buffer and for
+    an EXR when its codec is off; both are refusals naming the file, and the EXR one says how to read it."""
+    if os.environ.get("OPENCV_IO_ENABLE_OPENEXR"):
+        pytest.skip("the EXR codec is on here")
+    from ddp_lite.cli import main
+    (tmp_path / "empty.png").write_bytes(b"")
+    (tmp_path / "depth.exr").write_bytes(b"\x76\x2f\x31\x01" + bytes(300))  # EXR's magic number
+    with pytest.raises(ValueError, match=r"empty\.png is empty"):
+        fileio.read_rgb(tmp_path / "empty.png")
+    with pytest.raises(ValueError, match=r"depth\.exr.*OPENCV_IO_ENABLE_OPENEXR"):
+        fileio.read_image_file(tmp_path / "depth.exr")
+    cv2.imwrite(str(tmp_path / "rgb.png"), np.zeros((H, W, 3), np.uint8))
+    for flag, path in (("--depth", tmp_path / "depth.exr"), ("--rgb", tmp_path / "empty.png")):
+        argv = {"--rgb": tmp_path / "rgb.png", "--depth": tmp_path / "depth.exr", flag: path}
+        assert main(["complete", *[str(a) for item in argv.items() for a in item], "--out", str(tmp_path / "f.npy"),
+                     "--profile", "ci"]) == 2
+        assert flag in capsys.readouterr().err
