@@ -348,3 +348,32 @@ def test_complete_says_what_an_input_that_is_no_file_is(tmp_path, capsys):
         err = capsys.readouterr().err
         assert flag in err and kind in err, err
     assert not (tmp_path / "f.npy").exists()
+
+
+def test_sequence_views_from_the_end_and_repeated(tmp_path, capsys):
+    """--views -1 is the last view (the dry run and the run agree: plan_jobs takes 0..N-1 only);
+    a view listed twice is refused, not estimated and fitted twice."""
+    from ddp_lite.cli_sequence import _view_indices
+    from ddp_lite.formats import write_tum
+    from ddp_lite.scenes import make_scene
+    scene = make_scene("desk", size=(24, 32), n_views=3)
+    assert _view_indices(scene, ["-1", "0"]) == [2, 0] and _view_indices(scene, [scene[1].name]) == [1]
+    folder = write_tum(scene, tmp_path / "rgbd_dataset_freiburg3_desk")
+    base = ["sequence", str(folder), "--format", "tum", "--out", str(tmp_path / "o"), "--dry-run", "--views"]
+    assert main(base + ["-1"]) == 0 and "1 jobs" in capsys.readouterr().out
+    for views in (["0", "0"], ["2", "-1"]):  # the same view twice, once by its index from the end
+        assert main(base + views) == 2
+        err = capsys.readouterr().err
+        assert "--views: view" in err and "listed twice" in err, err
+
+
+def test_demo_and_sequence_name_size_when_the_net_cannot_take_it(tmp_path, capsys):
+    assert main(["demo", "--size", "8", "8", "--profile", "ci", "--out", str(tmp_path / "f.png")]) == 2
+    printed = capsys.readouterr()
+    assert "--size is 8×8 px" in printed.err and "holes:" not in printed.out, printed.err
+    from ddp_lite.formats import write_tum
+    from ddp_lite.scenes import make_scene
+    folder = write_tum(make_scene("desk", size=(24, 32), n_views=3), tmp_path / "rgbd_dataset_freiburg3_desk")
+    assert main(["sequence", str(folder), "--format", "tum", "--out", str(tmp_path / "o"), "--size", "8", "8",
+                 "--profile", "ci", "--dry-run"]) == 2
+    assert "--size is 8×8 px" in capsys.readouterr().err
