@@ -350,3 +350,14 @@ def test_a_submission_that_is_a_fifo_is_scored_unreadable_without_blocking(tmp_p
         classroom.read_hand_points(points)
     with pytest.raises(ValueError, match=r"points: .*folder"):
         classroom.read_hand_points(tmp_path / "submissions")
+
+
+@pytest.mark.parametrize("handed_in", ["01_a - Copy.ipynb", "01_a - Copy (2).ipynb", "01_a(1).ipynb", "01_A.ipynb",
+                                       "01_a (2).IPYNB", "01_a.ipynb.ipynb", "copy of 01_a.ipynb"])
+def test_renamed_copies_of_every_kind_are_matched(tmp_path, handed_in):
+    """Windows' " - Copy", no space before "(1)", another case, a doubled suffix: all the student's notebook."""
+    (tmp_path / handed_in).write_text("{}")
+    matched, notes, unmatched = classroom.match_submissions([tmp_path / handed_in], ["01_a.ipynb", "02_b.ipynb"])
+    assert {k: v.name for k, v in matched.items()} == {"01_a.ipynb": handed_in} and not unmatched
+    assert notes == [f"graded {handed_in!r} as 01_a.ipynb"]
+    assert classroom._notebook_files(tmp_path) == [tmp_path / handed_in]  # found, whatever the suffix's case
