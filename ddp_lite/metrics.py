@@ -6,8 +6,8 @@ masked entries are unknown (NaN), never scored. No function here changes its inp
 
 - ``rmse``/``mae``/``hole_rmse``: plain errors over a mask (default: where the truth is finite),
   so "error in the holes" is ``hole_rmse(pred, gt, ~input_mask)`` (paper Table 1, Fig. 5).
-- ``d1_error``: KITTI 2015's outlier rate (paper Table 4).
-- ``psnr``: 20·log10(MAX / √MSE) (paper Fig. 7, NYU v2).
+- ``d1_error``: KITTI 2015's outlier rate (paper Table 5).
+- ``psnr``: 20·log10(MAX / √MSE) (paper Fig. 8, NYU v2).
 - ``point_cloud_prf``: Tanks and Temples' precision/recall/F-score at a distance τ (Table 3);
   ``cloud_scores`` the same in %.
 - ``disparity_rmse``, ``edge_band``, ``texture_leakage``: the notebooks' errors in normalised
