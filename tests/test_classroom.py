@@ -361,3 +361,24 @@ def test_renamed_copies_of_every_kind_are_matched(tmp_path, handed_in):
     assert {k: v.name for k, v in matched.items()} == {"01_a.ipynb": handed_in} and not unmatched
     assert notes == [f"graded {handed_in!r} as 01_a.ipynb"]
     assert classroom._notebook_files(tmp_path) == [tmp_path / handed_in]  # found, whatever the suffix's case
+
+
+def test_a_kernel_that_does_not_start_stops_the_grading_and_scores_nobody_0(tmp_path, monkeypatch, capsys):
+    """The machine's fault (no kernel starts) is an error with exit 1, never a student's 0 in grades.csv."""
+    from nbgrader.preprocessors import Execute
+
+    from ddp_lite.cli import main
+    source_path = _tiny_source(tmp_path)
+    _submit(tmp_path, "ada", nbformat.read(source_path, as_version=4))
+
+    def no_kernel(self, nb, resources):
+        raise RuntimeError("Kernel died before replying to kernel_info")
+    monkeypatch.setattr(Execute, "preprocess", no_kernel)
+    log = []
+    with pytest.raises(RuntimeError, match="kernel did not start"):
+        classroom.grade(tmp_path / "submissions", source_path.parent, timeout=30, log=log.append)
+    assert not any("ada:" in line and "0/" in line for line in log), log
+    csv_path = tmp_path / "grades.csv"
+    assert main(["grade", str(tmp_path / "submissions"), "--source", str(source_path.parent),
+                 "--csv", str(csv_path)]) == 1
+    assert "kernel did not start" in capsys.readouterr().err and not csv_path.exists()
