@@ -377,3 +377,29 @@ def test_demo_and_sequence_name_size_when_the_net_cannot_take_it(tmp_path, capsy
     assert main(["sequence", str(folder), "--format", "tum", "--out", str(tmp_path / "o"), "--size", "8", "8",
                  "--profile", "ci", "--dry-run"]) == 2
     assert "--size is 8×8 px" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("shape", [(60, 90), (480, 640), (300, 1200), (600, 300), (12, 200)])
+def test_complete_preview_titles_overlap_nothing(shape, monkeypatch):
+    """No panel title, colour bar (with its labels) or the summary line overlaps another, at any aspect."""
+    import itertools
+
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from ddp_lite import cli_complete, viz
+    figures = []
+    monkeypatch.setattr(viz, "save_figure", lambda fig, path: figures.append(fig))
+    H, W = shape
+    depth = np.full(shape, 2.0, np.float32)
+    depth[: H // 3, : W // 3] = np.nan
+    cli_complete._write_preview("unused.png", depth, np.nan_to_num(depth, nan=2.5),
+                                "hole RMSE at full size (1234 pixels with ground truth): DDP 0.1 m, linear 0.2 m")
+    fig = figures[0]
+    FigureCanvasAgg(fig)
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    boxes = [(f"title {ax.get_title()!r}", ax.title.get_window_extent(renderer)) for ax in fig.axes if ax.get_title()]
+    boxes += [("colour bar", ax.get_tightbbox(renderer)) for ax in fig.axes if ax.get_label() == "<colorbar>"]
+    boxes += [("summary", fig._suptitle.get_window_extent(renderer))]
+    assert len(boxes) == 3 + 3 + 1
+    assert [(a, b) for (a, box_a), (b, box_b) in itertools.combinations(boxes, 2) if box_a.overlaps(box_b)] == []
