@@ -20,6 +20,7 @@ from .outpaths import check_output_folder
 from .profiles import get_profile
 from .runner import open_client
 from .sequence import run_sequence
+from .sequence_files import check_out_folder
 from .sequence_cost import estimate_sequence, format_estimate
 from .sequence_jobs import VARIANT
 from .tum import TUM_INTRINSICS
@@ -95,6 +96,7 @@ def _sequence(args) -> int:
                          f"inputs; give another folder")
     workers = _workers(args.workers) if args.scheduler is None else args.workers
     scene = load_sequence(args.path, args.format, **options)
+    check_out_folder(args.out, list(getattr(scene, "sources", [])) + [os.path.abspath(args.path)])  # a dry run too
     indices = _view_indices(scene, args.views)
     config = FitConfig.for_profile(profile, variant=VARIANT, seed=args.seed, device=args.device, progress=False,
                                    **({"iterations": args.iterations} if args.iterations else {}))

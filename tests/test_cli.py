@@ -403,3 +403,13 @@ def test_complete_preview_titles_overlap_nothing(shape, monkeypatch):
     boxes += [("summary", fig._suptitle.get_window_extent(renderer))]
     assert len(boxes) == 3 + 3 + 1
     assert [(a, b) for (a, box_a), (b, box_b) in itertools.combinations(boxes, 2) if box_a.overlaps(box_b)] == []
+
+
+def test_sequence_dry_run_refuses_an_out_inside_the_capture_as_the_run_would(tmp_path, capsys):
+    from ddp_lite.formats import write_tum
+    from ddp_lite.scenes import make_scene
+    folder = write_tum(make_scene("desk", size=(24, 32), n_views=3), tmp_path / "rgbd_dataset_freiburg3_desk")
+    for out in (folder / "rgb", folder / "results", tmp_path):
+        assert main(["sequence", str(folder), "--format", "tum", "--out", str(out), "--dry-run"]) == 2
+        err = capsys.readouterr().err
+        assert "out:" in err and str(folder) in err, err
