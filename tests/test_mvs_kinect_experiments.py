@@ -87,3 +87,14 @@ def test_nyu_branch_on_a_labelled_mat_fixture(tmp_path):
     assert table["dataset's fill"]["depth PSNR"] == pytest.approx(20 * np.log10(peak / 0.01), abs=0.01)
     assert table["linear"]["depth PSNR"] > 55  # disparity affine in the pixels: a linear fill is near exact
     assert np.isfinite(table["DDP (rgbd)"]["depth PSNR"])
+
+
+def test_printed_tables_keep_long_column_names_apart():
+    """Notebook 11's tables have column names longer than the 12-character default ("off >2 % (%)",
+    "reproj. PSNR"): each name must stand apart and right above its numbers."""
+    from ddp_lite.experiments import format_table
+    text = format_table({"p ≥ 0.1": {"kept %": 67.3, "off >2 % (%)": 59.6, "reproj. PSNR": 21.04}}, digits=1)
+    header, row = text.splitlines()
+    assert "  off >2 % (%)  reproj. PSNR" in header
+    for name, value in (("kept %", "67.3"), ("off >2 % (%)", "59.6"), ("reproj. PSNR", "21.0")):
+        assert header.index(name) + len(name) == row.index(value) + len(value)  # right-aligned together
