@@ -95,7 +95,10 @@ def _sequence(args) -> int:
         raise ValueError(f"--out {args.out!r} is PATH: the results (depth/, ...) would be written among the "
                          f"inputs; give another folder")
     workers = _workers(args.workers) if args.scheduler is None else args.workers
-    scene = load_sequence(args.path, args.format, **options)
+    try:
+        scene = load_sequence(args.path, args.format, **options)
+    except (FileNotFoundError, IsADirectoryError, NotADirectoryError) as error:  # an input not there: usage (2)
+        raise ValueError(f"PATH {args.path!r}: {error}") from None
     check_out_folder(args.out, list(getattr(scene, "sources", [])) + [os.path.abspath(args.path)])  # a dry run too
     indices = _view_indices(scene, args.views)
     config = FitConfig.for_profile(profile, variant=VARIANT, seed=args.seed, device=args.device, progress=False,

@@ -413,3 +413,19 @@ def test_sequence_dry_run_refuses_an_out_inside_the_capture_as_the_run_would(tmp
         assert main(["sequence", str(folder), "--format", "tum", "--out", str(out), "--dry-run"]) == 2
         err = capsys.readouterr().err
         assert "out:" in err and str(folder) in err, err
+
+
+def test_sequence_input_that_is_not_there_is_a_usage_error(tmp_path, capsys):
+    """A capture path that does not exist, or one of its listed files missing, exits 2 (usage) like every
+    other command's missing input, not 1 (a failure at run time)."""
+    from ddp_lite.formats import write_tum
+    from ddp_lite.scenes import make_scene
+    out = str(tmp_path / "o")
+    for argv in (["sequence", str(tmp_path / "none"), "--format", "tum"],
+                 ["sequence", str(tmp_path / "none.npz"), "--format", "scene"]):
+        assert main(argv + ["--out", out, "--dry-run"]) == 2
+        assert "PATH" in capsys.readouterr().err
+    folder = write_tum(make_scene("desk", size=(24, 32), n_views=3), tmp_path / "rgbd_dataset_freiburg3_desk")
+    next((folder / "depth").iterdir()).unlink()  # depth.txt lists a file that is gone
+    assert main(["sequence", str(folder), "--format", "tum", "--out", out, "--dry-run"]) == 2
+    assert "does not exist" in capsys.readouterr().err
