@@ -124,6 +124,20 @@ case("fetch --trust-first-download, garbage already there", FetchError, "trusts 
 case("fetch manual file is a FIFO (trusted)", ValueError, "FIFO")(
     lambda tmp: (_fifo(tmp / "hand" / "a.bin"),
                  lambda: fetch(_manual(), dest=tmp, trust_first_download=True, say=lambda *a: None))[1])
+case("fetch registry.json a FIFO", ValueError, "registry")(
+    lambda tmp: ((tmp / "hand").mkdir(), (tmp / "hand" / "a.bin").write_bytes(b"x"), _fifo(tmp / "hand" / "registry.json"),
+                 lambda: fetch(_manual(), dest=tmp, trust_first_download=True, say=lambda *a: None))[-1])
+case("fetch unpack marker a FIFO", ValueError, "unpack marker")(
+    lambda tmp: ((tmp / "hand").mkdir(), (tmp / "hand" / "a.zip").write_bytes(b"x"), _fifo(tmp / "hand" / ".a.zip.unpacked"),
+                 lambda: fetch(Dataset("hand", "hand", (RemoteFile("a.zip", sha256=__import__("hashlib").sha256(b"x").hexdigest(),
+                                                        unpack=True),), "CC0", "tests",
+                                       "-", "-", manual="put a.zip in {dest}"), dest=tmp, say=lambda *a: None))[-1])
+case("fetch partial download a FIFO", FetchError, "a.bin.part")(
+    lambda tmp: (_fifo(tmp / "toy" / "a.bin.part"),
+                 lambda: fetch(_toy(), dest=tmp, trust_first_download=True, say=lambda *a: None, retries=0))[-1])
+case("fetch trusts an empty manual download", FetchError, "empty (0 bytes)")(
+    lambda tmp: ((tmp / "hand").mkdir(), (tmp / "hand" / "a.bin").write_bytes(b""),
+                 lambda: fetch(_manual(), dest=tmp, trust_first_download=True, say=lambda *a: None))[-1])
 case("fetch manual file is a folder", IsADirectoryError, "a.bin")(
     lambda tmp: ((tmp / "hand" / "a.bin").mkdir(parents=True),
                  lambda: fetch(_manual(), dest=tmp, trust_first_download=True, say=lambda *a: None))[1])
