@@ -429,3 +429,21 @@ def test_sequence_input_that_is_not_there_is_a_usage_error(tmp_path, capsys):
     next((folder / "depth").iterdir()).unlink()  # depth.txt lists a file that is gone
     assert main(["sequence", str(folder), "--format", "tum", "--out", out, "--dry-run"]) == 2
     assert "does not exist" in capsys.readouterr().err
+
+
+def test_sequence_log_gives_the_whole_runs_share_and_time_left(tmp_path):
+    """Each view's line says how far the whole run is (views done of all to fit) and the time left."""
+    import re
+
+    from ddp_lite.fit import FitConfig
+    from ddp_lite.scenes import make_scene
+    from ddp_lite.sequence import run_sequence
+    lines = []
+    config = FitConfig.for_profile("ci", variant="rgbd+warp", progress=False, iterations=1)
+    run_sequence(make_scene("desk", size=(24, 32), n_views=3), tmp_path / "o", config, fuse=False, log=lines.append)
+    views = [line for line in lines if line.strip().startswith("view ")]
+    assert len(views) == 3, lines
+    shares = [re.search(r"\((\d)/3 views; all (\d+)%(, \d+:\d\d left)?\)$", line) for line in views]
+    assert all(shares), views
+    assert [(m.group(1), m.group(2)) for m in shares] == [("1", "33"), ("2", "67"), ("3", "100")]
+    assert views[-1].endswith("0:00 left)")
