@@ -447,3 +447,14 @@ def test_sequence_log_gives_the_whole_runs_share_and_time_left(tmp_path):
     assert all(shares), views
     assert [(m.group(1), m.group(2)) for m in shares] == [("1", "33"), ("2", "67"), ("3", "100")]
     assert views[-1].endswith("0:00 left)")
+
+
+def test_sequence_dry_run_says_h_by_w_on_both_lines(tmp_path, capsys):
+    """The scene line and the estimate both give H×W (40×56 for --size 40 56), as the rest of the kit."""
+    from ddp_lite.formats import write_tum
+    from ddp_lite.scenes import make_scene
+    folder = write_tum(make_scene("desk", size=(24, 32), n_views=3), tmp_path / "rgbd_dataset_freiburg3_desk")
+    assert main(["sequence", str(folder), "--format", "tum", "--out", str(tmp_path / "o"), "--dry-run",
+                 "--size", "40", "56"]) == 0
+    printed = capsys.readouterr().out
+    assert "3 views of 40×56" in printed and "40×56 px (H×W)" in printed and "56×40" not in printed
