@@ -23,6 +23,13 @@ def _subparsers():
     return action.choices
 
 
+def _tum_capture(tmp_path, n_views=3):
+    """A tiny TUM RGB-D folder (desk, 24×32) written by the kit, named as TUM names fr3 captures."""
+    from ddp_lite.formats import write_tum
+    from ddp_lite.scenes import make_scene
+    return write_tum(make_scene("desk", size=(24, 32), n_views=n_views), tmp_path / "rgbd_dataset_freiburg3_desk")
+
+
 def test_demo_honours_the_profile(tmp_path, monkeypatch, capsys):
     monkeypatch.setenv("DDP_PROFILE", "ci")
     out = tmp_path / "demo.png"
@@ -135,9 +142,7 @@ def test_sequence_tum_reads_a_millimetre_capture_with_depth_scale(tmp_path):
 
 
 def test_sequence_refuses_a_view_index_out_of_range(tmp_path, capsys):
-    from ddp_lite.formats import write_tum
-    from ddp_lite.scenes import make_scene
-    folder = write_tum(make_scene("desk", size=(24, 32), n_views=3), tmp_path / "rgbd_dataset_freiburg3_desk")
+    folder = _tum_capture(tmp_path)
     assert main(["sequence", str(folder), "--format", "tum", "--out", str(tmp_path / "o"), "--views", "0", "99",
                  "--dry-run"]) == 2
     err = capsys.readouterr().err
@@ -371,9 +376,7 @@ def test_demo_and_sequence_name_size_when_the_net_cannot_take_it(tmp_path, capsy
     assert main(["demo", "--size", "8", "8", "--profile", "ci", "--out", str(tmp_path / "f.png")]) == 2
     printed = capsys.readouterr()
     assert "--size is 8×8 px" in printed.err and "holes:" not in printed.out, printed.err
-    from ddp_lite.formats import write_tum
-    from ddp_lite.scenes import make_scene
-    folder = write_tum(make_scene("desk", size=(24, 32), n_views=3), tmp_path / "rgbd_dataset_freiburg3_desk")
+    folder = _tum_capture(tmp_path)
     assert main(["sequence", str(folder), "--format", "tum", "--out", str(tmp_path / "o"), "--size", "8", "8",
                  "--profile", "ci", "--dry-run"]) == 2
     assert "--size is 8×8 px" in capsys.readouterr().err
@@ -406,9 +409,7 @@ def test_complete_preview_titles_overlap_nothing(shape, monkeypatch):
 
 
 def test_sequence_dry_run_refuses_an_out_inside_the_capture_as_the_run_would(tmp_path, capsys):
-    from ddp_lite.formats import write_tum
-    from ddp_lite.scenes import make_scene
-    folder = write_tum(make_scene("desk", size=(24, 32), n_views=3), tmp_path / "rgbd_dataset_freiburg3_desk")
+    folder = _tum_capture(tmp_path)
     for out in (folder / "rgb", folder / "results", tmp_path):
         assert main(["sequence", str(folder), "--format", "tum", "--out", str(out), "--dry-run"]) == 2
         err = capsys.readouterr().err
@@ -418,14 +419,12 @@ def test_sequence_dry_run_refuses_an_out_inside_the_capture_as_the_run_would(tmp
 def test_sequence_input_that_is_not_there_is_a_usage_error(tmp_path, capsys):
     """A capture path that does not exist, or one of its listed files missing, exits 2 (usage) like every
     other command's missing input, not 1 (a failure at run time)."""
-    from ddp_lite.formats import write_tum
-    from ddp_lite.scenes import make_scene
     out = str(tmp_path / "o")
     for argv in (["sequence", str(tmp_path / "none"), "--format", "tum"],
                  ["sequence", str(tmp_path / "none.npz"), "--format", "scene"]):
         assert main(argv + ["--out", out, "--dry-run"]) == 2
         assert "PATH" in capsys.readouterr().err
-    folder = write_tum(make_scene("desk", size=(24, 32), n_views=3), tmp_path / "rgbd_dataset_freiburg3_desk")
+    folder = _tum_capture(tmp_path)
     next((folder / "depth").iterdir()).unlink()  # depth.txt lists a file that is gone
     assert main(["sequence", str(folder), "--format", "tum", "--out", out, "--dry-run"]) == 2
     assert "does not exist" in capsys.readouterr().err
@@ -451,9 +450,7 @@ def test_sequence_log_gives_the_whole_runs_share_and_time_left(tmp_path):
 
 def test_sequence_dry_run_says_h_by_w_on_both_lines(tmp_path, capsys):
     """The scene line and the estimate both give H×W (40×56 for --size 40 56), as the rest of the kit."""
-    from ddp_lite.formats import write_tum
-    from ddp_lite.scenes import make_scene
-    folder = write_tum(make_scene("desk", size=(24, 32), n_views=3), tmp_path / "rgbd_dataset_freiburg3_desk")
+    folder = _tum_capture(tmp_path)
     assert main(["sequence", str(folder), "--format", "tum", "--out", str(tmp_path / "o"), "--dry-run",
                  "--size", "40", "56"]) == 0
     printed = capsys.readouterr().out
