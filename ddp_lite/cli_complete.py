@@ -222,7 +222,9 @@ def _complete(args) -> int:
     camera = None
     if args.intrinsics is not None:
         from .camera import Camera
+        from .fit import _check_principal_point
         camera = Camera(np.array(args.intrinsics, dtype=np.float64), np.eye(4), depth.shape[1], depth.shape[0])
+        _check_principal_point(camera, "--intrinsics")  # K of another image size would bend the point cloud
     holes = ~np.isfinite(depth)
     if not holes.any():
         raise ValueError(f"--depth {args.depth!r} has no holes (0, inf or NaN pixels): nothing to fill")

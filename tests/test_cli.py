@@ -304,6 +304,9 @@ def test_complete_with_intrinsics_writes_the_frame_as_a_point_cloud(tmp_path, ca
             "--out", str(tmp_path / "filled.npy"), "--profile", "ci", "--iterations", "5", "--max-side", "32"]
     assert main(argv + ["--ply", str(tmp_path / "c.ply")]) == 2  # a cloud needs a camera
     assert "--ply needs --intrinsics" in capsys.readouterr().err
+    assert main(argv + ["--intrinsics", "525,525,319.5,239.5"]) == 2  # K of a 640×480 camera on this 90×60 image
+    assert "--intrinsics: the principal point (319.5, 239.5) px lies far outside" in capsys.readouterr().err
+    assert not (tmp_path / "filled.npy").exists()  # refused before the fit
     assert main(argv + ["--intrinsics", f"{fx},{fy},{cx},{cy}"]) == 0
     filled = np.load(tmp_path / "filled.npy")
     points = np.asarray(o3d.io.read_point_cloud(str(tmp_path / "filled.ply")).points)
