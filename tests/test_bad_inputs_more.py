@@ -235,6 +235,8 @@ case("gt_depth with 0 for unknown", ValueError, "gt_depth")(
                                         gt_depth=watch(np.where(np.isnan(depth()), 0.0, 2.0).astype(np.float32)))))
 case("merge() with 0 for holes", ValueError, "input_depth")(
     lambda tmp: (lambda: merge(watch(np.nan_to_num(depth(), nan=0.0)), depth())))
+case("merge() with a string for ddp_depth", TypeError, "ddp_depth")(
+    lambda tmp: (lambda: merge(depth(), "filled.npy")))
 case("neighbors=None for rgbd+warp", ValueError, "neighbor")(
     lambda tmp: (lambda: complete_depth(rgb(), depth(), camera(), None, config=tiny())))
 case("seed 2**63", ValueError, "config.seed")(lambda tmp: (lambda: tiny(seed=2**63).validate()))
@@ -337,6 +339,10 @@ def test_masked_depth_is_a_hole_everywhere():
     assert np.isnan(checked[:5]).all() and (checked[5:] == 2.0).all()
     filled = merge(masked, np.full((H, W), 3.0, np.float32))
     assert (filled[:5] == 3.0).all() and (filled[5:] == 2.0).all()
+    half = np.ma.masked_array(np.full((H, W), 3.0), mask=np.zeros((H, W), bool))
+    half[:2] = np.ma.masked  # a masked fill: no value there, a hole in the merge too
+    merged = merge(masked, half)
+    assert np.isnan(merged[:2]).all() and (merged[2:5] == 3.0).all()
     assert (raw[:5] == 123.0).all()  # the caller's data untouched
 
 
