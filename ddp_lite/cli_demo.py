@@ -22,6 +22,7 @@ from .experiments import error_table, format_table, make_case
 from .fit import FitConfig, complete_depth
 from .loop import check_memory
 from .metrics import hole_rmse
+from .nets import check_input_size
 from .outpaths import check_output_file
 from .profiles import get_profile
 from .progress import command_progress
@@ -48,6 +49,7 @@ def _demo(args) -> int:
     config = FitConfig.for_profile(profile, variant=VARIANT, iterations=args.iterations, seed=args.seed,
                                    device=args.device, max_memory_gb=args.max_memory_gb)
     config.validate()
+    check_input_size(config.net, config.channels, *profile.size, name="--size")  # the net's smallest input
     # before the scene is rendered (minutes at a large --size): a fit that cannot fit in memory
     check_memory(config, get_variant(VARIANT).out_channels, *profile.size, N_NEIGHBORS, resolve_device(config))
     case = make_case(args.scene, profile, holes=args.holes, seed=args.seed)

@@ -22,7 +22,7 @@ import torch
 from . import loop
 from .cache import cached
 from .camera import Camera, view_overlap, view_parallax
-from .checks import MIN_VALID_PIXELS, check_callback, check_depth, check_image
+from .checks import MIN_VALID_PIXELS, _unmask, check_callback, check_depth, check_image
 from .config import FitConfig, resolve_device, use_bf16
 from .dip import ImageResult, fit_image
 from .disparity import DisparityTransform
@@ -71,7 +71,10 @@ def merge(input_depth, ddp_depth) -> np.ndarray:
     ``input_depth`` follows the kit's convention (NaN holes, a masked array's mask = holes); a 0 or
     negative "hole" marker, or inf, is refused rather than kept as a depth."""
     input_depth = check_depth(input_depth, "input_depth", min_valid=0)
-    ddp_depth = np.asarray(ddp_depth, dtype=np.float32)
+    ddp_depth = np.asarray(_unmask(ddp_depth, "ddp_depth", holes=True))
+    if not (np.issubdtype(ddp_depth.dtype, np.floating) or np.issubdtype(ddp_depth.dtype, np.integer)):
+        raise TypeError(f"ddp_depth must be an (H, W) array of metres, got dtype {ddp_depth.dtype}")
+    ddp_depth = ddp_depth.astype(np.float32)
     if input_depth.shape != ddp_depth.shape:
         raise ValueError(f"input_depth {input_depth.shape} and ddp_depth {ddp_depth.shape} must have the same shape")
     return np.where(np.isfinite(input_depth), input_depth, ddp_depth).astype(np.float32)
@@ -124,6 +127,17 @@ def _check_useful_neighbors(camera: Camera, depth: np.ndarray, neighbors) -> Non
             warnings.warn(f"neighbors[{i}]: a baseline of {baseline:.3g} (pose units) gives at most {parallax:.2g} px "
                           f"of parallax over the valid depth ({np.nanmin(depth):.3g}–{np.nanmax(depth):.3g} m), so its "
                           f"warp cannot tell depths apart; are depth and poses in the same unit (metres)?", stacklevel=4)
+
+
+def _check_principal_point(camera: Camera, name: str) -> None:
+    """Refuse intrinsics that belong to another image size: a principal point more than an image width
+    (height) outside the image (640×480's (319.5, 239.5) on a 48×32 image). A crop may move it outside
+    the image, but not that far; ``Camera.resized`` scales K with the image."""
+    cx, cy = float(camera.K[0, 2]), float(camera.K[1, 2])
+    W, H = camera.width, camera.height
+    if not (-W <= cx <= 2 * W and -H <= cy <= 2 * H):
+        raise ValueError(f"{name}: the principal point ({cx:.6g}, {cy:.6g}) px lies far outside its {W}×{H} (W×H) "
+                         f"image; are the intrinsics for another image size? (Camera.resized scales them)")
 
 
 def _check_transform(transform: DisparityTransform, depth: np.ndarray) -> None:
@@ -247,6 +261,9 @@ def _check_fit_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth, 
         raise TypeError(f"camera must be a ddp_lite.Camera, got {type(camera).__name__}")
     if camera is not None and (camera.height, camera.width) != (H, W):
         raise ValueError(f"camera is {camera.width}×{camera.height} but depth is {W}×{H}")
+    for name, cam in ([("camera", camera)] if camera is not None else []) + [
+            (f"neighbors[{i}] camera", cam) for i, (_, cam) in enumerate(neighbors)]:
+        _check_principal_point(cam, name)
     if spec.needs_neighbors and (camera is None or not neighbors):
         raise ValueError(f"variant {spec.name!r} needs camera and at least one neighbor; use 'rgbd' without them")
     if spec.needs_neighbors:
