@@ -193,10 +193,48 @@ def run(args) -> None:
                                 px=rmse_px(result.merged(case.depth), case, fb),
                                 seconds=time.perf_counter() - start, iterations=result.iterations,
                                 overrides=repr(overrides), **region_errors(case, result.merged(case.depth))))
+                    if args.save_fits:  # the fit's disparity (1/m): members of any ensemble, averaged later
+                        save_fit(Path(args.save_fits), rows[-1], result.merged(case.depth))
                     print(f"{name:<22} {recipe:<14} {variant:<10} seed {seed}: {rows[-1]['px']:.3f} px "
                           f"({rows[-1]['seconds']:.0f} s)", flush=True)
     if out:
         out.close()
+
+
+def fit_path(folder: Path, case: str, recipe: str, variant: str, seed: int, size: str) -> Path:
+    """Where ``--save-fits`` keeps one fit's output: one ``.npy`` per (case, recipe, variant, seed, size)."""
+    return folder / f"{case.replace('/', '~')}__{recipe}__{variant}__{seed}__{size}.npy"
+
+
+def save_fit(folder: Path, row: dict, depth: np.ndarray) -> None:
+    """The fit's merged depth as inverse depth (1/m), float32, written atomically."""
+    folder.mkdir(parents=True, exist_ok=True)
+    path = fit_path(folder, row["case"], row["method"], row["variant"], row["seed"], row["size"])
+    temporary = path.with_suffix(".tmp.npy")
+    np.save(temporary, (1.0 / depth).astype(np.float32))
+    temporary.replace(path)
+
+
+def ensemble_rows(rows: list[dict], folder: Path, k: int, profile) -> list[dict]:
+    """Rows for the mean of ``k`` saved fits with seeds s, s+1, ..., s+k-1 (what ``FitConfig(ensemble=k,
+    seed=s)`` computes: the members' disparities averaged), for every s whose members are all saved.
+    The method is named ``<recipe>×k``; ``px`` is its hole RMSE on the case."""
+    seconds = {(r["case"], r["method"], r["variant"], r["size"], r["seed"]): r["seconds"] for r in rows if r.get("variant")}
+    by_key = set(seconds)
+    cases = {}
+    out = []
+    for case_name, method, variant, size, seed in sorted(by_key, key=str):
+        members = [fit_path(folder, case_name, method, variant, seed + j, size) for j in range(k)]
+        if not all(m.exists() for m in members):
+            continue
+        if case_name not in cases:
+            cases[case_name] = build_case(case_name, profile)
+        case, fb = cases[case_name]
+        inverse = np.mean([np.load(m) for m in members], axis=0)  # (H, W) 1/m
+        out.append(dict(case=case_name, method=f"{method}×{k}", variant=variant, seed=seed, size=size,
+                        px=rmse_px(1.0 / inverse, case, fb),
+                        seconds=sum(seconds.get((case_name, method, variant, size, seed + j), np.nan) for j in range(k))))
+    return out
 
 
 def paired_difference(ratios: np.ndarray, baseline: np.ndarray) -> dict:
@@ -276,8 +314,10 @@ def report_together(rows: list[dict]) -> None:
               f"{(max(real) if real else np.nan):>9.3f}{mean(synthetic + real):>8.3f}")
 
 
-def report(path: str, size: str | None = None) -> None:
+def report(path: str, size: str | None = None, extra=None) -> None:
+    """Print the tables of a results file; ``extra(rows)`` may return more rows (saved fits' ensembles)."""
     rows = [json.loads(line) for line in Path(path).read_text().splitlines() if line.strip()]
+    rows += extra(rows) if extra else []
     sizes = sorted({r["size"] for r in rows}) if size is None else [size]
     for size in sizes:
         here = [r for r in rows if r["size"] == size]
@@ -339,9 +379,17 @@ def main() -> None:
     parser.add_argument("--lane", default="0/1", help="i/n: run every n-th case starting at i (parallel lanes)")
     parser.add_argument("--out", help="append one JSON line per fit here (and skip fits already in it)")
     parser.add_argument("--report", metavar="JSONL", help="print the tables of a results file and exit")
+    parser.add_argument("--save-fits", metavar="DIR", help="keep each DDP fit's output here (inverse depth, .npy)")
+    parser.add_argument("--ensembles", type=int, nargs="+", default=[], metavar="K",
+                        help="with --report and --save-fits: also report the mean of K saved fits (seeds s..s+K-1)")
     args = parser.parse_args()
     if args.report:
-        report(args.report)
+        extra = None
+        if args.ensembles and args.save_fits:
+            profile = profile_from_args(args)
+            extra = lambda rows: [e for k in args.ensembles  # noqa: E731
+                                  for e in ensemble_rows(rows, Path(args.save_fits), k, profile)]
+        report(args.report, extra=extra)
         return
     run(args)
     if args.out:

@@ -22,6 +22,8 @@ import requests
 import urllib3
 from tqdm.auto import tqdm
 
+from .files import regular_file
+
 __all__ = ["FetchError", "ChecksumError", "ResumableDownloader"]
 
 
@@ -73,6 +75,12 @@ class ResumableDownloader:
             except requests.RequestException:
                 return False
         self.part.parent.mkdir(parents=True, exist_ok=True)
+        for kept in (self.part, self._meta):  # a FIFO there would block the first write (or read) for ever
+            if os.path.lexists(kept):
+                try:
+                    regular_file(kept, "download in progress")
+                except (ValueError, OSError) as error:
+                    raise FetchError(f"{error}; it is not a partial download: delete it and fetch again") from None
         for attempt in range(self.retries + 1):
             try:
                 self._attempt(url)

@@ -70,7 +70,7 @@ def _read_records(folder: Path) -> dict:
     if not path.exists():
         return {}
     try:
-        records = json.loads(path.read_text(encoding="utf-8"))
+        records = json.loads(regular_file(path, "registry").read_text(encoding="utf-8"))  # not a FIFO: no wait
     except (json.JSONDecodeError, UnicodeDecodeError) as error:
         raise FetchError(f"{path} is not valid JSON ({error}); fix or delete it") from None
     if not isinstance(records, dict):
@@ -104,7 +104,7 @@ def _known_hash(folder: Path, entry: RemoteFile, trust: bool) -> str | None:
 
 def _unpack(folder: Path, entry: RemoteFile, sha256: str, say) -> None:
     marker = folder / f".{Path(entry.name).name}.unpacked"
-    if marker.exists() and marker.read_text().strip() == sha256:
+    if marker.exists() and regular_file(marker, "unpack marker").read_text().strip() == sha256:
         return
     say(f"unpacking {entry.name} into {folder}")
     safe_extract(folder / entry.name, folder)
@@ -185,6 +185,12 @@ def fetch(dataset, dest=None, only=None, trust_first_download: bool = False, ret
                     f"away (or delete it) and fetch again.")
             _download(folder, entry, known, retries, progressbar, backoff)
         path = folder / entry.name
+        if known is None and path.stat().st_size == 0:  # an empty file is no dataset: never its trusted hash
+            if not manual:
+                path.unlink(missing_ok=True)
+            raise FetchError(f"{path} is empty (0 bytes){' as downloaded' if not manual else ''}; "
+                             f"--trust-first-download records only a file that holds something. "
+                             + ("Download it again by hand." if manual else "Fetch again later."))
         digest = known or pooch.file_hash(str(path))
         if entry.unpack:
             try:

@@ -126,6 +126,20 @@ case("fetch --trust-first-download, garbage already there", FetchError, "trusts 
 case("fetch manual file is a FIFO (trusted)", ValueError, "FIFO")(
     lambda tmp: (_fifo(tmp / "hand" / "a.bin"),
                  lambda: fetch(_manual(), dest=tmp, trust_first_download=True, say=lambda *a: None))[1])
+case("fetch registry.json a FIFO", ValueError, "registry")(
+    lambda tmp: ((tmp / "hand").mkdir(), (tmp / "hand" / "a.bin").write_bytes(b"x"), _fifo(tmp / "hand" / "registry.json"),
+                 lambda: fetch(_manual(), dest=tmp, trust_first_download=True, say=lambda *a: None))[-1])
+case("fetch unpack marker a FIFO", ValueError, "unpack marker")(
+    lambda tmp: ((tmp / "hand").mkdir(), (tmp / "hand" / "a.zip").write_bytes(b"x"), _fifo(tmp / "hand" / ".a.zip.unpacked"),
+                 lambda: fetch(Dataset("hand", "hand", (RemoteFile("a.zip", sha256=__import__("hashlib").sha256(b"x").hexdigest(),
+                                                        unpack=True),), "CC0", "tests",
+                                       "-", "-", manual="put a.zip in {dest}"), dest=tmp, say=lambda *a: None))[-1])
+case("fetch partial download a FIFO", FetchError, "a.bin.part")(
+    lambda tmp: (_fifo(tmp / "toy" / "a.bin.part"),
+                 lambda: fetch(_toy(), dest=tmp, trust_first_download=True, say=lambda *a: None, retries=0))[-1])
+case("fetch trusts an empty manual download", FetchError, "empty (0 bytes)")(
+    lambda tmp: ((tmp / "hand").mkdir(), (tmp / "hand" / "a.bin").write_bytes(b""),
+                 lambda: fetch(_manual(), dest=tmp, trust_first_download=True, say=lambda *a: None))[-1])
 case("fetch manual file is a folder", IsADirectoryError, "a.bin")(
     lambda tmp: ((tmp / "hand" / "a.bin").mkdir(parents=True),
                  lambda: fetch(_manual(), dest=tmp, trust_first_download=True, say=lambda *a: None))[1])
@@ -202,6 +216,13 @@ def _neighbour(pose):
 
 
 _SIDE = look_at((0.2, 0.0, 0.0), (0.0, 0.0, 2.0))
+_K_640x480 = np.array([[525.0, 0.0, 319.5], [0.0, 525.0, 239.5], [0.0, 0.0, 1.0]])  # TUM fr1's K, for 640×480
+case("intrinsics for 640×480 on a 32×24 image", ValueError, "camera: the principal point")(
+    lambda tmp: (lambda: complete_depth(rgb(), depth(), Camera(_K_640x480, np.eye(4), W, H), variant="rgbd",
+                                        config=tiny())))
+case("a neighbour's intrinsics for 640×480 on a 32×24 image", ValueError, "neighbors[0] camera")(
+    lambda tmp: (lambda: complete_depth(rgb(), depth(), camera(), [(rgb(), Camera(_K_640x480, _SIDE, W, H))],
+                                        config=tiny())))
 case("neighbour at the reference's pose", ValueError, "neighbors[0]")(
     lambda tmp: (lambda: complete_depth(rgb(), depth(), camera(np.eye(4)), [_neighbour(np.eye(4))], config=tiny())))
 case("the same neighbour twice", ValueError, "neighbors[1]")(
@@ -216,6 +237,8 @@ case("gt_depth with 0 for unknown", ValueError, "gt_depth")(
                                         gt_depth=watch(np.where(np.isnan(depth()), 0.0, 2.0).astype(np.float32)))))
 case("merge() with 0 for holes", ValueError, "input_depth")(
     lambda tmp: (lambda: merge(watch(np.nan_to_num(depth(), nan=0.0)), depth())))
+case("merge() with a string for ddp_depth", TypeError, "ddp_depth")(
+    lambda tmp: (lambda: merge(depth(), "filled.npy")))
 case("neighbors=None for rgbd+warp", ValueError, "neighbor")(
     lambda tmp: (lambda: complete_depth(rgb(), depth(), camera(), None, config=tiny())))
 case("seed 2**63", ValueError, "config.seed")(lambda tmp: (lambda: tiny(seed=2**63).validate()))
@@ -318,6 +341,10 @@ def test_masked_depth_is_a_hole_everywhere():
     assert np.isnan(checked[:5]).all() and (checked[5:] == 2.0).all()
     filled = merge(masked, np.full((H, W), 3.0, np.float32))
     assert (filled[:5] == 3.0).all() and (filled[5:] == 2.0).all()
+    half = np.ma.masked_array(np.full((H, W), 3.0), mask=np.zeros((H, W), bool))
+    half[:2] = np.ma.masked  # a masked fill: no value there, a hole in the merge too
+    merged = merge(masked, half)
+    assert np.isnan(merged[:2]).all() and (merged[2:5] == 3.0).all()
     assert (raw[:5] == 123.0).all()  # the caller's data untouched
 
 
@@ -447,3 +474,55 @@ if __name__ == "__main__":
     for verdict, id_, note in rows:
         print(f"{verdict:8} {id_:55} {note}")
     print(counts, "of", len(CASES))
+
+
+def test_masked_arrays_are_honoured_wherever_depth_is_scored_or_warped():
+    """A masked array's mask means unknown everywhere, not only in the fit: every metric, the disparity
+    range and the warp give exactly what they give for the same array with NaN under the mask."""
+    from ddp_lite import metrics
+    from ddp_lite.method.warp import warp_to_reference
+    raw = np.full((H, W), 2.0)
+    raw[:, W // 2:] = 3.0  # a depth edge, so edge_band and texture_leakage have something to see
+    masked = np.ma.masked_array(raw.copy(), mask=np.zeros((H, W), bool))
+    masked[:5] = np.ma.masked
+    masked.data[:5] = 99.0  # garbage under the mask
+    nan = raw.copy()
+    nan[:5] = np.nan  # the reference: the kit's own hole marker
+    pred = np.full((H, W), 2.5)
+    transform = DisparityTransform(1.0, 4.0)
+    assert DisparityTransform.from_depth(masked) == DisparityTransform.from_depth(nan)
+    assert metrics.rmse(pred, masked) == metrics.rmse(pred, nan)
+    assert metrics.mae(masked, nan, mask=np.isfinite(nan)) == 0.0
+    assert metrics.psnr(pred, masked, data_range=1.0) == metrics.psnr(pred, nan, data_range=1.0)
+    assert metrics.disparity_rmse(pred, masked, np.ones((H, W), bool), transform) == \
+        metrics.disparity_rmse(pred, nan, np.ones((H, W), bool), transform)
+    filled = np.where(np.isnan(nan), 2.0, nan)
+    assert metrics.texture_leakage(filled, np.ma.masked_array(filled, mask=masked.mask), transform) == \
+        metrics.texture_leakage(filled, filled, transform)
+    ref, nbr = camera(), camera(_SIDE)
+    image = rgb()
+    for a, b in zip(warp_to_reference(image, masked, ref, nbr), warp_to_reference(image, nan, ref, nbr)):
+        np.testing.assert_array_equal(a, b)
+    with pytest.raises(TypeError, match="nbr_image"):
+        warp_to_reference(np.ma.masked_less(image, 0.5), nan, ref, nbr)
+    assert (masked.data[:5] == 99.0).all()  # the caller's array untouched
+
+
+def test_an_empty_file_or_an_exr_opencv_cannot_decode_is_a_clear_refusal(tmp_path, capsys):
+    """OpenCV raises its own cv2.error (a traceback from the command line) for an empty buffer and for
+    an EXR when its codec is off; both are refusals naming the file, and the EXR one says how to read it."""
+    if os.environ.get("OPENCV_IO_ENABLE_OPENEXR"):
+        pytest.skip("the EXR codec is on here")
+    from ddp_lite.interface.cli import main
+    (tmp_path / "empty.png").write_bytes(b"")
+    (tmp_path / "depth.exr").write_bytes(b"\x76\x2f\x31\x01" + bytes(300))  # EXR's magic number
+    with pytest.raises(ValueError, match=r"empty\.png is empty"):
+        fileio.read_rgb(tmp_path / "empty.png")
+    with pytest.raises(ValueError, match=r"depth\.exr.*OPENCV_IO_ENABLE_OPENEXR"):
+        fileio.read_image_file(tmp_path / "depth.exr")
+    cv2.imwrite(str(tmp_path / "rgb.png"), np.zeros((H, W, 3), np.uint8))
+    for flag, path in (("--depth", tmp_path / "depth.exr"), ("--rgb", tmp_path / "empty.png")):
+        argv = {"--rgb": tmp_path / "rgb.png", "--depth": tmp_path / "depth.exr", flag: path}
+        assert main(["complete", *[str(a) for item in argv.items() for a in item], "--out", str(tmp_path / "f.npy"),
+                     "--profile", "ci"]) == 2
+        assert flag in capsys.readouterr().err

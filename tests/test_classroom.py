@@ -318,3 +318,67 @@ def test_make_classroom_targets_use_an_existing_environment_without_installing(t
     assert "pip install --" in dry("-B")  # the kit's own .venv: (re)installed when asked to remake everything
     assert f"ddp-lite grade submissions --source notebooks --csv grades.csv --details" in dry(
         "VENV=/x", "GRADE_ARGS=--details") or target != "grade"
+
+
+def test_a_submission_that_is_a_fifo_is_scored_unreadable_without_blocking(tmp_path):
+    """A named pipe where a notebook should be: reading it would wait for a writer for ever. It is scored
+    0 as unreadable, said as a FIFO, and the next student is graded."""
+    import contextlib
+    import threading
+    import time
+    source_path = _tiny_source(tmp_path)
+    (tmp_path / "submissions" / "ada").mkdir(parents=True)
+    fifo = tmp_path / "submissions" / "ada" / "01_tiny.ipynb"
+    os.mkfifo(fifo)
+    _submit(tmp_path, "ben", nbformat.read(source_path, as_version=4))
+
+    def unblock():  # a reader stuck on the FIFO is let go after 20 s, so that a failure is a failure, not a hang
+        time.sleep(20)
+        with contextlib.suppress(OSError):
+            fd = os.open(fifo, os.O_WRONLY | os.O_NONBLOCK)
+            os.close(fd)
+    threading.Thread(target=unblock, daemon=True).start()
+    log, start = [], time.monotonic()
+    scores = classroom.grade(tmp_path / "submissions", source_path.parent, timeout=30, log=log.append)
+    assert time.monotonic() - start < 20, "the grader waited on the FIFO"
+    assert any("ada/01_tiny.ipynb: unreadable" in line and "FIFO" in line for line in log), log
+    assert {s.exercise: s.status for s in scores if s.student == "ada"} == {e: "unreadable" for e in ("01.1", "01.2", "01.3")}
+    assert {s.exercise: s.status for s in scores if s.student == "ben"} == {"01.1": "pass", "01.2": "pass", "01.3": "answered"}
+    points = tmp_path / "points.csv"
+    os.mkfifo(points)
+    with pytest.raises(ValueError, match=r"points: .*FIFO"):
+        classroom.read_hand_points(points)
+    with pytest.raises(ValueError, match=r"points: .*folder"):
+        classroom.read_hand_points(tmp_path / "submissions")
+
+
+@pytest.mark.parametrize("handed_in", ["01_a - Copy.ipynb", "01_a - Copy (2).ipynb", "01_a(1).ipynb", "01_A.ipynb",
+                                       "01_a (2).IPYNB", "01_a.ipynb.ipynb", "copy of 01_a.ipynb"])
+def test_renamed_copies_of_every_kind_are_matched(tmp_path, handed_in):
+    """Windows' " - Copy", no space before "(1)", another case, a doubled suffix: all the student's notebook."""
+    (tmp_path / handed_in).write_text("{}")
+    matched, notes, unmatched = classroom.match_submissions([tmp_path / handed_in], ["01_a.ipynb", "02_b.ipynb"])
+    assert {k: v.name for k, v in matched.items()} == {"01_a.ipynb": handed_in} and not unmatched
+    assert notes == [f"graded {handed_in!r} as 01_a.ipynb"]
+    assert classroom._notebook_files(tmp_path) == [tmp_path / handed_in]  # found, whatever the suffix's case
+
+
+def test_a_kernel_that_does_not_start_stops_the_grading_and_scores_nobody_0(tmp_path, monkeypatch, capsys):
+    """The machine's fault (no kernel starts) is an error with exit 1, never a student's 0 in grades.csv."""
+    from nbgrader.preprocessors import Execute
+
+    from ddp_lite.interface.cli import main
+    source_path = _tiny_source(tmp_path)
+    _submit(tmp_path, "ada", nbformat.read(source_path, as_version=4))
+
+    def no_kernel(self, nb, resources):
+        raise RuntimeError("Kernel died before replying to kernel_info")
+    monkeypatch.setattr(Execute, "preprocess", no_kernel)
+    log = []
+    with pytest.raises(RuntimeError, match="kernel did not start"):
+        classroom.grade(tmp_path / "submissions", source_path.parent, timeout=30, log=log.append)
+    assert not any("ada:" in line and "0/" in line for line in log), log
+    csv_path = tmp_path / "grades.csv"
+    assert main(["grade", str(tmp_path / "submissions"), "--source", str(source_path.parent),
+                 "--csv", str(csv_path)]) == 1
+    assert "kernel did not start" in capsys.readouterr().err and not csv_path.exists()

@@ -23,6 +23,13 @@ def _subparsers():
     return action.choices
 
 
+def _tum_capture(tmp_path, n_views=3):
+    """A tiny TUM RGB-D folder (desk, 24×32) written by the kit, named as TUM names fr3 captures."""
+    from ddp_lite.data.formats import write_tum
+    from ddp_lite.world.scenes import make_scene
+    return write_tum(make_scene("desk", size=(24, 32), n_views=n_views), tmp_path / "rgbd_dataset_freiburg3_desk")
+
+
 def test_demo_honours_the_profile(tmp_path, monkeypatch, capsys):
     monkeypatch.setenv("DDP_PROFILE", "ci")
     out = tmp_path / "demo.png"
@@ -135,9 +142,7 @@ def test_sequence_tum_reads_a_millimetre_capture_with_depth_scale(tmp_path):
 
 
 def test_sequence_refuses_a_view_index_out_of_range(tmp_path, capsys):
-    from ddp_lite.data.formats import write_tum
-    from ddp_lite.world.scenes import make_scene
-    folder = write_tum(make_scene("desk", size=(24, 32), n_views=3), tmp_path / "rgbd_dataset_freiburg3_desk")
+    folder = _tum_capture(tmp_path)
     assert main(["sequence", str(folder), "--format", "tum", "--out", str(tmp_path / "o"), "--views", "0", "99",
                  "--dry-run"]) == 2
     err = capsys.readouterr().err
@@ -299,6 +304,9 @@ def test_complete_with_intrinsics_writes_the_frame_as_a_point_cloud(tmp_path, ca
             "--out", str(tmp_path / "filled.npy"), "--profile", "ci", "--iterations", "5", "--max-side", "32"]
     assert main(argv + ["--ply", str(tmp_path / "c.ply")]) == 2  # a cloud needs a camera
     assert "--ply needs --intrinsics" in capsys.readouterr().err
+    assert main(argv + ["--intrinsics", "525,525,319.5,239.5"]) == 2  # K of a 640×480 camera on this 90×60 image
+    assert "--intrinsics: the principal point (319.5, 239.5) px lies far outside" in capsys.readouterr().err
+    assert not (tmp_path / "filled.npy").exists()  # refused before the fit
     assert main(argv + ["--intrinsics", f"{fx},{fy},{cx},{cy}"]) == 0
     filled = np.load(tmp_path / "filled.npy")
     points = np.asarray(o3d.io.read_point_cloud(str(tmp_path / "filled.ply")).points)
@@ -332,3 +340,121 @@ def test_complete_reads_a_jpeg_with_exif_orientation_as_stored_like_its_depth(tm
         warnings.simplefilter("always")
         read = _read_rgb(str(path))
     assert read.shape == (8, 12, 3) and read[:, :6].mean() > read[:, 6:].mean() + 0.5
+
+
+def test_complete_says_what_an_input_that_is_no_file_is(tmp_path, capsys):
+    """A FIFO or a folder given as --rgb, --depth or --gt is named as such (not "no such file"), exit 2."""
+    _pair(tmp_path)
+    os.mkfifo(tmp_path / "pipe.png")
+    (tmp_path / "folder.npy").mkdir()
+    base = {"--rgb": tmp_path / "rgb.png", "--depth": tmp_path / "depth.npy"}
+    for flag, path, kind in (("--rgb", tmp_path / "pipe.png", "FIFO"), ("--depth", tmp_path / "folder.npy", "folder"),
+                             ("--gt", tmp_path / "pipe.png", "FIFO"), ("--depth", tmp_path / "none.npy", "no such file")):
+        argv = {**base, flag: path}
+        assert main(["complete", *[str(a) for item in argv.items() for a in item],
+                     "--out", str(tmp_path / "f.npy"), "--profile", "ci"]) == 2
+        err = capsys.readouterr().err
+        assert flag in err and kind in err, err
+    assert not (tmp_path / "f.npy").exists()
+
+
+def test_sequence_views_from_the_end_and_repeated(tmp_path, capsys):
+    """--views -1 is the last view (the dry run and the run agree: plan_jobs takes 0..N-1 only);
+    a view listed twice is refused, not estimated and fitted twice."""
+    from ddp_lite.interface.cli_sequence import _view_indices
+    from ddp_lite.data.formats import write_tum
+    from ddp_lite.world.scenes import make_scene
+    scene = make_scene("desk", size=(24, 32), n_views=3)
+    assert _view_indices(scene, ["-1", "0"]) == [2, 0] and _view_indices(scene, [scene[1].name]) == [1]
+    folder = write_tum(scene, tmp_path / "rgbd_dataset_freiburg3_desk")
+    base = ["sequence", str(folder), "--format", "tum", "--out", str(tmp_path / "o"), "--dry-run", "--views"]
+    assert main(base + ["-1"]) == 0 and "1 jobs" in capsys.readouterr().out
+    for views in (["0", "0"], ["2", "-1"]):  # the same view twice, once by its index from the end
+        assert main(base + views) == 2
+        err = capsys.readouterr().err
+        assert "--views: view" in err and "listed twice" in err, err
+
+
+def test_demo_and_sequence_name_size_when_the_net_cannot_take_it(tmp_path, capsys):
+    assert main(["demo", "--size", "8", "8", "--profile", "ci", "--out", str(tmp_path / "f.png")]) == 2
+    printed = capsys.readouterr()
+    assert "--size is 8×8 px" in printed.err and "holes:" not in printed.out, printed.err
+    folder = _tum_capture(tmp_path)
+    assert main(["sequence", str(folder), "--format", "tum", "--out", str(tmp_path / "o"), "--size", "8", "8",
+                 "--profile", "ci", "--dry-run"]) == 2
+    assert "--size is 8×8 px" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("shape", [(60, 90), (480, 640), (300, 1200), (600, 300), (12, 200)])
+def test_complete_preview_titles_overlap_nothing(shape, monkeypatch):
+    """No panel title, colour bar (with its labels) or the summary line overlaps another, at any aspect."""
+    import itertools
+
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from ddp_lite import cli_complete, viz
+    figures = []
+    monkeypatch.setattr(viz, "save_figure", lambda fig, path: figures.append(fig))
+    H, W = shape
+    depth = np.full(shape, 2.0, np.float32)
+    depth[: H // 3, : W // 3] = np.nan
+    cli_complete._write_preview("unused.png", depth, np.nan_to_num(depth, nan=2.5),
+                                "hole RMSE at full size (1234 pixels with ground truth): DDP 0.1 m, linear 0.2 m")
+    fig = figures[0]
+    FigureCanvasAgg(fig)
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    boxes = [(f"title {ax.get_title()!r}", ax.title.get_window_extent(renderer)) for ax in fig.axes if ax.get_title()]
+    boxes += [("colour bar", ax.get_tightbbox(renderer)) for ax in fig.axes if ax.get_label() == "<colorbar>"]
+    boxes += [("summary", fig._suptitle.get_window_extent(renderer))]
+    assert len(boxes) == 3 + 3 + 1
+    assert [(a, b) for (a, box_a), (b, box_b) in itertools.combinations(boxes, 2) if box_a.overlaps(box_b)] == []
+
+
+def test_sequence_dry_run_refuses_an_out_inside_the_capture_as_the_run_would(tmp_path, capsys):
+    folder = _tum_capture(tmp_path)
+    for out in (folder / "rgb", folder / "results", tmp_path):
+        assert main(["sequence", str(folder), "--format", "tum", "--out", str(out), "--dry-run"]) == 2
+        err = capsys.readouterr().err
+        assert "out:" in err and str(folder) in err, err
+
+
+def test_sequence_input_that_is_not_there_is_a_usage_error(tmp_path, capsys):
+    """A capture path that does not exist, or one of its listed files missing, exits 2 (usage) like every
+    other command's missing input, not 1 (a failure at run time)."""
+    out = str(tmp_path / "o")
+    for argv in (["sequence", str(tmp_path / "none"), "--format", "tum"],
+                 ["sequence", str(tmp_path / "none.npz"), "--format", "scene"]):
+        assert main(argv + ["--out", out, "--dry-run"]) == 2
+        assert "PATH" in capsys.readouterr().err
+    folder = _tum_capture(tmp_path)
+    next((folder / "depth").iterdir()).unlink()  # depth.txt lists a file that is gone
+    assert main(["sequence", str(folder), "--format", "tum", "--out", out, "--dry-run"]) == 2
+    assert "does not exist" in capsys.readouterr().err
+
+
+def test_sequence_log_gives_the_whole_runs_share_and_time_left(tmp_path):
+    """Each view's line says how far the whole run is (views done of all to fit) and the time left."""
+    import re
+
+    from ddp_lite.method.config import FitConfig
+    from ddp_lite.world.scenes import make_scene
+    from ddp_lite.sequences.sequence import run_sequence
+    lines = []
+    config = FitConfig.for_profile("ci", variant="rgbd+warp", progress=False, iterations=1)
+    run_sequence(make_scene("desk", size=(24, 32), n_views=3), tmp_path / "o", config, fuse=False, log=lines.append)
+    views = [line for line in lines if line.strip().startswith("view ")]
+    assert len(views) == 3, lines
+    shares = [re.search(r"\((\d)/3 views; all (\d+)%(, \d+:\d\d left)?\)$", line) for line in views]
+    assert all(shares), views
+    assert [(m.group(1), m.group(2)) for m in shares] == [("1", "33"), ("2", "67"), ("3", "100")]
+    assert views[-1].endswith("0:00 left)")
+
+
+def test_sequence_dry_run_says_h_by_w_on_both_lines(tmp_path, capsys):
+    """The scene line and the estimate both give H×W (40×56 for --size 40 56), as the rest of the kit."""
+    folder = _tum_capture(tmp_path)
+    assert main(["sequence", str(folder), "--format", "tum", "--out", str(tmp_path / "o"), "--dry-run",
+                 "--size", "40", "56"]) == 0
+    printed = capsys.readouterr().out
+    assert "3 views of 40×56" in printed and "40×56 px (H×W)" in printed and "56×40" not in printed

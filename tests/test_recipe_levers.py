@@ -169,6 +169,27 @@ def test_rgb_edge_guide_sees_an_edge_between_colours_of_equal_brightness_that_gr
         smoothness_weights(image, region, guide="colour")
 
 
+def test_structure_edge_guide_ignores_fine_texture_and_keeps_a_strong_edge():
+    from skimage.restoration import denoise_tv_chambolle
+
+    from ddp_lite.method.losses import STRUCTURE_TV_WEIGHT, smoothness_weights
+    rng = np.random.default_rng(0)
+    grey = np.where(np.arange(32) < 16, 0.2, 0.8)[None, :].repeat(24, 0)  # a step between columns 15 and 16
+    grey = grey + 0.04 * rng.standard_normal(grey.shape)  # fine texture on both surfaces
+    image = torch.from_numpy(np.repeat(grey[None, None], 3, axis=1)).float()  # (1, 3, 24, 32)
+    region = torch.ones(1, 1, 24, 32, dtype=torch.bool)
+    raw = smoothness_weights(image, region, edge=300.0, guide="grey")
+    structure = smoothness_weights(image, region, edge=300.0, guide="structure")
+    inside = (slice(2, -2), [4, 5, 6, 7, 24, 25, 26, 27])  # texture only, away from the step and the border
+    assert raw[0, 0][inside].mean() < 0.2  # the texture switches the raw guide off ...
+    assert structure[0, 0][inside].mean() > 0.5  # ... not the structure guide
+    assert structure[0, 0, 2:-2, 15:17].max() < 1e-6  # the step still relaxes both
+    # the weights are exp(-edge · half the central difference) of scikit-image's ROF denoising of the grey image
+    smooth = denoise_tv_chambolle(image[0].mean(0).double().numpy(), weight=STRUCTURE_TV_WEIGHT)
+    expected = np.exp(-300.0 * np.abs(smooth[:, 2:] - smooth[:, :-2]) / 2)
+    assert np.allclose(structure[0, 0, 1:-1, 1:-1].numpy(), expected[1:-1], atol=1e-5)
+
+
 def test_flatness_is_zero_on_a_constant_and_hand_computed_on_a_ramp():
     from ddp_lite.method.losses import flatness_loss, smoothness_weights
     H, W = 12, 16

@@ -22,13 +22,13 @@ import numpy as np
 import torch
 
 __all__ = ["env_choice", "named_choice", "check_callback", "check_int", "check_real", "check_bool", "check_choice", "check_int_tuple", "check_image", "check_depth",
-           "check_size", "MIN_VALID_PIXELS"]
+           "check_size", "unmask", "MIN_VALID_PIXELS"]
 
 MIN_VALID_PIXELS = 16  # a fit, or a mask, with fewer known pixels is refused
 MAX_DEPTH_RATIO = 1e6  # farthest / nearest valid depth: beyond it float32 disparity cannot resolve the far part
 
 
-def _unmask(array, name: str, holes: bool):
+def unmask(array, name: str, holes: bool):
     """A NumPy masked array → a plain one: masked entries become NaN holes (``holes``), or ``TypeError``
     for arrays with no holes (colour). Anything else is returned as it is."""
     if not np.ma.isMaskedArray(array):
@@ -112,7 +112,7 @@ def check_image(image, name: str, shape=None) -> np.ndarray:
     """(H, W, 3) float32 in [0, 1] (uint8 is scaled by 1/255), a copy; ``shape`` (H, W) if given."""
     if isinstance(image, torch.Tensor):
         raise TypeError(f"{name} must be a NumPy array (H, W, 3), got a torch tensor")
-    array = np.asarray(_unmask(image, name, holes=False))
+    array = np.asarray(unmask(image, name, holes=False))
     if array.dtype == np.uint8:
         array = array.astype(np.float32) / 255.0
     if not np.issubdtype(array.dtype, np.floating):
@@ -140,7 +140,7 @@ def check_depth(depth, name: str = "depth", allow_holes: bool = True, min_valid:
     """
     if isinstance(depth, torch.Tensor):
         raise TypeError(f"{name} must be a NumPy array (H, W), got a torch tensor")
-    array = np.asarray(_unmask(depth, name, holes=True))
+    array = np.asarray(unmask(depth, name, holes=True))
     if not np.issubdtype(array.dtype, np.floating):
         raise TypeError(f"{name} must be float metres with NaN holes, got dtype {array.dtype}")
     if array.ndim != 2:

@@ -91,7 +91,15 @@ def read_image_file(path, name: str = "path", flags: int = cv2.IMREAD_UNCHANGED)
     if data[:2] == b"\xff\xd8" and _jpeg_truncated(data):
         raise ValueError(f"{name}: {path} is a truncated JPEG (its image data has no end marker); the part "
                          f"below the cut would be read as grey. Copy or export the file again")
-    image = cv2.imdecode(np.frombuffer(data, np.uint8), flags | cv2.IMREAD_IGNORE_ORIENTATION)
+    if not data:
+        raise ValueError(f"{name}: {path} is empty (0 bytes); was it copied or downloaded completely?")
+    try:
+        image = cv2.imdecode(np.frombuffer(data, np.uint8), flags | cv2.IMREAD_IGNORE_ORIENTATION)
+    except cv2.error as error:  # OpenCV raises for a codec it was built without or left off (EXR)
+        hint = (" OpenCV reads .exr only with OPENCV_IO_ENABLE_OPENEXR=1 set before it is imported; or store "
+                "the depth as .npy or .pfm" if data[:4] == b"\x76\x2f\x31\x01" else "")
+        raise ValueError(f"{name}: {path}: OpenCV cannot decode it ({str(error).strip().splitlines()[-1]})."
+                         f"{hint}") from None
     if image is None:
         raise ValueError(f"{name}: {path} is not an image OpenCV can read")
     orientation = exif_orientation(data)

@@ -141,13 +141,21 @@ def error_table(case: Case, estimates: dict, band: int = 3) -> dict[str, dict[st
 
 
 def format_table(table: dict[str, dict[str, float]], digits: int = 2, title: str = "") -> str:
-    """A plain-text table of ``{row: {column: value}}``, rows in the given order."""
+    """A plain-text table of ``{row: {column: value}}``, rows in the given order; each column at least
+    12 characters wide and 2 wider than its name, so that long names stay apart.
+
+    Example:
+        >>> print(format_table({"DDP": {"depth PSNR": 16.7, "reproj. PSNR": 21.0}}, digits=1))
+               depth PSNR  reproj. PSNR
+        DDP          16.7          21.0
+    """
     columns = list(next(iter(table.values())).keys())
     width = max(len(str(r)) for r in table) + 2
+    widths = [max(12, len(str(c)) + 2) for c in columns]
     lines = [title] if title else []
-    lines.append(" " * width + "".join(f"{c:>12}" for c in columns))
+    lines.append(" " * width + "".join(f"{c:>{w}}" for c, w in zip(columns, widths)))
     for row, values in table.items():
-        lines.append(f"{str(row):<{width}}" + "".join(f"{values[c]:>12.{digits}f}" for c in columns))
+        lines.append(f"{str(row):<{width}}" + "".join(f"{values[c]:>{w}.{digits}f}" for c, w in zip(columns, widths)))
     return "\n".join(lines)
 
 

@@ -1,13 +1,13 @@
 """Metrics the paper reports: depth errors, KITTI's D1, PSNR, and Tanks and Temples' P/R/F.
 
 Conventions: depth (H, W) metres with NaN holes; disparity (H, W) pixels with NaN holes;
-images (H, W, 3) or (H, W) in [0, data_range]; masks bool, True = counted. No function here
-changes its inputs.
+images (H, W, 3) or (H, W) in [0, data_range]; masks bool, True = counted. A NumPy masked array's
+masked entries are unknown (NaN), never scored. No function here changes its inputs.
 
 - ``rmse``/``mae``/``hole_rmse``: plain errors over a mask (default: where the truth is finite),
   so "error in the holes" is ``hole_rmse(pred, gt, ~input_mask)`` (paper Table 1, Fig. 5).
-- ``d1_error``: KITTI 2015's outlier rate (paper Table 4).
-- ``psnr``: 20·log10(MAX / √MSE) (paper Fig. 7, NYU v2).
+- ``d1_error``: KITTI 2015's outlier rate (paper Table 5).
+- ``psnr``: 20·log10(MAX / √MSE) (paper Fig. 8, NYU v2).
 - ``point_cloud_prf``: Tanks and Temples' precision/recall/F-score at a distance τ (Table 3);
   ``cloud_scores`` the same in %.
 - ``disparity_rmse``, ``edge_band``, ``texture_leakage``: the notebooks' errors in normalised
@@ -25,11 +25,19 @@ __all__ = ["rmse", "mae", "hole_rmse", "d1_error", "psnr", "point_cloud_prf", "c
            "edge_band", "texture_leakage"]
 
 
+def _plain(value):
+    """``value`` as it is, or a NumPy masked array as float64 with its masked entries NaN (unknown, as
+    every NaN here): ``np.asarray`` alone would drop the mask and score whatever lies under it."""
+    if np.ma.isMaskedArray(value) and np.issubdtype(value.dtype, np.number):
+        return np.ma.filled(value.astype(np.float64), np.nan)
+    return value
+
+
 def _pair(pred, gt, names=("pred", "gt")) -> tuple[np.ndarray, np.ndarray]:
     """float64 views of two same-shape numeric arrays, or a ValueError naming the argument."""
     out = []
     for value, name in zip((pred, gt), names):
-        array = np.asarray(value)
+        array = np.asarray(_plain(value))
         if not (np.issubdtype(array.dtype, np.floating) or np.issubdtype(array.dtype, np.integer)):
             raise TypeError(f"{name} must be a numeric array, got dtype {array.dtype}")
         if array.ndim == 0 or array.size == 0:
@@ -233,10 +241,11 @@ def edge_band(depth, width: int = 3, relative_jump: float = 0.05) -> np.ndarray:
 
 def disparity_rmse(depth, gt, mask, transform: DisparityTransform) -> float:
     """RMSE ×100 of normalised disparity between two depth maps (H, W metres) on ``mask``."""
+    depth, gt = np.asarray(_plain(depth), np.float64), np.asarray(_plain(gt), np.float64)
     mask = np.asarray(mask, bool) & np.isfinite(depth) & np.isfinite(gt)
     if not mask.any():
         return float("nan")
-    error = transform.to_disparity(np.asarray(depth, np.float64)) - transform.to_disparity(np.asarray(gt, np.float64))
+    error = transform.to_disparity(depth) - transform.to_disparity(gt)
     return float(100.0 * np.sqrt(np.mean(error[mask] ** 2)))
 
 
@@ -251,8 +260,9 @@ def texture_leakage(depth, gt, transform: DisparityTransform, band: int = 3, reg
     to the planks: ``case.labels == views.LABEL_PLANKS``).
     """
     kernel = np.array([[0.0, 1.0, 0.0], [1.0, -4.0, 1.0], [0.0, 1.0, 0.0]])
-    out = ndimage.convolve(transform.to_disparity(np.asarray(depth, np.float64)), kernel, mode="nearest")
-    truth = ndimage.convolve(transform.to_disparity(np.asarray(gt, np.float64)), kernel, mode="nearest")
+    depth, gt = np.asarray(_plain(depth), np.float64), np.asarray(_plain(gt), np.float64)
+    out = ndimage.convolve(transform.to_disparity(depth), kernel, mode="nearest")
+    truth = ndimage.convolve(transform.to_disparity(gt), kernel, mode="nearest")
     planar = (np.abs(truth) < 1e-4) & ~edge_band(gt, band)
     if region is not None:
         planar &= np.asarray(region, bool)

@@ -9,6 +9,8 @@ Kinect-style readings filled and scored by PSNR (paper Fig. 8).
   reference view through a depth map and compare with the reference image, 20·log10(1/√MSE).
 - ``fill_table``: DDP and classical fills of one reading → depth PSNR in its holes (against the exact
   depth) and reprojection PSNR there.
+- ``nyu_fill_table``: the same fills on a real NYU v2 Kinect frame (the labelled ``.mat``), with the
+  dataset's own filled depth as one more row, scored on held-out blobs of its raw depth.
 """
 from __future__ import annotations
 
@@ -25,7 +27,7 @@ from ..core.views import Scene
 from ..method.warp import warp_to_reference
 
 __all__ = ["sweep_views", "scene_neighbors", "complete_views", "fused_scores",
-           "reprojection_psnr", "fill_table"]
+           "reprojection_psnr", "fill_table", "nyu_fill_table"]
 
 
 def sweep_views(views, neighbors_of, d_min: float, d_max: float, **options) -> list:
@@ -86,3 +88,31 @@ def fill_table(view, reading, gt, neighbor, ddp_depth, methods=("colorization", 
     return {name: {"depth PSNR": psnr(d, gt, data_range=peak, mask=known),
                    "reproj. PSNR": reprojection_psnr(d, view, neighbor, holes & seen_by_all)}
             for name, d in depths.items()}
+
+
+def nyu_fill_table(path, profile=None, index: int = 0, fraction: float = 0.15, seed: int = 0, config=None,
+                   methods=("colorization", "cross-bilateral")) -> dict:
+    """{method: {"depth PSNR"}} (dB) on NYU v2's labelled ``.mat`` frame ``index``, at the profile's size.
+
+    NYU has no second view in the labelled set and no truth in the Kinect's holes, so ``fraction`` of
+    the valid raw depth is held out in blobs (``random_holes``, ``seed``) and every fill is scored there,
+    against the raw reading, with the peak the raw depth's range: DDP (rgbd, ``config`` or the
+    profile's), each classical fill of ``methods``, and the dataset's own fill (which saw those pixels:
+    a bound, not a competitor).
+    """
+    from .datasets import load_nyu
+    from .holes import random_holes
+    from .profiles import get_profile
+    from .resample import resize_scene
+
+    profile = get_profile(profile) if profile is None or isinstance(profile, str) else profile
+    raw = resize_scene(load_nyu(path, index=index, raw=True), profile.size)[0]
+    toolbox = resize_scene(load_nyu(path, index=index, raw=False), profile.size)[0].depth
+    held_in, _ = random_holes(raw.depth, fraction=fraction, seed=seed)
+    held_out = np.isfinite(raw.depth) & ~np.isfinite(held_in)
+    config = FitConfig.for_profile(profile, variant="rgbd", progress=False) if config is None else config
+    result = complete_depth(raw.rgb, held_in, raw.camera, (), variant="rgbd", config=config)
+    fills = {"DDP (rgbd)": result.merged(held_in), "dataset's fill": toolbox,
+             **{m: fill(held_in, raw.rgb, method=m) for m in methods}}
+    peak = float(np.nanmax(raw.depth) - np.nanmin(raw.depth))
+    return {name: {"depth PSNR": psnr(d, raw.depth, data_range=peak, mask=held_out)} for name, d in fills.items()}

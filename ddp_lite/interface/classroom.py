@@ -34,6 +34,8 @@ from pathlib import Path
 import nbformat
 
 from data_fetch.atomic import write_bytes_atomic
+from data_fetch.files import regular_file
+
 from ..core.outpaths import check_not_overlapping, check_output_folder
 
 __all__ = ["student_copy", "execute", "exercises", "grade_notebook", "grade", "format_grades", "write_csv",
@@ -64,9 +66,9 @@ def _nbgrader_meta(cell) -> dict:
 
 def _read(path) -> nbformat.NotebookNode:
     path = Path(path)
-    if not path.is_file():
+    if not path.exists():
         raise ValueError(f"notebook {str(path)!r} does not exist")
-    return nbformat.read(path, as_version=4)
+    return nbformat.read(regular_file(path, "notebook"), as_version=4)  # a FIFO would block the read
 
 
 def _write(nb, path) -> None:
@@ -224,9 +226,16 @@ def grade_notebook(submission, source, student: str = "", timeout: int = 600, pr
     return scores
 
 
-# What a browser or Jupyter makes of a file name on a second download or a duplicate: "01_x (1).ipynb",
-# "Copy of 01_x.ipynb", "01_x-Copy1.ipynb".
-_RENAMED = re.compile(r"^(?:Copy of )?(?P<stem>.+?)(?: ?\(\d+\)|-Copy\d*)?\.ipynb$")
+# What a browser, a file manager or Jupyter makes of a file name on a second download or a duplicate:
+# "01_x (1).ipynb", "01_x(1).ipynb", "Copy of 01_x.ipynb", "01_x-Copy1.ipynb", "01_x - Copy (2).ipynb"
+# (Windows), "01_x.ipynb.ipynb", and any of them in another case ("01_X.IPYNB").
+_RENAMED = re.compile(r"^(?:Copy of )?(?P<stem>.+?)(?:\.ipynb)?(?: ?\(\d+\)|-Copy\d*| - Copy(?: \(\d+\))?)?\.ipynb$",
+                      re.IGNORECASE)
+
+
+def _notebook_files(folder: Path) -> list[Path]:
+    """A student's notebooks: every ``.ipynb`` under ``folder`` whatever the suffix's case, checkpoints left out."""
+    return sorted(p for p in folder.rglob("*") if p.suffix.lower() == ".ipynb" and ".ipynb_checkpoints" not in p.parts)
 
 
 def match_submissions(files, names) -> tuple[dict, list[str], list]:
@@ -239,7 +248,8 @@ def match_submissions(files, names) -> tuple[dict, list[str], list]:
     Returns:
         (``{name: path}``, notes on renamed files taken for a source, the files matched to nothing).
         The exact name wins; else a renamed copy ("01_x (1).ipynb", "Copy of 01_x.ipynb",
-        "01_x-Copy1.ipynb"), the most recently modified one when there are several.
+        "01_x-Copy1.ipynb", "01_x - Copy.ipynb", another case), the most recently modified one when
+        there are several.
     """
     files = [Path(f) for f in files]
     matched, notes = {}, []
@@ -248,7 +258,7 @@ def match_submissions(files, names) -> tuple[dict, list[str], list]:
         if exact:
             matched[name] = exact[0]
             continue
-        renamed = [f for f in files if (m := _RENAMED.match(f.name)) and m.group("stem") + ".ipynb" == name]
+        renamed = [f for f in files if (m := _RENAMED.match(f.name)) and (m.group("stem") + ".ipynb").lower() == name.lower()]
         if renamed:
             matched[name] = max(renamed, key=lambda f: (f.stat().st_mtime, f.name))
             notes.append(f"graded {matched[name].name!r} as {name}"
@@ -282,7 +292,7 @@ def grade(submissions_dir, source_dir="notebooks", timeout: int = 600, profile: 
             check_output_folder(Path(executed_dir) / student.name, "executed_dir (--executed)")
     scores = []
     for number, student in enumerate(students, 1):
-        files = [p for p in sorted(student.rglob("*.ipynb")) if ".ipynb_checkpoints" not in p.parts]
+        files = _notebook_files(student)
         handed_in, notes, unmatched = match_submissions(files, [p.name for p in sources])
         for note in notes:
             log(f"{student.name}: {note}")
@@ -296,7 +306,7 @@ def grade(submissions_dir, source_dir="notebooks", timeout: int = 600, profile: 
             submission = None
             if path is not None:
                 try:
-                    submission = nbformat.read(path, as_version=4)
+                    submission = nbformat.read(regular_file(path, "notebook"), as_version=4)  # a FIFO: scored, not read
                 except Exception as error:  # the student's file is not a notebook: score it 0, go on
                     log(f"{student.name}/{path.name}: unreadable, scored 0 ({type(error).__name__}: {error})")
                     mine.extend(replace(s, status="unreadable")
@@ -324,8 +334,12 @@ def read_hand_points(path) -> dict:
     naming the row) if a column is missing, a value is not a finite number ≥ 0, or a pair repeats.
     """
     path = Path(path)
-    if not path.is_file():
+    if not path.exists():
         raise ValueError(f"points {str(path)!r}: no such file")
+    try:
+        regular_file(path, "points")  # a folder or a FIFO: said as it is, before anything is opened
+    except IsADirectoryError as error:
+        raise ValueError(str(error)) from None
     with open(path, newline="", encoding="utf-8-sig") as handle:
         rows = list(csv.DictReader(handle))
     if not rows:
@@ -438,12 +452,12 @@ def write_feedback(scores: list[Score], out_dir, submissions_dir, source_dir="no
     for student in dict.fromkeys(s.student for s in scores):
         manual = [s for s in scores if s.student == student and s.kind == "manual"]
         handed_in, _, _ = match_submissions(
-            [p for p in sorted((Path(submissions_dir) / student).rglob("*.ipynb")) if ".ipynb_checkpoints" not in p.parts],
+            _notebook_files(Path(submissions_dir) / student),
             list(dict.fromkeys(f"{s.notebook}.ipynb" for s in manual)))
         answers = {}
         for name, path in handed_in.items():
             try:
-                answers.update(open_answers(nbformat.read(path, as_version=4)))
+                answers.update(open_answers(nbformat.read(regular_file(path, "notebook"), as_version=4)))
             except Exception:  # unreadable: already reported by grade(); its answers show as missing
                 pass
         lines = [f"# Open answers: {student}", ""]

@@ -27,6 +27,7 @@ import cv2
 import numpy as np
 
 from data_fetch.atomic import write_bytes_atomic
+from data_fetch.files import regular_file
 from ..data.fileio import depth_png_bytes, npy_bytes, pfm_bytes, read_image_file, read_pfm, read_rgb
 from ..core.outpaths import check_output_file
 
@@ -86,8 +87,7 @@ def _check_outputs(args, writers: dict) -> None:
 def _read_depth(path: str, scale: float | None, flag: str = "--depth") -> np.ndarray:
     """``path`` as float32 metres, NaN where the file has no value (0, ≤ 0, inf, NaN); a scale that
     gives an implausible depth range is refused (:func:`check_plausible_depth`)."""
-    if not os.path.isfile(path):
-        raise ValueError(f"{flag}: no such file {path!r}")
+    _input_file(path, flag)
     suffix = os.path.splitext(path)[1].lower()
     if suffix == ".npy":
         try:
@@ -141,9 +141,19 @@ def check_plausible_depth(stored, scale: float, flag: str = "--depth") -> None:
                      f"metres per stored unit")
 
 
+def _input_file(path: str, flag: str) -> None:
+    """Refuse an input that is missing, a folder, or not a regular file (a FIFO would block the read),
+    as a usage error (``ValueError``) naming ``flag``."""
+    if not os.path.exists(path):
+        raise ValueError(f"{flag}: no such file {path!r}")
+    try:
+        regular_file(path, flag)
+    except IsADirectoryError as error:
+        raise ValueError(str(error)) from None
+
+
 def _read_rgb(path: str) -> np.ndarray:
-    if not os.path.isfile(path):
-        raise ValueError(f"--rgb: no such file {path!r}")
+    _input_file(path, "--rgb")
     return read_rgb(path, "--rgb")  # pixels as stored, the same way as the depth: a phone's EXIF rotation is not applied
 
 
@@ -215,7 +225,9 @@ def complete_command(args) -> int:
     camera = None
     if args.intrinsics is not None:
         from ..core.camera import Camera
+        from ..method.fit_inputs import check_principal_point
         camera = Camera(np.array(args.intrinsics, dtype=np.float64), np.eye(4), depth.shape[1], depth.shape[0])
+        check_principal_point(camera, "--intrinsics")  # K of another image size would bend the point cloud
     holes = ~np.isfinite(depth)
     if not holes.any():
         raise ValueError(f"--depth {args.depth!r} has no holes (0, inf or NaN pixels): nothing to fill")

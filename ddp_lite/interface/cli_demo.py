@@ -22,6 +22,7 @@ from ..evaluation.experiments import error_table, format_table, make_case
 from ..method.config import FitConfig
 from ..method.fit import complete_depth
 from ..method.loop import check_memory
+from ..method.nets import check_input_size
 from ..evaluation.metrics import hole_rmse
 from ..core.outpaths import check_output_file
 from ..method.profiles import get_profile
@@ -50,6 +51,7 @@ def demo_command(args) -> int:
     config = FitConfig.for_profile(profile, variant=VARIANT, iterations=args.iterations, seed=args.seed,
                                    device=args.device, max_memory_gb=args.max_memory_gb)
     config.validate()
+    check_input_size(config.net, config.channels, *profile.size, name="--size")  # the net's smallest input
     # before the scene is rendered (minutes at a large --size): a fit that cannot fit in memory
     check_memory(config, get_variant(VARIANT).out_channels, *profile.size, N_NEIGHBORS, resolve_device(config))
     case = make_case(args.scene, profile, holes=args.holes, seed=args.seed)

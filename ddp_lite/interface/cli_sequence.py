@@ -16,9 +16,11 @@ import numpy as np
 from ..method.config import FitConfig
 from ..data.formats import load_sequence
 from ..core.outpaths import check_output_folder
+from ..method.nets import check_input_size
 from ..method.profiles import get_profile
 from ..sequences.runner import open_client
 from ..sequences.sequence import run_sequence
+from ..sequences.sequence_files import check_out_folder
 from ..sequences.sequence_cost import estimate_sequence, format_estimate
 from ..sequences.sequence_jobs import VARIANT
 from ..data.tum import TUM_INTRINSICS
@@ -55,19 +57,24 @@ def _view_indices(scene, tokens):
     if not tokens:
         return None
     names = {view.name: i for i, view in enumerate(scene.views)}
+    n = len(scene.views)
     indices = []
     for token in tokens:
         if token in names:
-            indices.append(names[token])
+            index = names[token]
         elif token.lstrip("-").isdigit():
             index = int(token)
-            if not -len(scene.views) <= index < len(scene.views):
-                raise ValueError(f"--views: {index} is out of range: the sequence has {len(scene.views)} views "
-                                 f"(0–{len(scene.views) - 1})")
-            indices.append(index)
+            if not -n <= index < n:
+                raise ValueError(f"--views: {index} is out of range: the sequence has {n} views (0–{n - 1}, or "
+                                 f"-{n}–-1 from the end)")
+            index %= n  # -1 is the last view, as in Python
         else:
             raise ValueError(f"--views: {token!r} is neither a view index nor a view name (first names: "
                              f"{', '.join(list(names)[:5])})")
+        if index in indices:
+            raise ValueError(f"--views: view {index} ({scene.views[index].name}) is listed twice ({token!r}); "
+                             f"list each view once")
+        indices.append(index)
     return indices
 
 
@@ -89,11 +96,16 @@ def sequence_command(args) -> int:
         raise ValueError(f"--out {args.out!r} is PATH: the results (depth/, ...) would be written among the "
                          f"inputs; give another folder")
     workers = _workers(args.workers) if args.scheduler is None else args.workers
-    scene = load_sequence(args.path, args.format, **options)
+    try:
+        scene = load_sequence(args.path, args.format, **options)
+    except (FileNotFoundError, IsADirectoryError, NotADirectoryError) as error:  # an input not there: usage (2)
+        raise ValueError(f"PATH {args.path!r}: {error}") from None
+    check_out_folder(args.out, list(getattr(scene, "sources", [])) + [os.path.abspath(args.path)])  # a dry run too
     indices = _view_indices(scene, args.views)
     config = FitConfig.for_profile(profile, variant=VARIANT, seed=args.seed, device=args.device, progress=False,
                                    **({"iterations": args.iterations} if args.iterations else {}))
     config.validate()
+    check_input_size(config.net, config.channels, *scene.size, name="--size" if args.size else "each view")
     print(f"{scene}; profile '{profile.name}'")
     if args.dry_run:
         n_views = len(scene) if indices is None else len(indices)

@@ -61,6 +61,8 @@ class DisparityTransform:
         """A range that holds the valid (finite) depths of ``depth`` (H, W) with a ``margin`` factor
         on both sides, so a hole may be a little nearer or farther than anything observed."""
         check_real(margin, "margin", 1.0)
+        if np.ma.isMaskedArray(depth):  # masked = hole: what lies under the mask is no depth
+            depth = np.ma.filled(depth.astype(np.float64), np.nan)
         valid = np.asarray(depth, dtype=np.float64)
         valid = valid[np.isfinite(valid)]
         if valid.size == 0:

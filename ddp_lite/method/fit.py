@@ -21,7 +21,7 @@ import torch
 
 from . import loop
 from .cache import cached
-from ..core.checks import MIN_VALID_PIXELS, check_callback, check_depth
+from ..core.checks import MIN_VALID_PIXELS, check_callback, check_depth, unmask
 from .config import FitConfig
 from .device import resolve_device
 from .disparity import DisparityTransform
@@ -67,7 +67,10 @@ def merge(input_depth, ddp_depth) -> np.ndarray:
     ``input_depth`` follows the kit's convention (NaN holes, a masked array's mask = holes); a 0 or
     negative "hole" marker, or inf, is refused rather than kept as a depth."""
     input_depth = check_depth(input_depth, "input_depth", min_valid=0)
-    ddp_depth = np.asarray(ddp_depth, dtype=np.float32)
+    ddp_depth = np.asarray(unmask(ddp_depth, "ddp_depth", holes=True))
+    if not (np.issubdtype(ddp_depth.dtype, np.floating) or np.issubdtype(ddp_depth.dtype, np.integer)):
+        raise TypeError(f"ddp_depth must be an (H, W) array of metres, got dtype {ddp_depth.dtype}")
+    ddp_depth = ddp_depth.astype(np.float32)
     if input_depth.shape != ddp_depth.shape:
         raise ValueError(f"input_depth {input_depth.shape} and ddp_depth {ddp_depth.shape} must have the same shape")
     return np.where(np.isfinite(input_depth), input_depth, ddp_depth).astype(np.float32)

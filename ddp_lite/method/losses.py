@@ -200,7 +200,8 @@ def warp_loss(reference: torch.Tensor, warped: list, valid: list, lambda_w: floa
     return torch.stack(losses).mean()
 
 
-EDGE_GUIDES = ("grey", "rgb")
+EDGE_GUIDES = ("grey", "rgb", "structure")
+STRUCTURE_TV_WEIGHT = 0.1  # ROF weight of the "structure" guide, for images in [0, 1]
 
 
 def smoothness_weights(image, region, edge: float = 10.0, guide: str = "grey") -> torch.Tensor:
@@ -209,8 +210,10 @@ def smoothness_weights(image, region, edge: float = 10.0, guide: str = "grey") -
     bool and on the one-pixel border where a second difference does not exist. ``g`` is the
     colour change across the pixel (half its central difference) of ``image`` (B, 3, H, W) in
     [0, 1]: of the grey image (``guide="grey"``), or the largest over the three channels
-    (``"rgb"``), which also sees edges between colours of equal brightness. Constant during a
-    fit, so it is computed once.
+    (``"rgb"``), which also sees edges between colours of equal brightness, or of the grey image's
+    *structure* (``"structure"``: its total-variation (ROF) denoising, weight 0.1, which removes
+    texture and keeps strong edges), so that texture on one surface does not switch the terms off.
+    Constant during a fit, so it is computed once.
 
     Example:
         >>> image = torch.zeros(1, 3, 1, 4); image[0, 0, 0, 2:] = 1.0  # black | red: grey steps by 1/3
@@ -222,7 +225,12 @@ def smoothness_weights(image, region, edge: float = 10.0, guide: str = "grey") -
     """
     if guide not in EDGE_GUIDES:
         raise ValueError(f"guide must be one of {EDGE_GUIDES}, got {guide!r}")
-    source = image.mean(dim=1, keepdim=True) if guide == "grey" else image  # (B, 1 or 3, H, W)
+    source = image.mean(dim=1, keepdim=True) if guide != "rgb" else image  # (B, 1 or 3, H, W)
+    if guide == "structure":
+        from skimage.restoration import denoise_tv_chambolle
+        grey = source.detach().to("cpu", torch.float64).numpy()[:, 0]  # (B, H, W)
+        structure = np.stack([denoise_tv_chambolle(g, weight=STRUCTURE_TV_WEIGHT) for g in grey])[:, None]
+        source = torch.from_numpy(structure).to(image.device, image.dtype)  # (B, 1, H, W)
     gx = torch.zeros_like(source[:, :1])  # (B, 1, H, W)
     gy = torch.zeros_like(source[:, :1])
     # central differences: the colour change across the pixel whose curvature is penalised

@@ -19,6 +19,7 @@ import torch
 import torch.nn.functional as F
 
 from ..core.camera import Camera, pixel_grid, relative_pose
+from ..core.checks import unmask
 
 __all__ = ["Warper", "warp_to_reference"]
 
@@ -85,8 +86,8 @@ def warp_to_reference(nbr_image, ref_depth, ref_cam: Camera, nbr_cam: Camera):
         raise TypeError("ref_cam and nbr_cam must be ddp_lite.Camera instances")
     as_numpy = not isinstance(nbr_image, torch.Tensor)
     if as_numpy:
-        image = np.asarray(nbr_image, dtype=np.float32)
-        depth = np.asarray(ref_depth, dtype=np.float32)
+        image = np.asarray(unmask(nbr_image, "nbr_image", holes=False), dtype=np.float32)
+        depth = np.asarray(unmask(ref_depth, "ref_depth", holes=True), dtype=np.float32)  # masked = unknown
         if image.ndim != 3 or image.shape[2] < 1:
             raise ValueError(f"nbr_image must be (H, W, C), got shape {image.shape}")
         if depth.ndim != 2:

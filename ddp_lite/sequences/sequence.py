@@ -36,6 +36,7 @@ import time
 import numpy as np
 
 from ..method.config import FitConfig
+from ..core.progress import CommandClock
 from .runner import run_jobs
 from .sequence_cost import estimate_sequence, format_estimate, measure_fit_cost
 from .sequence_files import (MANIFEST, view_files, view_finished, fuse_views, write_manifest, write_view, check_out_folder,
@@ -89,20 +90,23 @@ def run_sequence(scene: Scene, out, config: FitConfig | None = None, views=None,
     log(f"{len(jobs)} views: {len(skipped)} already done, {len(todo)} to fit"
         + (f" on {len(client.scheduler_info()['workers'])} Dask workers" if client is not None and todo else ""))
     computed, failed = [], {}
+    clock = CommandClock(max(len(todo), 1))  # the whole run's share and time left, on every view's line
     for key, outcome in run_jobs(fit_view, {k: (job,) for k, job in todo.items()}, client=client, retries=retries):
         job = todo[key]
         entry = manifest["views"][job.name]
+        clock.advance()
+        whole = f" ({clock.done}/{len(todo)} views; {clock.summary()})"
         if isinstance(outcome, BaseException):
             entry.update(status="failed", error=f"{type(outcome).__name__}: {outcome}")
             failed[job.name] = entry["error"]
-            log(f"  view {job.name}: FAILED ({entry['error']})")
+            log(f"  view {job.name}: FAILED ({entry['error']}){whole}")
         else:
             overflow = write_view(out, job, outcome)
             entry.update(status="done", iterations=outcome["iterations"], seconds=round(outcome["seconds"], 3),
                          png_overflow_pixels=overflow, finished=time.strftime("%Y-%m-%dT%H:%M:%S"))
             entry.pop("error", None)
             computed.append(job.name)
-            log(f"  view {job.name}: {outcome['iterations']} iterations, {outcome['seconds']:.1f} s")
+            log(f"  view {job.name}: {outcome['iterations']} iterations, {outcome['seconds']:.1f} s{whole}")
         write_manifest(out, manifest)
     fused, points = None, 0
     if fuse:
