@@ -1,4 +1,4 @@
-"""Issue 14's list of bad inputs, as tests: every one refused before any work, with a clear message.
+"""The bad inputs a user can give, as tests: every one refused before any work, with a clear message.
 
 Each case builds its inputs in a fresh folder, then acts; the test asserts the exception type,
 that the message names the argument, that no file in the folder was created or changed, and
@@ -663,7 +663,7 @@ def verdicts() -> dict:
         _WATCHED.clear()
         if c.id in skip:
             counts["silent"] += 1
-            rows.append(("silent", c.id, "not run here (SKIP_CASES): accepted, per the issue's measurement"))
+            rows.append(("silent", c.id, "not run here (SKIP_CASES): accepted, as measured"))
             continue
         with tempfile.TemporaryDirectory() as tmp:
             try:

@@ -275,7 +275,7 @@ def test_data_dir(monkeypatch, tmp_path):
     assert data_dir().name == "ddp-lite"
 
 
-# --------------------------------------------------------------------------- issue 14: resume and archives
+# --------------------------------------------------------------------------- resume and archives
 
 def listing(folder):
     return sorted(str(p.relative_to(folder)) for p in folder.rglob("*")) if folder.exists() else []

@@ -1,4 +1,4 @@
-"""ConstantTarget (issue 13): a target's work done once per fit gives the numbers of the plain computation."""
+"""ConstantTarget: a target's work done once per fit gives the numbers of the plain computation."""
 import numpy as np
 import pytest
 import torch

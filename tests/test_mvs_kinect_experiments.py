@@ -1,4 +1,4 @@
-"""Notebook 11's plumbing (ddp_lite.mvs_kinect_experiments) against hand computations: the paper's
+"""Notebook 11's plumbing (ddp_lite.evaluation.mvs_kinect_experiments) against hand computations: the paper's
 reprojection PSNR (Sec. 4.4) on a fronto-parallel plane whose warp is an integer shift, the fill
 table's two PSNRs, and the NYU v2 branch on a labelled-.mat fixture."""
 import numpy as np

@@ -1,4 +1,4 @@
-"""Progress output: a bar on a terminal or in Jupyter, short lines in logs (issue 15)."""
+"""Progress output: a bar on a terminal or in Jupyter, short lines in logs."""
 import io
 
 import pytest

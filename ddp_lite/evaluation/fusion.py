@@ -53,7 +53,7 @@ def _open3d():
 def _check_view(depth, camera, rgb=None, index: str = "") -> tuple:
     """float64 depth (H, W) with NaN holes, the camera, float64 rgb (or None); errors name the argument."""
     if not isinstance(camera, Camera):
-        raise TypeError(f"camera{index} must be a ddp_lite.camera.Camera, got {type(camera).__name__}")
+        raise TypeError(f"camera{index} must be a ddp_lite.core.camera.Camera, got {type(camera).__name__}")
     array = check_depth(depth, f"depth{index}", min_valid=0, shape=(camera.height, camera.width), dtype=np.float64)
     if rgb is None:
         return array, camera, None
@@ -264,7 +264,7 @@ def render_point_cloud(cloud, camera=None, ax=None, point_size: int = 1, backgro
         raise ValueError(f"point_size must be a positive integer (pixels), got {point_size!r}")
     camera = _default_camera(points) if camera is None else camera
     if not isinstance(camera, Camera):
-        raise TypeError(f"camera must be a ddp_lite.camera.Camera or None, got {type(camera).__name__}")
+        raise TypeError(f"camera must be a ddp_lite.core.camera.Camera or None, got {type(camera).__name__}")
     H, W = camera.height, camera.width
     u, v, z = project_points(points, camera)
     by_depth = colours is None

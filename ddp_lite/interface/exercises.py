@@ -246,7 +246,7 @@ def check_d1(student_d1) -> bool:
     pred = gt + rng.normal(0.0, 4.0, gt.shape)
     pred[np.isnan(pred)] = 1.0
     cases.append(((pred, gt), 100 * d1_error(pred, gt)["d1_all"]))  # a random map vs the kit's tested metric
-    return _run("D1", student_d1, cases, "hand-computed cases and ddp_lite.metrics.d1_error", _close(1e-9))
+    return _run("D1", student_d1, cases, "hand-computed cases and ddp_lite.evaluation.metrics.d1_error", _close(1e-9))
 
 
 # The calibration of scikit-image's Middlebury 2014 pair (skimage.data.stereo_motorcycle's docstring):
