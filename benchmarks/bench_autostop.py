@@ -37,7 +37,7 @@ SCENES = ("house", "desk", "room", "street")
 
 
 def replay(heldout, patience: int, eval_every: int, decays: int):
-    """The auto-stop of ``fit._run`` on a recorded held-out curve: (index kept, index stopped at)."""
+    """The auto-stop of ``ddp_lite.method.loop.run`` on a recorded held-out curve: (index kept, index stopped at)."""
     stopper, kept = PlateauStopper(patience, eval_every, decays), 0
     for i, error in enumerate(heldout):
         event = stopper.update(error)

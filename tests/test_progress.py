@@ -19,7 +19,7 @@ def test_a_log_gets_one_short_line_every_ten_percent():
     for i in bar:
         if i == 100:
             bar.set_postfix(heldout="0.0123", refresh=False)
-    bar.close()  # fit.py closes after the loop too: no second last line
+    bar.close()  # the fit loop (method/loop.py) closes after the loop too: no second last line
     lines = log.getvalue().splitlines()
     assert "\r" not in log.getvalue()
     assert [line.split()[2] for line in lines[:-1]] == [f"{p}%" for p in range(10, 100, 10)]

@@ -14,7 +14,7 @@ A profile (``ci``, ``class``, ``paper``; ``DDP_PROFILE``) sets the size and the 
 Every profile runs with every recipe, so ``FitConfig.for_profile("ci", recipe="paper")`` is the
 paper's method in seconds. The quality study's other recipes are :data:`STUDY`. The numbers
 quoted are DDP's mean hole error over the quality suite as a multiple of the best classical fill
-of each case (``benchmarks/bench_quality.py``); their history is ``docs/tuning_history.md``.
+of each case (``benchmarks/bench_quality.py``); their history is ``docs/quality_study.md``.
 """
 from __future__ import annotations
 
@@ -52,7 +52,7 @@ class Recipe:
 
 
 # The kit's additions, per profile (FitConfig fields), each with what it bought on the quality suite when it
-# came in (multiples of the best classical fill, seeds 0 and 1; docs/tuning_history.md has each pass).
+# came in (multiples of the best classical fill, seeds 0 and 1; docs/quality_study.md has each step).
 KIT_AT = {
     "ci": dict(
         smoothness=1.0,  # curvature in the holes: a hole far from valid pixels does not bend (5.4× → 2.4×)
