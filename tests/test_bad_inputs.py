@@ -652,38 +652,45 @@ def test_cli_writes_the_format_its_suffix_names(tmp_path):
 
 # --------------------------------------------------------------------------- counting verdicts
 
-def verdicts() -> dict:
-    """Run every case against the ddp_lite on the path: 'clear', 'unclear' (another exception, or
-    a message not naming the argument) or 'silent' (accepted)."""
+def judge(c) -> tuple[str, str]:
+    """One case against the ddp_lite on the path → (verdict, note): 'clear' (the expected exception,
+    naming the argument, no file changed), 'unclear' (another exception, or a message not naming the
+    argument, or files changed) or 'silent' (accepted)."""
     import tempfile
-    os.environ.setdefault("DDP_PROFILE", "ci")
+    import warnings
+    _WATCHED.clear()
+    with tempfile.TemporaryDirectory() as tmp, warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        try:
+            act = c.setup(Path(tmp))
+            before = snapshot(Path(tmp))
+            act()
+            return "silent", "accepted"
+        except c.exc as error:
+            changed = snapshot(Path(tmp)) != before
+            verdict = "clear" if c.name in str(error) and not changed else "unclear"
+            return verdict, ("changed files; " if changed else "") + (str(error).splitlines()[0][:100] if str(error) else "")
+        except BaseException as error:  # noqa: BLE001 - a count, not a test
+            return "unclear", f"{type(error).__name__}: {str(error).splitlines()[0][:100] if str(error) else ''}"
+
+
+def verdicts(cases=None, skip=()) -> tuple[dict, list]:
+    """Every case's verdict (``judge``): the counts and one (verdict, id, note) row per case. A case in
+    ``skip`` (too heavy to run unguarded) counts as silent, as the measurement that listed it found."""
     counts, rows = {"clear": 0, "unclear": 0, "silent": 0}, []
-    skip = set(os.environ.get("SKIP_CASES", "").split("|")) - {""}  # cases too heavy to run unguarded
-    for c in CASES:
-        _WATCHED.clear()
+    for c in CASES if cases is None else cases:
         if c.id in skip:
-            counts["silent"] += 1
-            rows.append(("silent", c.id, "not run here (SKIP_CASES): accepted, as measured"))
-            continue
-        with tempfile.TemporaryDirectory() as tmp:
-            try:
-                act = c.setup(Path(tmp))
-                before = snapshot(Path(tmp))
-                act()
-                verdict, note = "silent", "accepted"
-            except c.exc as error:
-                changed = snapshot(Path(tmp)) != before
-                verdict = "clear" if c.name in str(error) and not changed else "unclear"
-                note = ("changed files; " if changed else "") + str(error).splitlines()[0][:100] if str(error) else ""
-            except BaseException as error:  # noqa: BLE001 - a count, not a test
-                verdict, note = "unclear", f"{type(error).__name__}: {str(error).splitlines()[0][:100] if str(error) else ''}"
+            verdict, note = "silent", "not run here (SKIP_CASES): accepted, as measured"
+        else:
+            verdict, note = judge(c)
         counts[verdict] += 1
         rows.append((verdict, c.id, note))
     return counts, rows
 
 
 if __name__ == "__main__":
-    counts, rows = verdicts()
+    os.environ.setdefault("DDP_PROFILE", "ci")
+    counts, rows = verdicts(skip=set(os.environ.get("SKIP_CASES", "").split("|")) - {""})
     for verdict, id_, note in rows:
         print(f"{verdict:8} {id_:55} {note}")
     print(counts, "of", len(CASES))

@@ -40,7 +40,7 @@ from ddp_lite.sequences.sequence import run_sequence  # noqa: E402
 from ddp_lite import sequence_files  # noqa: E402
 from ddp_lite.sequences.sequence_files import MANIFEST, read_manifest  # noqa: E402
 
-from test_bad_inputs import Case, _WATCHED, camera, depth, rgb, snapshot, tiny, watch  # noqa: E402
+from test_bad_inputs import Case, _WATCHED, camera, depth, rgb, snapshot, tiny, verdicts, watch  # noqa: E402
 
 H, W = 24, 32
 BAD = (TypeError, ValueError)
@@ -444,33 +444,9 @@ def test_the_list_grew():
 
 # --------------------------------------------------------------------------- counting verdicts
 
-def verdicts():
-    """Each refusal against the ddp_lite on the path: 'clear', 'unclear' or 'silent' (accepted)."""
-    import tempfile
-    counts, rows = {"clear": 0, "unclear": 0, "silent": 0}, []
-    for c in CASES:
-        _WATCHED.clear()
-        with tempfile.TemporaryDirectory() as tmp, warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            try:
-                act = c.setup(Path(tmp))
-                before = snapshot(Path(tmp))
-                act()
-                verdict, note = "silent", "accepted"
-            except c.exc as error:
-                changed = snapshot(Path(tmp)) != before
-                verdict = "clear" if c.name in str(error) and not changed else "unclear"
-                note = ("changed files; " if changed else "") + (str(error).splitlines()[0][:100] if str(error) else "")
-            except BaseException as error:  # noqa: BLE001 - a count, not a test
-                verdict, note = "unclear", f"{type(error).__name__}: {str(error).splitlines()[0][:100] if str(error) else ''}"
-        counts[verdict] += 1
-        rows.append((verdict, c.id, note))
-    return counts, rows
-
-
 if __name__ == "__main__":
     sys.path.insert(0, str(Path(__file__).parent))
-    counts, rows = verdicts()
+    counts, rows = verdicts(CASES)
     for verdict, id_, note in rows:
         print(f"{verdict:8} {id_:55} {note}")
     print(counts, "of", len(CASES))

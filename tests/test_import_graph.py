@@ -172,3 +172,44 @@ def test_each_sub_package_imports_only_what_its_docstring_allows():
             if len(other) >= 2 and other[1] != parts[1] and allowed is not None and other[1] not in allowed:
                 breaches.append(f"{importer} imports {target}")
     assert breaches == []
+
+
+def _ddp_lite_imports(source: str, importer: str | None = None, is_package: bool = False):
+    """(line, absolute module name) of every import of ``ddp_lite`` or one of its modules in ``source``."""
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                if alias.name.split(".")[0] == "ddp_lite":
+                    yield node.lineno, alias.name
+        elif isinstance(node, ast.ImportFrom):
+            if node.level and importer is None:
+                continue  # a relative import outside the package: not ours
+            target = resolve(importer, is_package, node.level, node.module) if node.level else node.module or ""
+            if target.split(".")[0] == "ddp_lite":
+                yield node.lineno, target
+
+
+def test_every_import_of_the_package_names_a_module_that_exists():
+    """Also the late imports inside functions, and those of tests, benchmarks and notebooks, which no other
+    test may reach (a module moved into a sub-package leaves them pointing at nothing)."""
+    import json
+    known = set(modules())
+    root = PACKAGE.parent
+    missing = []
+    for name, path in modules().items():
+        for line, target in _ddp_lite_imports(path.read_text(encoding="utf-8"), name, path.name == "__init__.py"):
+            if target not in known:
+                missing.append(f"{path.relative_to(root)}:{line}: {target}")
+    for path in sorted((root / "tests").glob("*.py")) + sorted((root / "benchmarks").glob("*.py")):
+        for line, target in _ddp_lite_imports(path.read_text(encoding="utf-8")):
+            if target not in known:
+                missing.append(f"{path.relative_to(root)}:{line}: {target}")
+    for path in sorted((root / "notebooks").glob("*.ipynb")):
+        for i, cell in enumerate(json.loads(path.read_text(encoding="utf-8"))["cells"]):
+            if cell["cell_type"] == "code":
+                source = "".join(cell["source"])
+                source = "\n".join(l for l in source.splitlines() if not l.lstrip().startswith(("%", "!")))
+                for line, target in _ddp_lite_imports(source):
+                    if target not in known:
+                        missing.append(f"{path.relative_to(root)} cell {i}:{line}: {target}")
+    assert not missing, "imports of modules that do not exist:\n" + "\n".join(missing)

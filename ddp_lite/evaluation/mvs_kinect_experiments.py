@@ -100,10 +100,10 @@ def nyu_fill_table(path, profile=None, index: int = 0, fraction: float = 0.15, s
     profile's), each classical fill of ``methods``, and the dataset's own fill (which saw those pixels:
     a bound, not a competitor).
     """
-    from .datasets import load_nyu
-    from .holes import random_holes
-    from .profiles import get_profile
-    from .resample import resize_scene
+    from ..data.datasets import load_nyu
+    from ..classical.holes import random_holes
+    from ..method.profiles import get_profile
+    from ..data.resample import resize_scene
 
     profile = get_profile(profile) if profile is None or isinstance(profile, str) else profile
     raw = resize_scene(load_nyu(path, index=index, raw=True), profile.size)[0]
