@@ -43,3 +43,12 @@ def test_ddp_recipe_selects_the_default_and_bad_names_are_refused(monkeypatch):
     with pytest.raises(ValueError, match="recipe must be one of"):
         get_recipe("bogus")
     assert set(RECIPES) >= {"paper", "kit"}
+
+
+def test_a_profiles_first_line_names_what_the_recipe_in_force_adds():
+    from ddp_lite.method.profiles import get_profile
+    profile = get_profile("class")
+    assert "curvature" in profile.describe("kit") and "coordinates" in profile.describe("kit")
+    paper = profile.describe("paper")
+    assert "curvature" not in paper and "flatness" not in paper and "input:" not in paper
+    assert paper == profile.describe("kit").split(", hole curvature")[0]  # the size and budget are the same

@@ -57,13 +57,14 @@ class Profile:
         """The learning-rate decay iterations a run of ``iterations`` reaches (paper depth-only: none)."""
         return tuple(m for m in self.lr_milestones if m < iterations)
 
-    def describe(self) -> str:
-        """One line for a notebook's first cell: the size and budget, and what the ``kit`` recipe adds here."""
+    def describe(self, recipe=None) -> str:
+        """One line for a notebook's first cell: the size and budget, and what ``recipe`` (a name or
+        :class:`Recipe`; None: the one ``DDP_RECIPE`` selects, ``kit`` by default) adds to the paper's method here."""
         H, W = self.size
         return (f"profile '{self.name}': {H}×{W} images, UNet {'-'.join(map(str, self.channels))}, "
                 f"{'≤ ' if self.auto_stop else ''}{self.iterations} iterations (depth-only {self.iterations_depth_only}), "
                 f"lr {self.lr:g}, auto-stop {'on' if self.auto_stop else 'off'}"
-                + describe_method(get_recipe("kit").settings(self.name)))
+                + describe_method(get_recipe(recipe).settings(self.name)))
 
 
 PROFILES = {

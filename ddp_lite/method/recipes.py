@@ -109,7 +109,8 @@ def describe_method(settings: dict) -> str:
             + (f" (in enclosed holes only within {reach:g} px of valid depth)"
                if flatness and reach is not None else "")
             + (f" (relaxed at colour edges by exp(-{edge:g}·"
-               + ("|∇grey|" if settings.get("edge_guide", "grey") == "grey" else "max over R, G, B of |∇I|") + "))"
+               + {"grey": "|∇grey|", "rgb": "max over R, G, B of |∇I|", "structure": "|∇ structure of grey|"}[
+                   settings.get("edge_guide", "grey")] + "))"
                if smoothness or flatness else "")
             + (", input: the pixel coordinates" + (" + noise" if noise_channels > 2 else "")
                if settings.get("net_input", "noise") == "meshgrid" else "")
