@@ -237,6 +237,26 @@ def ensemble_rows(rows: list[dict], folder: Path, k: int, profile) -> list[dict]
     return out
 
 
+def mix_rows(rows: list[dict], folder: Path, recipes: list[str], profile) -> list[dict]:
+    """Rows for the mean of one saved fit of each of ``recipes`` (same case, variant and seed): an
+    ensemble whose members differ in method, not only in seed. The method is named ``a+b``."""
+    seconds = {(r["case"], r["method"], r["variant"], r["size"], r["seed"]): r["seconds"] for r in rows if r.get("variant")}
+    keys = {(c, v, size, seed) for c, m, v, size, seed in seconds if m == recipes[0]}
+    cases, out = {}, []
+    for case_name, variant, size, seed in sorted(keys, key=str):
+        members = [fit_path(folder, case_name, r, variant, seed, size) for r in recipes]
+        if not all(m.exists() for m in members):
+            continue
+        if case_name not in cases:
+            cases[case_name] = build_case(case_name, profile)
+        case, fb = cases[case_name]
+        inverse = np.mean([np.load(m) for m in members], axis=0)  # (H, W) 1/m
+        out.append(dict(case=case_name, method="+".join(recipes), variant=variant, seed=seed, size=size,
+                        px=rmse_px(1.0 / inverse, case, fb),
+                        seconds=sum(seconds.get((case_name, r, variant, size, seed), np.nan) for r in recipes)))
+    return out
+
+
 def paired_difference(ratios: np.ndarray, baseline: np.ndarray) -> dict:
     """A recipe against a baseline on the same fits: ``ratios`` and ``baseline`` (N,) hold the
     ratio to the best fill of N (case, seed) fits each, in the same order. Returns the mean
@@ -382,13 +402,17 @@ def main() -> None:
     parser.add_argument("--save-fits", metavar="DIR", help="keep each DDP fit's output here (inverse depth, .npy)")
     parser.add_argument("--ensembles", type=int, nargs="+", default=[], metavar="K",
                         help="with --report and --save-fits: also report the mean of K saved fits (seeds s..s+K-1)")
+    parser.add_argument("--mixes", nargs="+", default=[], metavar="A+B",
+                        help="with --report and --save-fits: also report the mean of one fit of each recipe (same seed)")
     args = parser.parse_args()
     if args.report:
         extra = None
-        if args.ensembles and args.save_fits:
+        if (args.ensembles or args.mixes) and args.save_fits:
             profile = profile_from_args(args)
-            extra = lambda rows: [e for k in args.ensembles  # noqa: E731
-                                  for e in ensemble_rows(rows, Path(args.save_fits), k, profile)]
+            extra = lambda rows: ([e for k in args.ensembles  # noqa: E731
+                                   for e in ensemble_rows(rows, Path(args.save_fits), k, profile)]
+                                  + [m for mix in args.mixes
+                                     for m in mix_rows(rows, Path(args.save_fits), mix.split("+"), profile)])
         report(args.report, extra=extra)
         return
     run(args)
