@@ -215,46 +215,40 @@ def save_fit(folder: Path, row: dict, depth: np.ndarray) -> None:
     temporary.replace(path)
 
 
-def ensemble_rows(rows: list[dict], folder: Path, k: int, profile) -> list[dict]:
-    """Rows for the mean of ``k`` saved fits with seeds s, s+1, ..., s+k-1 (what ``FitConfig(ensemble=k,
-    seed=s)`` computes: the members' disparities averaged), for every s whose members are all saved.
-    The method is named ``<recipe>×k``; ``px`` is its hole RMSE on the case."""
+def averaged_rows(rows: list[dict], folder: Path, profile, name: str, members) -> list[dict]:
+    """Rows for the mean of saved fits (their inverse depths averaged, as ``FitConfig.ensemble`` averages
+    its members' disparities): ``members(method, seed)`` lists the (method, seed) pairs averaged for a
+    row anchored at a fit of ``method`` with ``seed``, or None to skip it; the row's method is
+    ``name(method)`` and ``px`` its hole RMSE on the case. Rows whose members are not all saved are left out."""
     seconds = {(r["case"], r["method"], r["variant"], r["size"], r["seed"]): r["seconds"] for r in rows if r.get("variant")}
-    by_key = set(seconds)
-    cases = {}
-    out = []
-    for case_name, method, variant, size, seed in sorted(by_key, key=str):
-        members = [fit_path(folder, case_name, method, variant, seed + j, size) for j in range(k)]
-        if not all(m.exists() for m in members):
+    cases, out = {}, []
+    for case_name, method, variant, size, seed in sorted(seconds, key=str):
+        chosen = members(method, seed)
+        paths = [fit_path(folder, case_name, m, variant, s, size) for m, s in chosen or ()]
+        if not chosen or not all(p.exists() for p in paths):
             continue
         if case_name not in cases:
             cases[case_name] = build_case(case_name, profile)
         case, fb = cases[case_name]
-        inverse = np.mean([np.load(m) for m in members], axis=0)  # (H, W) 1/m
-        out.append(dict(case=case_name, method=f"{method}×{k}", variant=variant, seed=seed, size=size,
+        inverse = np.mean([np.load(p) for p in paths], axis=0)  # (H, W) 1/m
+        out.append(dict(case=case_name, method=name(method), variant=variant, seed=seed, size=size,
                         px=rmse_px(1.0 / inverse, case, fb),
-                        seconds=sum(seconds.get((case_name, method, variant, size, seed + j), np.nan) for j in range(k))))
+                        seconds=sum(seconds.get((case_name, m, variant, size, s), np.nan) for m, s in chosen)))
     return out
+
+
+def ensemble_rows(rows: list[dict], folder: Path, k: int, profile) -> list[dict]:
+    """The mean of ``k`` saved fits of one recipe with seeds s, s+1, ..., s+k-1 (what ``FitConfig(ensemble=k,
+    seed=s)`` computes), named ``<recipe>×k``."""
+    return averaged_rows(rows, folder, profile, lambda method: f"{method}×{k}",
+                         lambda method, seed: [(method, seed + j) for j in range(k)])
 
 
 def mix_rows(rows: list[dict], folder: Path, recipes: list[str], profile) -> list[dict]:
-    """Rows for the mean of one saved fit of each of ``recipes`` (same case, variant and seed): an
-    ensemble whose members differ in method, not only in seed. The method is named ``a+b``."""
-    seconds = {(r["case"], r["method"], r["variant"], r["size"], r["seed"]): r["seconds"] for r in rows if r.get("variant")}
-    keys = {(c, v, size, seed) for c, m, v, size, seed in seconds if m == recipes[0]}
-    cases, out = {}, []
-    for case_name, variant, size, seed in sorted(keys, key=str):
-        members = [fit_path(folder, case_name, r, variant, seed, size) for r in recipes]
-        if not all(m.exists() for m in members):
-            continue
-        if case_name not in cases:
-            cases[case_name] = build_case(case_name, profile)
-        case, fb = cases[case_name]
-        inverse = np.mean([np.load(m) for m in members], axis=0)  # (H, W) 1/m
-        out.append(dict(case=case_name, method="+".join(recipes), variant=variant, seed=seed, size=size,
-                        px=rmse_px(1.0 / inverse, case, fb),
-                        seconds=sum(seconds.get((case_name, r, variant, size, seed), np.nan) for r in recipes)))
-    return out
+    """The mean of one saved fit of each of ``recipes`` with the same seed (members that differ in
+    method, not only in seed), named ``a+b``."""
+    return averaged_rows(rows, folder, profile, lambda method: "+".join(recipes),
+                         lambda method, seed: [(r, seed) for r in recipes] if method == recipes[0] else None)
 
 
 def paired_difference(ratios: np.ndarray, baseline: np.ndarray) -> dict:
