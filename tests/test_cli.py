@@ -458,3 +458,29 @@ def test_sequence_dry_run_says_h_by_w_on_both_lines(tmp_path, capsys):
                  "--size", "40", "56"]) == 0
     printed = capsys.readouterr().out
     assert "3 views of 40×56" in printed and "40×56 px (H×W)" in printed and "56×40" not in printed
+
+
+def test_recipe_flag_runs_the_named_method_as_ddp_recipe_does(tmp_path, monkeypatch, capsys):
+    """``--recipe paper`` gives the fit DDP_RECIPE=paper gives, and not the kit's."""
+    _pair(tmp_path)
+    argv = ["complete", "--rgb", str(tmp_path / "rgb.png"), "--depth", str(tmp_path / "depth.npy"), "--raw",
+            "--profile", "ci", "--iterations", "20", "--max-side", "32"]
+    monkeypatch.setenv("DDP_RECIPE", "kit")
+    assert main(argv + ["--recipe", "paper", "--out", str(tmp_path / "flag.npy")]) == 0
+    assert main(argv + ["--out", str(tmp_path / "kit.npy")]) == 0
+    monkeypatch.setenv("DDP_RECIPE", "paper")
+    assert main(argv + ["--out", str(tmp_path / "env.npy")]) == 0
+    flag, kit, env = (np.load(tmp_path / f"{name}.npy") for name in ("flag", "kit", "env"))
+    np.testing.assert_array_equal(flag, env)
+    assert not np.allclose(flag, kit)
+    with pytest.raises(SystemExit):
+        main(argv + ["--recipe", "papper", "--out", str(tmp_path / "bad.npy")])
+    assert "--recipe" in capsys.readouterr().err
+
+
+def test_sequence_dry_run_names_the_recipe_and_passes_it_on(tmp_path, capsys):
+    folder = _tum_capture(tmp_path)
+    assert main(["sequence", str(folder), "--format", "tum", "--out", str(tmp_path / "o"), "--dry-run",
+                 "--recipe", "paper"]) == 0
+    printed = capsys.readouterr().out
+    assert "recipe 'paper'" in printed and "--recipe paper" in printed

@@ -135,8 +135,9 @@ def _environment(**values):
 
 
 def execute(nb, profile: str = "ci", timeout: int = 600, workdir=None, allow_errors: bool = True,
-            figures: bool = False):
-    """Run ``nb`` (modified in place) top to bottom in a fresh kernel with ``DDP_PROFILE=profile``.
+            figures: bool = False, recipe: str = "kit"):
+    """Run ``nb`` (modified in place) top to bottom in a fresh kernel with ``DDP_PROFILE=profile`` and
+    ``DDP_RECIPE=recipe`` (grading keeps the default ``kit``, which the checks expect).
 
     Args:
         timeout: seconds one cell may take; a cell over it is interrupted and gets an error output.
@@ -150,6 +151,8 @@ def execute(nb, profile: str = "ci", timeout: int = 600, workdir=None, allow_err
     from nbgrader.preprocessors import Execute
     if profile not in ("ci", "class", "paper"):
         raise ValueError(f"profile must be 'ci', 'class' or 'paper', got {profile!r}")
+    if recipe not in ("kit", "paper"):
+        raise ValueError(f"recipe must be 'kit' or 'paper', got {recipe!r}")
     if not (isinstance(timeout, int) and timeout > 0):
         raise ValueError(f"timeout must be a positive number of seconds, got {timeout!r}")
     for cell in nb.cells:  # so that "did not run" is visible afterwards
@@ -158,7 +161,7 @@ def execute(nb, profile: str = "ci", timeout: int = 600, workdir=None, allow_err
     runner = Execute(timeout=timeout, allow_errors=allow_errors, interrupt_on_timeout=True)
     resources = {"metadata": {"path": str(workdir or os.getcwd())}}
     backend = "module://matplotlib_inline.backend_inline" if figures else "Agg"
-    with _environment(DDP_PROFILE=profile, MPLBACKEND=backend):
+    with _environment(DDP_PROFILE=profile, DDP_RECIPE=recipe, MPLBACKEND=backend):
         try:
             runner.preprocess(nb, resources)
         except Exception as error:  # a dead kernel, or the first error when allow_errors is False
@@ -516,6 +519,8 @@ def build_student(source_dir="notebooks", out_dir="build/student") -> list[Path]
     (ValueError, before anything is written) when ``out_dir`` is, contains or lies inside ``source_dir``."""
     check_not_overlapping(out_dir, "out_dir (--out)", source_dir, "source_dir (--source)")
     check_output_folder(out_dir, "out_dir (--out)")
+    if recipe not in ("kit", "paper"):
+        raise ValueError(f"recipe must be 'kit' or 'paper', got {recipe!r}")
     written = []
     for path in _source_notebooks(source_dir):
         target = Path(out_dir) / path.name
@@ -525,20 +530,23 @@ def build_student(source_dir="notebooks", out_dir="build/student") -> list[Path]
 
 
 def build_solutions(source_dir="notebooks", out_dir="build/solutions", profile: str = "class",
-                    timeout: int = 3600, names=None, log=print) -> list[Path]:
-    """Execute every source notebook (solutions in place) under ``profile`` and write it with its
+                    timeout: int = 3600, names=None, log=print, recipe: str = "kit") -> list[Path]:
+    """Execute every source notebook (solutions in place) under ``profile`` and ``recipe`` and write it with its
     outputs to ``out_dir``: the copy a teacher projects. Stops at the first failing cell. Refused
     (ValueError, before anything runs) when ``out_dir`` is, contains or lies inside ``source_dir``."""
     check_not_overlapping(out_dir, "out_dir (--out)", source_dir, "source_dir (--source)")
     check_output_folder(out_dir, "out_dir (--out)")
+    if recipe not in ("kit", "paper"):
+        raise ValueError(f"recipe must be 'kit' or 'paper', got {recipe!r}")
     written = []
     for path in _source_notebooks(source_dir):
         if names and path.stem[:2] not in names and path.stem not in names:
             continue
-        log(f"executing {path.name} at {profile} ...")
+        log(f"executing {path.name} at {profile} ({recipe} recipe) ...")
         nb = _read(path)
         try:
-            execute(nb, profile=profile, timeout=timeout, workdir=path.parent, allow_errors=False, figures=True)
+            execute(nb, profile=profile, timeout=timeout, workdir=path.parent, allow_errors=False, figures=True,
+                    recipe=recipe)
         except Exception as error:  # nbclient's CellExecutionError carries the cell's own error name and value
             what = f"{getattr(error, 'ename', type(error).__name__)}: {getattr(error, 'evalue', error)}"
             raise RuntimeError(f"{path.name}: a cell failed at {profile} ({what}); it was not written, "

@@ -17,6 +17,7 @@ from .. import __version__
 
 PROFILES = ("ci", "class", "paper")
 PROFILE_HELP = "ci, class or paper (default: $DDP_PROFILE, else class)"
+RECIPE_NAMES = ("kit", "paper")  # ddp_lite.method.recipes.RECIPES, without importing the method here
 EXIT_CODES = ("exit codes: 0 done, 1 failed at run time (nothing half-written), 2 usage error "
               "(the message names the option), 130 interrupted (Ctrl-C)")
 
@@ -103,6 +104,12 @@ def _add_profile(parser, default=None, what: str = "") -> None:
                                                              f"ci, class or paper (default: {default})"))
 
 
+def _add_recipe(parser) -> None:
+    parser.add_argument("--recipe", choices=RECIPE_NAMES, default=None,
+                        help="kit: the paper's losses plus the kit's hole terms and inputs; paper: the paper's "
+                             "method alone (default: $DDP_RECIPE, else kit)")
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="ddp-lite", description="Depth completion with a Deep Depth Prior (Ghosh et al., 3DV 2020).",
@@ -122,6 +129,7 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--size", type=_number(int, 1, "--size"), nargs=2, default=None, metavar=("H", "W"),
                       help="image size, height then width (default: the profile's; class: 96 128)")
     _add_profile(demo)
+    _add_recipe(demo)
     demo.add_argument("--seed", type=_number(int, 0, "--seed"), default=0,
                       help="seed of the scene's holes and of the fit (default 0; same seed, same numbers on CPU)")
     demo.add_argument("--device", default=None, help="cpu, cuda or mps (default: cpu)")
@@ -142,6 +150,7 @@ def build_parser() -> argparse.ArgumentParser:
     complete.add_argument("--variant", choices=("d", "rgbd"), default="rgbd",
                           help="the net fits depth only (d) or colour and depth (rgbd, default)")
     _add_profile(complete)
+    _add_recipe(complete)
     complete.add_argument("--iterations", type=_number(int, 1, "--iterations"), default=None,
                           help="iteration cap of the fit (default: the profile's)")
     complete.add_argument("--max-side", type=_number(int, 16, "--max-side"), default=None,
@@ -176,6 +185,7 @@ def build_parser() -> argparse.ArgumentParser:
                           "(default 0: in this process)")
     seq.add_argument("--scheduler", default=None, help="join a running Dask cluster, e.g. tcp://host:8786")
     _add_profile(seq, what="the fit's schedule; images keep their size unless --size")
+    _add_recipe(seq)
     seq.add_argument("--dry-run", action="store_true", help="print jobs, compute and memory estimates; fit nothing")
     seq.add_argument("--size", type=_number(int, 1, "--size"), nargs=2, metavar=("H", "W"), default=None,
                      help="resample every view to height H, width W")
@@ -207,6 +217,7 @@ def build_parser() -> argparse.ArgumentParser:
     solutions.add_argument("--out", default="build/solutions",
                            help="folder for the executed copies, outside --source (default: build/solutions)")
     _add_profile(solutions, default="class")
+    _add_recipe(solutions)
     solutions.add_argument("--only", nargs="+", default=None, metavar="NN", help="only these notebooks (01 05 ...)")
     solutions.add_argument("--timeout", type=_number(int, 1, "--timeout"), default=3600, help="seconds per cell")
     grade = _subparser(sub, "grade", "run submitted notebooks and score their exercise checks",

@@ -25,9 +25,11 @@ def solutions_command(args) -> int:
 
     def log(message):
         print(message, flush=True)
+    from ..method.recipes import get_recipe
+    recipe = get_recipe(args.recipe).name  # --recipe, else DDP_RECIPE, else kit
     written = build_solutions(args.source, args.out, profile=args.profile, timeout=args.timeout, names=args.only,
-                              log=log)
-    print(f"{len(written)} executed notebooks in {os.path.abspath(args.out)} ({args.profile})")
+                              log=log, recipe=recipe)
+    print(f"{len(written)} executed notebooks in {os.path.abspath(args.out)} ({args.profile}, recipe {recipe})")
     return 0
 
 

@@ -208,8 +208,8 @@ def complete_command(args) -> int:
     from ..core.progress import command_progress
     from ..sequences.working_size import fill_holes_at_full_size, shrink, working_shape
     profile = get_profile(args.profile)
-    config = FitConfig.for_profile(profile, variant=args.variant, device=args.device, seed=args.seed,
-                                   max_memory_gb=args.max_memory_gb,
+    config = FitConfig.for_profile(profile, variant=args.variant, recipe=args.recipe, device=args.device,
+                                   seed=args.seed, max_memory_gb=args.max_memory_gb,
                                    **({"iterations": args.iterations} if args.iterations else {}))
     config.validate()  # --device, before the inputs are read
     rgb = _read_rgb(args.rgb)

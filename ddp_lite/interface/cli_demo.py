@@ -26,6 +26,7 @@ from ..method.nets import check_input_size
 from ..evaluation.metrics import hole_rmse
 from ..core.outpaths import check_output_file
 from ..method.profiles import get_profile
+from ..method.recipes import get_recipe
 from ..core.progress import command_progress
 from ..world.scenes import SCENES, list_scenes
 from ..method.variants import get_variant
@@ -48,8 +49,8 @@ def demo_command(args) -> int:
         raise ValueError(f"--scene must be one of {', '.join(SCENES)} (ddp-lite scenes), got {args.scene!r}")
     profile = get_profile(args.profile)  # --profile, else DDP_PROFILE, else class
     profile = dataclasses.replace(profile, size=tuple(args.size)) if args.size else profile
-    config = FitConfig.for_profile(profile, variant=VARIANT, iterations=args.iterations, seed=args.seed,
-                                   device=args.device, max_memory_gb=args.max_memory_gb)
+    config = FitConfig.for_profile(profile, variant=VARIANT, recipe=args.recipe, iterations=args.iterations,
+                                   seed=args.seed, device=args.device, max_memory_gb=args.max_memory_gb)
     config.validate()
     check_input_size(config.net, config.channels, *profile.size, name="--size")  # the net's smallest input
     # before the scene is rendered (minutes at a large --size): a fit that cannot fit in memory
@@ -65,7 +66,8 @@ def demo_command(args) -> int:
     table = error_table(case, estimates)
     for name, depth in estimates.items():
         table[name]["holes (m)"] = hole_rmse(depth, case.gt, case.holes)
-    print(format_table(table, 3, f"RMSE in the holes (sky not scored), DDP after {result.iterations} iterations"
+    print(format_table(table, 3, f"RMSE in the holes (sky not scored), DDP ({get_recipe(args.recipe).name} recipe) "
+                                 f"after {result.iterations} iterations"
                                  + (f" (the mean of {result.fits} fits)" if result.fits > 1 else "") + ": "
                                  "normalised disparity ×100, its part near depth edges, metres"))
 

@@ -18,6 +18,7 @@ from ..data.formats import load_sequence
 from ..core.outpaths import check_output_folder
 from ..method.nets import check_input_size
 from ..method.profiles import get_profile
+from ..method.recipes import get_recipe
 from ..sequences.runner import open_client
 from ..sequences.sequence import run_sequence
 from ..sequences.sequence_files import check_out_folder
@@ -102,16 +103,19 @@ def sequence_command(args) -> int:
         raise ValueError(f"PATH {args.path!r}: {error}") from None
     check_out_folder(args.out, list(getattr(scene, "sources", [])) + [os.path.abspath(args.path)])  # a dry run too
     indices = _view_indices(scene, args.views)
-    config = FitConfig.for_profile(profile, variant=VARIANT, seed=args.seed, device=args.device, progress=False,
+    recipe = get_recipe(args.recipe)  # --recipe, else DDP_RECIPE, else kit
+    config = FitConfig.for_profile(profile, variant=VARIANT, recipe=recipe, seed=args.seed, device=args.device,
+                                   progress=False,
                                    **({"iterations": args.iterations} if args.iterations else {}))
     config.validate()
     check_input_size(config.net, config.channels, *scene.size, name="--size" if args.size else "each view")
-    print(f"{scene}; profile '{profile.name}'")
+    print(f"{scene}; profile '{profile.name}', recipe '{recipe.name}'")
     if args.dry_run:
         n_views = len(scene) if indices is None else len(indices)
         flags = {"every": args.every, "max_frames": args.max_frames, "depth_scale": args.depth_scale,
                  "size": " ".join(map(str, args.size)) if args.size else None}
         command = (f"ddp-lite sequence {args.path} --format {args.format} --out {args.out} --profile {profile.name} "
+                   f"--recipe {recipe.name} "
                    f"--scheduler tcp://SCHEDULER:8786" + "".join(f" --{k.replace('_', '-')} {v}" for k, v in
                                                                   flags.items() if v is not None))
         print(format_estimate(estimate_sequence(n_views, scene.size, profile, gpu_tflops=args.gpu_tflops), command))

@@ -67,6 +67,7 @@ class FitConfig:
     flatness: float = 0.0  # weight of an edge-aware first-order smoothness in the holes (0: off)
     affinity: float = 0.0  # weight of the colorization energy in the holes (losses.affinity_loss; 0: off)
     flatness_reach: float | None = None  # enclosed holes: that term only within this many px of valid depth (None: everywhere)
+    step_reach: float | None = None  # hole terms off within this many px of a depth step in the valid input (None: on)
     disparity_margin: float = 1.25  # transform=None: d_min / margin … d_max × margin around the valid depth
     auto_stop: bool = False
     holdout_fraction: float = 0.05  # share of valid pixels held out when auto_stop is on
@@ -175,6 +176,8 @@ class FitConfig:
                 raise ValueError(f"config.gammas must have γ1 + γ2 ≤ 1, got {self.gammas}")
         if self.flatness_reach is not None:
             check_real(self.flatness_reach, "config.flatness_reach", 0.0, None)
+        if self.step_reach is not None:
+            check_real(self.step_reach, "config.step_reach", 0.0, None)
         if self.max_memory_gb is not None:
             check_real(self.max_memory_gb, "config.max_memory_gb", 0.0, None, low_open=True)
         if self.device is not None:

@@ -158,7 +158,7 @@ def fit_once(rgb, depth, camera, neighbors, variant, config, *, gt_depth=None, t
     paper_loss = PaperLoss(spec, config, transform, target, to_tensor(valid & ~heldout, device).bool(), rgb_t,
                            camera, nbrs, device)
     # the unconstrained pixels: holes, and the held-out pixels, which must behave like holes
-    hole_terms = HoleTerms(config, ~(valid & ~heldout), rgb_t, rgb, device)
+    hole_terms = HoleTerms(config, ~(valid & ~heldout), rgb_t, rgb, device, transform.to_disparity(depth))
 
     def loss_fn(output):  # (1, 1 or 4, H, W): Z_out, then I_out
         disparity = output[:, :1]  # one view for every term: the gradients add up in the same order

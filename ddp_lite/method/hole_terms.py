@@ -9,6 +9,8 @@ on the disparity Z in the *free* pixels (holes and held-out pixels), each relaxe
 - L_flat = Σ w'·(|∂Z/∂x| + |∂Z/∂y|) / Σ w, first order (``FitConfig.flatness`` = f): a hole that
   reaches the border levels off instead of carrying the last slope outward; ``flatness_reach``
   limits it, in enclosed holes, to a rim of that many px (w' = w there, 0 elsewhere);
+- both off (w = 0) in the holes within ``step_reach`` px of a depth step of the valid input, where a
+  hole is likely an occlusion band that belongs to the far side (:func:`~ddp_lite.method.losses.step_region`);
 - w = exp(-edge·|∇I|) of the grey image, or the largest over R, G, B (``smoothness_edge``,
   ``edge_guide``; :func:`~ddp_lite.method.losses.smoothness_weights`);
 - L_aff = Σ |Z_p - Σ_q w_pq Z_q| / #free, Levin et al.'s colorization energy
@@ -24,7 +26,7 @@ import torch
 from ..classical.baselines import NEIGHBOUR_OFFSETS, colorization_affinities
 from .config import FitConfig
 from .loop import to_tensor
-from .losses import affinity_loss, flatness_loss, flatness_region, smoothness_loss, smoothness_weights
+from .losses import affinity_loss, flatness_loss, flatness_region, smoothness_loss, smoothness_weights, step_region
 
 __all__ = ["HoleTerms"]
 
@@ -33,12 +35,13 @@ class HoleTerms:
     """The kit's hole terms of one fit: ``add(disparity, total, terms)`` adds each that is on.
 
     ``free`` (H, W) bool: the pixels no data term constrains (holes and held-out pixels);
+    ``disparity`` (H, W) the input disparity, read outside ``free`` (only for ``step_reach``);
     ``rgb_t`` (1, 3, H, W) the colour the edges are measured on (None: no edges); ``rgb``
     (H, W, 3) NumPy, for the colorization affinities (None: no affinity term).
     """
 
     def __init__(self, config: FitConfig, free: np.ndarray, rgb_t: torch.Tensor | None, rgb: np.ndarray | None,
-                 device):
+                 device, disparity: np.ndarray | None = None):
         self.config = config
         H, W = free.shape
         self.smooth_weights = self.flat_weights = self.weight_total = None
@@ -48,6 +51,9 @@ class HoleTerms:
                                                      config.edge_guide)  # (1, 2, H, W)
             # both terms divide by the full weights' sum, also where flatness acts on part of the holes
             self.weight_total = self.smooth_weights.sum()
+            if config.step_reach is not None and disparity is not None:
+                beside_step = step_region(free, disparity, config.step_reach)
+                self.smooth_weights = self.smooth_weights * to_tensor(~beside_step, device)
             self.flat_weights = self.smooth_weights
             if config.flatness > 0 and config.flatness_reach is not None:
                 self.flat_weights = self.smooth_weights * to_tensor(flatness_region(free, config.flatness_reach), device)

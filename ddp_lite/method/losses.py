@@ -314,6 +314,42 @@ def flatness_region(holes: np.ndarray, reach: float) -> np.ndarray:
     return touching | (holes & (ndimage.distance_transform_edt(holes) <= reach))
 
 
+STEP_RATIO = 1.15  # a depth step: the valid disparities near a pixel differ by more than 15 %
+
+
+def step_region(holes: np.ndarray, disparity: np.ndarray, reach: float) -> np.ndarray:
+    """The hole pixels beside a depth step of the valid input, (H, W) bool: those whose disk of
+    radius ``reach`` px holds valid disparities differing by more than :data:`STEP_RATIO` (largest
+    over smallest). ``holes`` (H, W) bool, True where the fit is free; ``disparity`` (H, W), any
+    positive unit, read where ``holes`` is False.
+
+    Such a hole is typically an occlusion: the band a foreground edge hides in the other view,
+    which belongs to the *far* surface. Curvature and flatness there carry the near surface's
+    slope into the band; with them off, the net's prior and the colour decide where the step goes.
+
+    Example:
+        >>> holes = np.zeros((1, 9), bool); holes[0, 3:6] = True
+        >>> disparity = np.array([[2.0, 2, 2, 0, 0, 0, 1, 1, 1]])  # near | hole | far
+        >>> step_region(holes, disparity, reach=3.0).astype(int)  # every pixel sees both sides
+        array([[0, 0, 0, 1, 1, 1, 0, 0, 0]])
+        >>> step_region(holes, disparity, reach=2.0).astype(int)  # only the middle one does
+        array([[0, 0, 0, 0, 1, 0, 0, 0, 0]])
+        >>> bool(step_region(holes, np.where(disparity > 0, 1.0, 0.0), reach=3.0).any())  # one level: no step
+        False
+    """
+    holes = np.asarray(holes, bool)
+    valid = ~holes & np.isfinite(disparity) & (disparity > 0)
+    r = int(np.floor(reach))
+    yy, xx = np.mgrid[-r:r + 1, -r:r + 1]
+    disk = yy ** 2 + xx ** 2 <= reach ** 2
+    nearest_high = ndimage.maximum_filter(np.where(valid, disparity, -np.inf), footprint=disk, mode="constant",
+                                          cval=-np.inf)
+    nearest_low = ndimage.minimum_filter(np.where(valid, disparity, np.inf), footprint=disk, mode="constant",
+                                         cval=np.inf)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return holes & np.isfinite(nearest_low) & (nearest_high > STEP_RATIO * nearest_low)
+
+
 def affinity_loss(disparity: torch.Tensor, affinities: torch.Tensor, offsets, region: torch.Tensor,
                   normaliser: torch.Tensor) -> torch.Tensor:
     """Levin et al.'s colorization energy as a hole term: Σ_p∈region |z_p − Σ_q w_pq z_q| / ``normaliser``.
