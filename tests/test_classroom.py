@@ -172,8 +172,8 @@ def test_grade_refuses_a_folder_without_students(tmp_path):
 
 # --- the real notebooks at ci: minutes ------------------------------------------------------------
 
-def test_the_notebooks_have_fourteen_autograded_checks():
-    assert sum(len(_checks(nbformat.read(p, as_version=4))) for p in SOURCES) == 14
+def test_the_notebooks_have_fifteen_autograded_checks():
+    assert sum(len(_checks(nbformat.read(p, as_version=4))) for p in SOURCES) == 15
 
 
 @pytest.mark.fit_cache  # the fits of notebooks 01 and 08 are their nbval runs' (conftest.py)
@@ -265,11 +265,11 @@ def test_hand_points_merge_into_the_scores_and_open_answers_go_to_one_file_per_s
     assert "YOUR ANSWER HERE" in (tmp_path / "open" / "dan.md").read_text()
 
 
-def test_exercise_10_3s_command_prints_what_its_expected_answer_says(tmp_path, capsys):
+def test_exercise_11_3s_command_prints_what_its_expected_answer_says(tmp_path, capsys):
     from ddp_lite.interface.cli import main
     from ddp_lite.data.formats import write_tum
     from ddp_lite.world.scenes import make_scene
-    nb = nbformat.read(NOTEBOOKS / "10_your_own_data.ipynb", as_version=4)
+    nb = nbformat.read(NOTEBOOKS / "11_your_own_data.ipynb", as_version=4)
     listed = next(c.source for c in nb.cells if "## Exercises" in c.source).split("3. Run `", 1)[1]
     command = listed.split("`", 1)[0].split()
     assert command[:2] == ["ddp-lite", "sequence"] and "<DATA>" in command
@@ -285,7 +285,7 @@ def test_exercise_10_3s_command_prints_what_its_expected_answer_says(tmp_path, c
 
 # --- the README's instructor section, from the notebooks and the Makefile --------------------------
 
-README = NOTEBOOKS.parent / "README.md"
+README = NOTEBOOKS.parent / "docs" / "exercises.md"  # the exercise table lives here
 
 
 def test_the_readmes_exercise_table_is_the_notebooks(tmp_path):
@@ -293,7 +293,7 @@ def test_the_readmes_exercise_table_is_the_notebooks(tmp_path):
     block = text.split(classroom.TABLE_START, 1)[1].split(classroom.TABLE_END, 1)[0].strip()
     assert block == classroom.exercise_table(NOTEBOOKS)
     listed = sum(len(classroom.exercises(nbformat.read(p, as_version=4))) for p in SOURCES)
-    assert f"{listed} exercises:" in block and "| 10.3 |" in block  # every notebook's, 10's too
+    assert f"{listed} exercises:" in block and "| 11.3 |" in block  # every notebook's, 11's too
     copy = tmp_path / "README.md"  # and the refresh rewrites only the table
     copy.write_text(text.replace("| 01.1 |", "| 01.9 |"), encoding="utf-8")
     assert classroom.update_readme_table(copy, NOTEBOOKS) and copy.read_text(encoding="utf-8") == text

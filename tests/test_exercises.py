@@ -235,6 +235,21 @@ def test_kinect_quantisation_check_agrees_with_the_kits_sensor_model():
     assert np.allclose(_quantise()(depth, 580.0, 0.075, 8), quantise_depth(depth), rtol=1e-6)
 
 
+def _paired(stderr_ddof=1, better=np.less):
+    def paired(before, after):
+        difference = np.asarray(after, float) - np.asarray(before, float)
+        n = difference.size
+        stderr = difference.std(ddof=stderr_ddof) / np.sqrt(n) if n > 1 else 0.0
+        return difference.mean(), stderr, int(better(difference, 0).sum())
+    return paired
+
+
+CASES["check_paired_change"] = (_paired(), {
+    "the population standard deviation": _paired(stderr_ddof=0),
+    "an unchanged pair counted as better": _paired(better=np.less_equal),
+    "before − after": lambda before, after: _paired()(after, before),
+})
+
 CASES["check_kinect_quantisation"] = (_quantise(), {
     "the depth rounded": _quantise(round_depth=True),
     "a zero disparity kept as a reading": _quantise(zero_is_reading=True),

@@ -1,4 +1,4 @@
-"""Notebook 11's plumbing (ddp_lite.evaluation.mvs_kinect_experiments) against hand computations: the paper's
+"""Notebook 12's plumbing (ddp_lite.evaluation.mvs_kinect_experiments) against hand computations: the paper's
 reprojection PSNR (Sec. 4.4) on a fronto-parallel plane whose warp is an integer shift, the fill
 table's two PSNRs, and the NYU v2 branch on a labelled-.mat fixture."""
 import numpy as np
@@ -90,7 +90,7 @@ def test_nyu_branch_on_a_labelled_mat_fixture(tmp_path):
 
 
 def test_printed_tables_keep_long_column_names_apart():
-    """Notebook 11's tables have column names longer than the 12-character default ("off >2 % (%)",
+    """Notebook 12's tables have column names longer than the 12-character default ("off >2 % (%)",
     "reproj. PSNR"): each name must stand apart and right above its numbers."""
     from ddp_lite.evaluation.experiments import format_table
     text = format_table({"p ≥ 0.1": {"kept %": 67.3, "off >2 % (%)": 59.6, "reproj. PSNR": 21.04}}, digits=1)

@@ -266,6 +266,25 @@ def test_flatness_reach_zero_leaves_an_enclosed_hole_to_the_curvature_term_alone
     assert not np.array_equal(fit(flatness=0.6), without)
 
 
+def test_step_reach_switches_the_hole_terms_off_beside_a_depth_step_and_nowhere_else():
+    # a hole in a gently tilted plane (depth within ±15 % over 12 px: no step): the guard changes nothing
+    depth = tilted_plane(24, 32, slope=0.005)
+    depth[8:16, 10:20] = np.nan
+    transform = DisparityTransform.from_depth(depth)
+    fit = lambda d, t, **c: complete_depth(None, d, variant="d", transform=t,
+                                           config=FitConfig(**TINY, iterations=30, **c)).disparity
+    terms = dict(smoothness=1.0, flatness=0.6)
+    np.testing.assert_array_equal(fit(depth, transform, step_reach=6.0, **terms), fit(depth, transform, **terms))
+    # a band of holes between a near (1 m) and a far (2 m) half: every hole pixel sees both sides
+    # within 6 px, so the fit is the one without hole terms, to the bit
+    step = np.where(np.arange(32)[None, :] < 16, 1.0, 2.0) * np.ones((24, 1))
+    step[:, 13:19] = np.nan
+    step_transform = DisparityTransform.from_depth(step)
+    without = fit(step, step_transform)
+    np.testing.assert_array_equal(fit(step, step_transform, step_reach=6.0, **terms), without)
+    assert not np.array_equal(fit(step, step_transform, **terms), without)
+
+
 def test_smoothness_fills_a_hole_in_a_plane_better_than_without():
     gt, depth = plane_with_hole()
     base = FitConfig(**TINY, iterations=60)

@@ -22,7 +22,7 @@ from scipy import ndimage
 from ..method.disparity import DisparityTransform
 
 __all__ = ["rmse", "mae", "hole_rmse", "d1_error", "psnr", "point_cloud_prf", "cloud_scores", "disparity_rmse",
-           "edge_band", "texture_leakage"]
+           "edge_band", "texture_leakage", "texture_leakage_map"]
 
 
 def _plain(value):
@@ -249,9 +249,10 @@ def disparity_rmse(depth, gt, mask, transform: DisparityTransform) -> float:
     return float(100.0 * np.sqrt(np.mean(error[mask] ** 2)))
 
 
-def texture_leakage(depth, gt, transform: DisparityTransform, band: int = 3, region=None) -> float:
-    """Mean |Laplacian| ×100 of the normalised disparity of ``depth`` (H, W metres) on the pixels
-    where the truth ``gt`` is locally planar (its own Laplacian ≈ 0) and away from depth edges.
+def texture_leakage_map(depth, gt, transform: DisparityTransform, band: int = 3, region=None) -> np.ndarray:
+    """|Laplacian| ×100 of the normalised disparity of ``depth`` (H, W metres), (H, W), on the pixels
+    where the truth ``gt`` is locally planar (its own Laplacian ≈ 0) and away from depth edges;
+    NaN elsewhere. :func:`texture_leakage` is its mean.
 
     For a plane, inverse depth is an affine function of the pixel coordinates, so its Laplacian is
     zero; with ``transform.constant == 0`` the same holds for normalised disparity. Colour texture
@@ -267,6 +268,11 @@ def texture_leakage(depth, gt, transform: DisparityTransform, band: int = 3, reg
     if region is not None:
         planar &= np.asarray(region, bool)
     planar = ndimage.binary_erosion(planar, iterations=1)
-    if not planar.any():
-        return float("nan")
-    return float(100.0 * np.mean(np.abs(out[planar])))
+    return np.where(planar, 100.0 * np.abs(out), np.nan)
+
+
+def texture_leakage(depth, gt, transform: DisparityTransform, band: int = 3, region=None) -> float:
+    """Mean of :func:`texture_leakage_map` over the pixels it measures (NaN if none): how much
+    colour texture leaked into the depth of planar surfaces."""
+    leakage = texture_leakage_map(depth, gt, transform, band, region)
+    return float(np.nanmean(leakage)) if np.isfinite(leakage).any() else float("nan")

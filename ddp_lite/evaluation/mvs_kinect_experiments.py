@@ -1,4 +1,4 @@
-"""Notebook 11's plumbing: MVS depth with holes where its probability is low (paper Table 4), and
+"""Notebook 12's plumbing: MVS depth with holes where its probability is low (paper Table 4), and
 Kinect-style readings filled and scored by PSNR (paper Fig. 8).
 
 - ``sweep_views``: ``plane_sweep`` of every view of a scene against its best neighbours.

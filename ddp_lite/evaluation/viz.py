@@ -12,7 +12,7 @@ import numpy as np
 
 from data_fetch.atomic import atomic_path
 
-__all__ = ["show_depth", "show_image", "show_error", "error_vmax", "outline", "overlay_holes", "save_figure",
+__all__ = ["show_depth", "show_image", "show_error", "show_errors", "error_vmax", "outline", "overlay_holes", "save_figure",
            "HOLE_COLOUR", "HOLE_RGB"]
 
 HOLE_COLOUR = "magenta"
@@ -54,6 +54,48 @@ def show_error(ax, estimate, truth, title: str = "", vmax=None, mask=None, label
     ax.set_title(title)
     ax.axis("off")
     return image
+
+
+def show_errors(axes, estimates: dict, truth, mask=None, transform=None, percentile: float = 99.0,
+                label: str | None = None) -> float:
+    """A row of error maps on one scale with one colour bar: |estimate - truth| of each (H, W) depth
+    in ``estimates`` ({title: depth}) on the matching axis of ``axes``, outside ``mask`` grey.
+
+    With ``transform`` (a :class:`~ddp_lite.method.disparity.DisparityTransform`) the error is in
+    the unit of the kit's tables, normalised disparity ×100; without it, in the arrays' own unit
+    (metres, or px for disparity maps). The scale stops at the ``percentile`` of all the maps' errors
+    (the bar says so), so that a few large errors at the border do not turn every other error
+    black. ``label`` names the colour bar's quantity instead. Returns that top.
+
+    Example:
+        >>> import matplotlib; matplotlib.use("Agg"); import matplotlib.pyplot as plt
+        >>> fig, axes = plt.subplots(1, 2)
+        >>> show_errors(axes, {"a": np.zeros((4, 4)), "b": np.full((4, 4), 2.0)}, np.ones((4, 4)))
+        1.0
+    """
+    if transform is not None:
+        maps = {name: 100.0 * np.abs(transform.to_disparity(np.asarray(d, np.float64))
+                                     - transform.to_disparity(np.asarray(truth, np.float64)))
+                for name, d in estimates.items()}
+        default_label = "|error| (norm. disparity ×100)"
+    else:
+        maps = {name: np.abs(np.asarray(d, np.float64) - np.asarray(truth, np.float64)) for name, d in estimates.items()}
+        default_label = "|error|"
+    if mask is not None:
+        maps = {name: np.where(mask, e, np.nan) for name, e in maps.items()}
+    label = label or default_label
+    values = np.concatenate([e[np.isfinite(e)] for e in maps.values()])
+    top = max(float(np.percentile(values, percentile)) if values.size else 1.0, 1e-6)
+    colours = matplotlib.colormaps["magma"].copy()
+    colours.set_bad("lightgrey")
+    axes = list(np.ravel(axes))
+    for ax, (name, error) in zip(axes, maps.items()):
+        image = ax.imshow(np.ma.masked_invalid(error), cmap=colours, vmin=0, vmax=top, interpolation="nearest")
+        ax.set_title(name)
+        ax.axis("off")
+    ax.figure.colorbar(image, ax=ax, fraction=0.046, pad=0.04, extend="max",
+                       label=f"{label}, top: {percentile:g}th pct.")
+    return top
 
 
 def error_vmax(estimates, truth, mask=None, percentile: float = 99.0) -> float:

@@ -397,7 +397,7 @@ def _listed_exercises(nb) -> dict:
     return {number: " ".join(text.split()) for number, text in items}
 
 
-TABLE_START = "<!-- exercise table: written by ddp_lite.interface.classroom.exercise_table; refresh: python -m ddp_lite.interface.classroom README.md -->"
+TABLE_START = "<!-- exercise table: written by ddp_lite.interface.classroom.exercise_table; refresh: python -m ddp_lite.interface.classroom docs/exercises.md -->"
 TABLE_END = "<!-- end of the exercise table -->"
 
 
@@ -519,8 +519,6 @@ def build_student(source_dir="notebooks", out_dir="build/student") -> list[Path]
     (ValueError, before anything is written) when ``out_dir`` is, contains or lies inside ``source_dir``."""
     check_not_overlapping(out_dir, "out_dir (--out)", source_dir, "source_dir (--source)")
     check_output_folder(out_dir, "out_dir (--out)")
-    if recipe not in ("kit", "paper"):
-        raise ValueError(f"recipe must be 'kit' or 'paper', got {recipe!r}")
     written = []
     for path in _source_notebooks(source_dir):
         target = Path(out_dir) / path.name
@@ -557,9 +555,9 @@ def build_solutions(source_dir="notebooks", out_dir="build/solutions", profile: 
     return written
 
 
-if __name__ == "__main__":  # python -m ddp_lite.interface.classroom README.md [notebooks]: refresh the README's table
+if __name__ == "__main__":  # python -m ddp_lite.interface.classroom docs/exercises.md [notebooks]: refresh the table
     import sys
     if len(sys.argv) not in (2, 3):
-        sys.exit("usage: python -m ddp_lite.interface.classroom README.md [SOURCE_DIR]")
+        sys.exit("usage: python -m ddp_lite.interface.classroom docs/exercises.md [SOURCE_DIR]")
     changed = update_readme_table(sys.argv[1], *(sys.argv[2:] or ["notebooks"]))
     print(f"{sys.argv[1]}: exercise table {'updated' if changed else 'already up to date'}")

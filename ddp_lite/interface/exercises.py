@@ -23,7 +23,8 @@ from ..method.warp import warp_to_reference
 
 __all__ = ["check_psnr", "check_masked_mse", "check_disparity_transform", "check_hole_rmse", "check_ssim",
            "check_masked_l1", "check_backproject", "check_warp", "check_fscore", "check_nearest_fill",
-           "check_d1", "check_depth_from_disparity", "check_resize_calibration", "check_kinect_quantisation"]
+           "check_d1", "check_depth_from_disparity", "check_resize_calibration", "check_kinect_quantisation",
+           "check_paired_change"]
 
 
 def _report(name: str, failures: list[str], cases: int, reference: str) -> bool:
@@ -358,3 +359,15 @@ def check_kinect_quantisation(student_quantise) -> bool:
                             f"got {got[where]:.6g}, expected {want[where]:.6g} (round the disparity, not the depth; "
                             f"a disparity rounded to 0 is no reading)")
     return _report("kinect quantisation", failures, len(cases), "hand-computed readings")
+
+
+def check_paired_change(student_paired) -> bool:
+    """``student_paired(before, after)`` → (mean of after − before, its standard error (sample standard
+    deviation / √n; 0 for one pair), how many pairs got better, i.e. lower) for two equal-length
+    sequences of errors of the same fits (same case and seed). Reference: hand-computed values."""
+    # differences −0.1, −0.3, +0.1: mean −0.1; sample std 0.2 → stderr 0.2/√3; two of three lower
+    cases = [(([1.0, 1.2, 0.9], [0.9, 0.9, 1.0]), (-0.1, 0.2 / np.sqrt(3), 2)),
+             (([2.0, 2.0], [2.0, 2.0]), (0.0, 0.0, 0)),  # equal is not better
+             (([1.5], [1.2]), (-0.3, 0.0, 1)),
+             ((np.array([1.0, 1.0, 1.0, 1.0]), np.array([1.5, 0.5, 1.5, 0.5])), (0.0, 0.5 / np.sqrt(4) * np.sqrt(4 / 3), 2))]
+    return _run("paired change", student_paired, cases, "hand-computed values", _close(1e-9))

@@ -1,0 +1,55 @@
+"""The objective a fit's config optimises, written out as one equation for a notebook.
+
+The paper's terms (Eq. 2-5, :mod:`ddp_lite.method.paper_method`) come with the weights the
+variant gives them; the kit's additions (:mod:`ddp_lite.method.hole_terms`, the net inputs of
+:mod:`ddp_lite.method.nets`) are set apart under a brace marked "not in the paper", so a student
+sees at a glance what the recipe in force adds. Reads only the config's fields.
+"""
+from __future__ import annotations
+
+from .variants import get_variant
+
+__all__ = ["loss_equation"]
+
+
+def _weight(value: float) -> str:
+    return f"{value:g}\\,"
+
+
+def loss_equation(config, variant: str) -> str:
+    """The loss ``config`` (a :class:`~ddp_lite.method.config.FitConfig`) optimises for ``variant``,
+    as LaTeX for ``IPython.display.Math``: the weighted paper terms, then the kit's terms and the
+    net's input, each kit part under a brace "not in the paper".
+
+    Example:
+        >>> from ddp_lite.method.config import FitConfig
+        >>> print(loss_equation(FitConfig.for_profile("ci", variant="rgbd", recipe="paper"), "rgbd"))
+        \\min_\\theta\\ 0.98\\,L^{\\mathrm{disp}} + 0.01\\,L^{\\mathrm{RGB}},\\quad (Z, I) = f_\\theta(\\text{noise})
+    """
+    spec = get_variant(variant)
+    w_disp, w_rgb, w_warp = spec.loss_weights(config.gammas)
+    paper = [_weight(w_disp) + "L^{\\mathrm{disp}}"]
+    if w_rgb > 0:
+        paper.append(_weight(w_rgb) + "L^{\\mathrm{RGB}}")
+    if w_warp > 0:
+        paper.append(_weight(w_warp) + "L^{\\mathrm{warp}}")
+    kit = []
+    if config.smoothness > 0:
+        kit.append(_weight(config.smoothness) + "L^{\\mathrm{curv}}_{w}")
+    if config.flatness > 0:
+        kit.append(_weight(config.flatness) + "L^{\\mathrm{flat}}_{w}")
+    if config.affinity > 0:
+        kit.append(_weight(config.affinity) + "L^{\\mathrm{aff}}")
+    loss = " + ".join(paper)
+    if kit:
+        loss += " + \\underbrace{" + " + ".join(kit) + "}_{\\text{not in the paper}}"
+    outputs = "(Z, I)" if spec.uses_rgb else "Z"
+    in_paper = ["\\text{noise}"] if config.net_input != "meshgrid" or config.noise_channels > 2 else []
+    added = ["u, v"] if config.net_input == "meshgrid" else []
+    if spec.uses_rgb and config.image_input > 0:
+        added.append(f"G_{{{config.image_blur:g}}} * I_{{\\mathrm{{in}}}}")
+    if config.fill_input > 0:
+        added.append("\\text{fill}(Z_{\\mathrm{in}})")
+    net_input = ", ".join(in_paper + (["\\underbrace{" + ", ".join(added) + "}_{\\text{not in the paper}}"]
+                                      if added else []))
+    return f"\\min_\\theta\\ {loss},\\quad {outputs} = f_\\theta({net_input})"
