@@ -129,10 +129,11 @@ def format_additions(results: dict, cases=None) -> str:
     cases = list(results["ratio"]) if cases is None else list(cases)
     steps = results["steps"]
     width = max(len(s) for s in steps) + 2
-    lines = [" " * width + "".join(f"{name:>24}" for name in cases) + f"{'paired vs the step before':>34}"]
-    lines.append(" " * width + "".join(f"{'(best: ' + results['best_fill'][c][0] + ')':>24}" for c in cases))
+    column = max(24, *(len(c) + 2 for c in cases), *(len(results["best_fill"][c][0]) + 10 for c in cases))
+    lines = [" " * width + "".join(f"{name:>{column}}" for name in cases) + f"{'paired vs the step before':>34}"]
+    lines.append(" " * width + "".join(f"{'(best: ' + results['best_fill'][c][0] + ')':>{column}}" for c in cases))
     for i, step in enumerate(steps):
-        cells = "".join(f"{np.mean(results['ratio'][c][step]):>15.3f} ± {np.std(results['ratio'][c][step]):.3f}"
+        cells = "".join(f"{np.mean(results['ratio'][c][step]):>{column - 9}.3f} ± {np.std(results['ratio'][c][step]):.3f}"
                         for c in cases)
         change = ""
         if i > 0:
