@@ -3,7 +3,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 
-from ddp_lite.evaluation.viz import HOLE_RGB, error_vmax, outline, overlay_holes, show_error
+from ddp_lite.evaluation.viz import HOLE_RGB, error_vmax, outline, overlay_holes, show_error, show_errors
+from ddp_lite.method.disparity import DisparityTransform
 
 
 def test_error_vmax_is_the_percentile_of_all_maps_together():
@@ -46,3 +47,21 @@ def test_overlay_holes_paints_only_the_holes_in_the_hole_colour():
     np.testing.assert_array_equal(out[holes], [HOLE_RGB] * 2)
     np.testing.assert_array_equal(out[~holes], image[~holes])
     assert image[0, 0, 0] == 0.25  # the input is not modified
+
+
+def test_show_errors_draws_a_row_in_the_tables_unit_on_one_clipped_scale_with_one_bar():
+    truth = np.full((4, 5), 2.0)  # metres
+    near, far = np.full((4, 5), 1.5), np.full((4, 5), 4.0)
+    transform = DisparityTransform(d_min=1.0, d_max=5.0, constant=0.0)
+    fig, axes = plt.subplots(1, 2)
+    top = show_errors(axes, {"near": near, "far": far}, truth, transform=transform)
+    # normalised disparity ×100 by hand: (1/z − 1/5) / (1 − 1/5) × 100
+    to_z = lambda z: (1.0 / z - 0.2) / 0.8 * 100.0  # noqa: E731
+    errors = np.array([abs(to_z(1.5) - to_z(2.0)), abs(to_z(4.0) - to_z(2.0))])
+    assert top == pytest.approx(np.percentile(np.repeat(errors, 20), 99))
+    assert axes[0].images[0].get_clim() == axes[1].images[0].get_clim() == (0, pytest.approx(top))
+    assert len(fig.axes) == 3  # the two maps and one colour bar
+    assert "×100" in fig.axes[-1].get_ylabel()
+    with pytest.raises(ValueError, match="estimates"):
+        show_errors(axes, {"only one": near}, truth)
+    plt.close(fig)

@@ -73,6 +73,10 @@ def show_errors(axes, estimates: dict, truth, mask=None, transform=None, percent
         >>> show_errors(axes, {"a": np.zeros((4, 4)), "b": np.full((4, 4), 2.0)}, np.ones((4, 4)))
         1.0
     """
+    axes = list(np.ravel(axes))
+    if len(estimates) != len(axes):
+        raise ValueError(f"estimates must hold one map per axis: {len(estimates)} maps for {len(axes)} axes "
+                         "(two maps with the same title count once)")
     if transform is not None:
         maps = {name: 100.0 * np.abs(transform.to_disparity(np.asarray(d, np.float64))
                                      - transform.to_disparity(np.asarray(truth, np.float64)))
@@ -88,7 +92,6 @@ def show_errors(axes, estimates: dict, truth, mask=None, transform=None, percent
     top = max(float(np.percentile(values, percentile)) if values.size else 1.0, 1e-6)
     colours = matplotlib.colormaps["magma"].copy()
     colours.set_bad("lightgrey")
-    axes = list(np.ravel(axes))
     for ax, (name, error) in zip(axes, maps.items()):
         image = ax.imshow(np.ma.masked_invalid(error), cmap=colours, vmin=0, vmax=top, interpolation="nearest")
         ax.set_title(name)
