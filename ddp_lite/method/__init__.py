@@ -2,7 +2,7 @@
 (``disparity``, ``losses``, ``warp``, ``nets``, ``variants``); the fit (``fit``, ``fit_inputs``,
 ``loop``, ``config``, ``device``); the kit's additions beside it (``hole_terms``, ``ensemble``,
 ``coarse_to_fine``); Deep Image Prior (``dip``); size and method switches (``profiles``,
-``recipes``); the fit cache (``cache``).
+``recipes``) and the loss a config optimises, written out (``equation``); the fit cache (``cache``).
 
 May import: core, classical.
 """
