@@ -52,3 +52,27 @@ def test_a_profiles_first_line_names_what_the_recipe_in_force_adds():
     paper = profile.describe("paper")
     assert "curvature" not in paper and "flatness" not in paper and "input:" not in paper
     assert paper == profile.describe("kit").split(", hole curvature")[0]  # the size and budget are the same
+
+
+def test_the_loss_equation_marks_exactly_the_kits_additions():
+    from ddp_lite.method.config import FitConfig
+    from ddp_lite.method.equation import loss_equation
+    paper = loss_equation(FitConfig.for_profile("class", variant="rgbd+warp", recipe="paper"), "rgbd+warp")
+    assert paper == ("\\min_\\theta\\ 0.96\\,L^{\\mathrm{disp}} + 0.02\\,L^{\\mathrm{RGB}} + 0.02\\,L^{\\mathrm{warp}},"
+                     "\\quad (Z, I) = f_\\theta(\\text{noise})")  # Eq. 5 with the supplement's γ, by hand
+    kit = loss_equation(FitConfig.for_profile("class", variant="rgbd", recipe="kit"), "rgbd")
+    assert kit.count("not in the paper") == 2  # the hole terms, and the input
+    assert "1\\,L^{\\mathrm{curv}}_{w} + 0.6\\,L^{\\mathrm{flat}}_{w}" in kit and "u, v, G_{1} * I" in kit
+    depth_only = loss_equation(FitConfig.for_profile("class", variant="d", recipe="kit"), "d")
+    assert "G_" not in depth_only and "L^{\\mathrm{RGB}}" not in depth_only  # no image for depth-only
+
+
+@pytest.mark.parametrize("profile", ["ci", "class", "paper"])
+def test_the_additions_path_runs_from_the_paper_recipe_to_the_kit(profile):
+    from ddp_lite.evaluation.additions import addition_steps
+    from ddp_lite.method.config import FitConfig
+    steps = addition_steps(profile)
+    configs = [FitConfig.for_profile(profile, variant="rgbd", recipe="paper", **o) for o in steps.values()]
+    assert configs[0] == FitConfig.for_profile(profile, variant="rgbd", recipe="paper")
+    assert configs[-1] == FitConfig.for_profile(profile, variant="rgbd", recipe="kit")
+    assert len(set(map(repr, configs))) == len(configs)  # every step changes something
