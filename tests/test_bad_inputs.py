@@ -543,7 +543,7 @@ case("safe_extract a text file", FetchError, "x.txt")(
     lambda tmp: ((tmp / "x.txt").write_text("x"), lambda: safe_extract(tmp / "x.txt", tmp / "out"))[1])
 
 
-# --------------------------------------------------------------------------- found while hardening (not in the issue)
+# --------------------------------------------------------------------------- found while hardening
 
 case("complete_depth callback=5", TypeError, "callback")(_fit(callback=5))
 case("Camera.resized(0, 0)", BAD, "width")(lambda tmp: (lambda: camera().resized(0, 0)))

@@ -23,7 +23,7 @@ def reference_ssim(x, y):  # Wang et al. 2004 written out, 5 moments every call
     return (((2 * mu_x * mu_y + c1) * (2 * cov + c2)) / ((mu_x ** 2 + mu_y ** 2 + c1) * (var_x + var_y + c2))).mean()
 
 
-def reference_l1_ssim(x, y, mask, l1_weight):  # the pre-issue-13 formula: holes → 0, output made to agree outside mask
+def reference_l1_ssim(x, y, mask, l1_weight):  # the earlier formula: holes → 0, output made to agree outside mask
     if mask is not None:
         y = torch.where(mask, y, torch.zeros_like(y))
         x = torch.where(mask, x, y)
