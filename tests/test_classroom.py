@@ -285,16 +285,17 @@ def test_exercise_11_3s_command_prints_what_its_expected_answer_says(tmp_path, c
 
 # --- the README's instructor section, from the notebooks and the Makefile --------------------------
 
-README = NOTEBOOKS.parent / "docs" / "exercises.md"  # the exercise table lives here
+README = NOTEBOOKS.parent / "README.md"
+EXERCISE_TABLE = NOTEBOOKS.parent / "docs" / "exercises.md"  # written from the notebooks
 
 
-def test_the_readmes_exercise_table_is_the_notebooks(tmp_path):
-    text = README.read_text(encoding="utf-8")
+def test_the_exercise_table_is_the_notebooks(tmp_path):
+    text = EXERCISE_TABLE.read_text(encoding="utf-8")
     block = text.split(classroom.TABLE_START, 1)[1].split(classroom.TABLE_END, 1)[0].strip()
     assert block == classroom.exercise_table(NOTEBOOKS)
     listed = sum(len(classroom.exercises(nbformat.read(p, as_version=4))) for p in SOURCES)
     assert f"{listed} exercises:" in block and "| 11.3 |" in block  # every notebook's, 11's too
-    copy = tmp_path / "README.md"  # and the refresh rewrites only the table
+    copy = tmp_path / "exercises.md"  # and the refresh rewrites only the table
     copy.write_text(text.replace("| 01.1 |", "| 01.9 |"), encoding="utf-8")
     assert classroom.update_readme_table(copy, NOTEBOOKS) and copy.read_text(encoding="utf-8") == text
 
