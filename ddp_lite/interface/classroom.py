@@ -37,6 +37,7 @@ from data_fetch.atomic import write_bytes_atomic
 from data_fetch.files import regular_file
 
 from ..core.outpaths import check_not_overlapping, check_output_folder
+from ..method.recipes import get_recipe
 
 __all__ = ["student_copy", "execute", "exercises", "grade_notebook", "grade", "format_grades", "write_csv",
            "build_student", "build_solutions", "Score", "match_submissions", "read_hand_points",
@@ -151,8 +152,7 @@ def execute(nb, profile: str = "ci", timeout: int = 600, workdir=None, allow_err
     from nbgrader.preprocessors import Execute
     if profile not in ("ci", "class", "paper"):
         raise ValueError(f"profile must be 'ci', 'class' or 'paper', got {profile!r}")
-    if recipe not in ("kit", "paper"):
-        raise ValueError(f"recipe must be 'kit' or 'paper', got {recipe!r}")
+    get_recipe(recipe)  # an unknown name is refused here, before any notebook runs
     if not (isinstance(timeout, int) and timeout > 0):
         raise ValueError(f"timeout must be a positive number of seconds, got {timeout!r}")
     for cell in nb.cells:  # so that "did not run" is visible afterwards
@@ -534,8 +534,7 @@ def build_solutions(source_dir="notebooks", out_dir="build/solutions", profile: 
     (ValueError, before anything runs) when ``out_dir`` is, contains or lies inside ``source_dir``."""
     check_not_overlapping(out_dir, "out_dir (--out)", source_dir, "source_dir (--source)")
     check_output_folder(out_dir, "out_dir (--out)")
-    if recipe not in ("kit", "paper"):
-        raise ValueError(f"recipe must be 'kit' or 'paper', got {recipe!r}")
+    get_recipe(recipe)  # an unknown name is refused here, before any notebook runs
     written = []
     for path in _source_notebooks(source_dir):
         if names and path.stem[:2] not in names and path.stem not in names:

@@ -138,7 +138,6 @@ def fit_once(rgb, depth, camera, neighbors, variant, config, *, gt_depth=None, t
     config, depth, rgb, neighbors, gt_depth, transform = check_fit_inputs(
         rgb, depth, camera, neighbors, variant, config, gt_depth, transform)
     H, W = depth.shape
-
     device = resolve_device(config)
     iterations = config.resolved_iterations(variant)
     spec = get_variant(variant)
@@ -152,13 +151,14 @@ def fit_once(rgb, depth, camera, neighbors, variant, config, *, gt_depth=None, t
                else np.zeros_like(valid))
     if (valid & ~heldout).sum() < MIN_VALID_PIXELS:
         heldout = np.zeros_like(valid)
-    target = to_tensor(np.nan_to_num(transform.to_disparity(depth), nan=0.0), device)  # (1, 1, H, W)
+    disparity_in = transform.to_disparity(depth)  # (H, W), NaN in the holes
+    target = to_tensor(np.nan_to_num(disparity_in, nan=0.0), device)  # (1, 1, H, W)
     rgb_t = to_tensor(rgb, device) if rgb is not None and w_rgb + w_warp > 0 else None  # (1, 3, H, W)
     nbrs = [(to_tensor(img, device), cam) for img, cam in neighbors] if w_warp > 0 else []
     paper_loss = PaperLoss(spec, config, transform, target, to_tensor(valid & ~heldout, device).bool(), rgb_t,
                            camera, nbrs, device)
     # the unconstrained pixels: holes, and the held-out pixels, which must behave like holes
-    hole_terms = HoleTerms(config, ~(valid & ~heldout), rgb_t, rgb, device, transform.to_disparity(depth))
+    hole_terms = HoleTerms(config, ~(valid & ~heldout), rgb_t, rgb, device, disparity_in)
 
     def loss_fn(output):  # (1, 1 or 4, H, W): Z_out, then I_out
         disparity = output[:, :1]  # one view for every term: the gradients add up in the same order
