@@ -61,6 +61,7 @@ class FitConfig:
     reg_noise_std: float = 0.0  # DIP input jitter: n + σ·N(0, 1) every iteration
     average_outputs: float = 0.0  # DIP output averaging: EMA weight (0.99 in DIP), 0 = off
     ensemble: int = 1  # fits with seeds seed, seed+1, ...; their disparities are averaged
+    blend_paper: bool = False  # also fit the paper's recipe; blend the two by a held-out ring (method.blend)
     smoothness: float = 0.0  # weight of an edge-aware second-order smoothness of disparity in the holes (0: the paper)
     smoothness_edge: float = 10.0  # how strongly colour edges relax both hole terms: exp(-edge · |∇I|)
     edge_guide: str = "grey"  # |∇I| of the grey image, or "rgb": the largest over the three channels
@@ -164,7 +165,7 @@ class FitConfig:
                 ("smoothness_edge", 0.0, None, False, False), ("disparity_margin", 1.0, None, False, False),
                 ("holdout_fraction", 0.0, 0.5, True, True)):
             check_real(getattr(self, name), f"config.{name}", low, high, low_open, high_open)
-        for name in ("auto_stop", "channels_last", "progress"):
+        for name in ("auto_stop", "blend_paper", "channels_last", "progress"):
             check_bool(getattr(self, name), f"config.{name}")
         if self.bf16 is not None:  # None: decided by the hardware (use_bf16)
             check_bool(self.bf16, "config.bf16")
@@ -174,6 +175,9 @@ class FitConfig:
             g1, g2 = (check_real(g, f"config.gammas[{i}]", 0.0, 1.0) for i, g in enumerate(self.gammas))
             if g1 + g2 > 1.0:
                 raise ValueError(f"config.gammas must have γ1 + γ2 ≤ 1, got {self.gammas}")
+        if self.blend_paper and self.ensemble > 1:
+            raise ValueError(f"config.blend_paper and config.ensemble > 1 cannot be combined (a blend of two fits "
+                             f"is not averaged with more), got ensemble={self.ensemble}")
         if self.flatness_reach is not None:
             check_real(self.flatness_reach, "config.flatness_reach", 0.0, None)
         if self.step_reach is not None:

@@ -25,12 +25,14 @@ from ..core.checks import MIN_VALID_PIXELS, check_callback, check_depth, unmask
 from .config import FitConfig
 from .device import resolve_device
 from .disparity import DisparityTransform
+from .blend import best_weight, validation_ring
 from .ensemble import mean_outputs, parallel_members, run_members
 from .fit_inputs import check_fit_inputs
 from .hole_terms import HoleTerms
 from .loop import check_finite_output, check_memory, holdout_mask, to_tensor
 from .nets import fill_channel, image_channels
 from .paper_method import PaperLoss
+from .recipes import get_recipe
 from .variants import get_variant
 
 __all__ = ["DepthResult", "complete_depth", "merge", "fit_once"]
@@ -108,6 +110,8 @@ def complete_depth(rgb, depth, camera: Camera | None = None, neighbors=(), varia
     get_variant(variant)  # a bad name fails here, before any config is built
     config = FitConfig.for_profile(variant=variant) if config is None else config
     check_callback(callback, config.callback_every if isinstance(config, FitConfig) else None)
+    if isinstance(config, FitConfig) and config.blend_paper:
+        return fit_blended(rgb, depth, camera, neighbors, variant, config, gt_depth, transform, callback, init)
     if not isinstance(config, FitConfig) or config.ensemble == 1:
         return fit_once(rgb, depth, camera, neighbors, variant, config, gt_depth=gt_depth, transform=transform,
                         callback=callback, init=init)
@@ -129,6 +133,37 @@ def complete_depth(rgb, depth, camera: Camera | None = None, neighbors=(), varia
                        transform=transform, iterations=sum(m.iterations for m in members),
                        best_iteration=members[0].best_iteration, seconds=sum(m.seconds for m in members),
                        state=members[0].state, fits=len(members))
+
+
+def fit_blended(rgb, depth, camera, neighbors, variant, config, gt_depth, transform, callback, init) -> DepthResult:
+    """``config.blend_paper``: this config's fit and the paper recipe's, both without a ring of the valid
+    input around the holes, blended by the weight that predicts the ring best (:mod:`ddp_lite.method.blend`).
+    ``history`` is the first fit's plus ``blend_weight`` (the first fit's weight) and ``blend_ring_errors``."""
+    config, depth, _, neighbors, _, transform = check_fit_inputs(rgb, depth, camera, neighbors, variant, config,
+                                                                 gt_depth, transform)
+    config = config.replace(blend_paper=False)
+    ring = validation_ring(np.isfinite(depth), config.seed)
+    if (np.isfinite(depth) & ~ring).sum() < MIN_VALID_PIXELS or ring.sum() < MIN_VALID_PIXELS:
+        ring = np.zeros_like(ring)  # too little to judge by (or to fit without): this config's fit alone
+    held_out = np.where(ring, np.nan, depth).astype(np.float32)
+    members = [config, config.replace(**get_recipe("paper").overrides)] if ring.any() else [config]
+
+    def fit_member(k: int) -> DepthResult:  # a warm start fits the first fit's net only
+        return fit_once(rgb, held_out, camera, neighbors, variant, members[k], gt_depth=gt_depth,
+                        transform=transform, callback=callback, init=init if k == 0 else None)
+
+    fits = run_members(fit_member, len(members), parallel_members(config.replace(ensemble=len(members)), variant,
+                                                                  depth.shape, len(neighbors), callback))
+    if len(fits) == 1:
+        return fits[0]
+    weight, errors = best_weight(fits[0].disparity, fits[1].disparity, transform.to_disparity(depth), ring)
+    disparity = (weight * fits[0].disparity + (1.0 - weight) * fits[1].disparity).astype(np.float32)  # (H, W)
+    out_rgb = None if fits[0].rgb is None else (weight * fits[0].rgb + (1.0 - weight) * fits[1].rgb).astype(np.float32)
+    return DepthResult(depth=transform.to_depth(disparity).astype(np.float32), disparity=disparity, rgb=out_rgb,
+                       history={**fits[0].history, "blend_weight": weight, "blend_ring_errors": errors},
+                       transform=transform, iterations=sum(f.iterations for f in fits),
+                       best_iteration=fits[0].best_iteration, seconds=sum(f.seconds for f in fits),
+                       state=fits[0].state, fits=2)
 
 
 def fit_once(rgb, depth, camera, neighbors, variant, config, *, gt_depth=None, transform=None, callback=None,

@@ -81,7 +81,7 @@ RECIPES = {
     # (the colour-edge strength, the blur of an image that is not in the input) but bf16 at class, the
     # precision the net runs in, not what it optimises
     "paper": Recipe("paper", dict(smoothness=0.0, flatness=0.0, image_input=0.0, fill_input=0.0, net_input="noise",
-                                  noise_channels=16),
+                                  noise_channels=16, blend_paper=False),
                     "the paper's losses (Eq. 2-5) from its 16-channel noise input, nothing added", base="kit"),
 }
 

@@ -1,0 +1,75 @@
+"""A self-validated blend of the kit's fit and the paper's (``FitConfig.blend_paper``). Not in the paper.
+
+The two recipes err in different places. On rendered scenes the kit's hole terms and inputs fill
+large holes far better; on a real photograph's occlusions the paper's plain loss is ahead
+(``docs/real_data.md``). A fixed mean of the two helps the photograph and costs the rendered
+scenes. Here the image decides, as in self-validation for deep priors: a ring of valid input
+around the holes is held out of both fits, and the weight that best predicts it is the one used
+in the holes:
+
+    V  = valid pixels within r px of a hole, in patches (half the ring)      validation_ring
+    w* = argmin_{w ∈ {0, ¼, ½, ¾, 1}}  RMSE_V( w·Z_kit + (1 − w)·Z_paper − Z_in )   best_weight
+    Z  = w*·Z_kit + (1 − w*)·Z_paper
+
+Both fits see the input without V (V behaves as a hole: the hole terms act there too), so their
+error on V is an honest estimate of how each fills a hole's edge on this image. The two fits run
+side by side on a CPU with two threads (:func:`ddp_lite.method.ensemble.run_members`).
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy import ndimage
+
+__all__ = ["BLEND_WEIGHTS", "validation_ring", "best_weight", "ring_width"]
+
+BLEND_WEIGHTS = (0.0, 0.25, 0.5, 0.75, 1.0)  # the kit fit's weight; 0 is the paper's fit alone
+RING_SHARE = 0.5  # the share of the ring held out: the rest keeps the holes' edges where they are
+
+
+def ring_width(shape) -> int:
+    """The ring's width in px for an (H, W) image: 2 px at 96–143 rows, 1 px below, ~min(H, W)/48 above."""
+    return max(1, int(min(shape)) // 48)
+
+
+def validation_ring(valid: np.ndarray, seed: int = 0, width: int | None = None,
+                    share: float = RING_SHARE) -> np.ndarray:
+    """(H, W) bool: the valid pixels within ``width`` px (Euclidean; None → :func:`ring_width`) of a
+    hole, in patches: those where a smooth random field (blur min(H, W)/24 px, seeded) is below its
+    ``share`` quantile over the ring. Patches, not scattered pixels: a scattered pixel is predicted
+    from its neighbours by any smooth fit, a patch is not. Empty if ``valid`` has no hole.
+
+    Example:
+        >>> valid = np.ones((48, 64), bool); valid[20:28, 20:40] = False
+        >>> ring = validation_ring(valid, seed=0)
+        >>> bool((ring & ~valid).any()), int(ring.sum()) > 0
+        (False, True)
+    """
+    valid = np.asarray(valid, bool)
+    if valid.ndim != 2:
+        raise ValueError(f"valid must be an (H, W) bool array, got shape {valid.shape}")
+    width = ring_width(valid.shape) if width is None else width
+    if valid.all():  # no hole: (scipy's distance transform measures to pixel (0, 0) then)
+        return np.zeros_like(valid)
+    ring = valid & (ndimage.distance_transform_edt(valid) <= width)
+    if not ring.any() or share >= 1.0:
+        return ring
+    H, W = valid.shape
+    field = ndimage.gaussian_filter(np.random.default_rng(seed + 777).standard_normal((H, W)),
+                                    max(1.0, min(H, W) / 24.0), mode="wrap")
+    return ring & (field <= np.quantile(field[ring], share))
+
+
+def best_weight(kit: np.ndarray, paper: np.ndarray, target: np.ndarray, ring: np.ndarray,
+                weights=BLEND_WEIGHTS) -> tuple[float, list[float]]:
+    """The weight w of ``kit`` in w·kit + (1 − w)·paper whose RMSE against ``target`` on ``ring`` is
+    least (ties: the larger w, the kit's), and the RMSE of every weight. All (H, W), one unit.
+
+    Example:
+        >>> target = np.zeros((2, 2)); ring = np.ones((2, 2), bool)
+        >>> best_weight(target + 1.0, target - 1.0, target, ring)
+        (0.5, [1.0, 0.5, 0.0, 0.5, 1.0])
+    """
+    errors = [float(np.sqrt(np.mean((w * kit[ring] + (1.0 - w) * paper[ring] - target[ring]) ** 2)))
+              for w in weights]
+    best = min(range(len(weights)), key=lambda k: (errors[k], -weights[k]))
+    return float(weights[best]), errors

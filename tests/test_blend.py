@@ -1,0 +1,106 @@
+"""The self-validated blend of the kit's fit and the paper's (``FitConfig.blend_paper``): the ring it
+holds out, the weight it picks, and the fit it returns, each against an independent reference."""
+import numpy as np
+import pytest
+import torch
+
+from ddp_lite import FitConfig, complete_depth
+from ddp_lite.method.blend import BLEND_WEIGHTS, best_weight, ring_width, validation_ring
+from ddp_lite.method.recipes import get_recipe
+from conftest import TINY, tilted_plane
+
+
+def brute_force_distance_to_hole(valid):
+    """(H, W) Euclidean distance of every pixel to the nearest hole pixel, by comparing all pairs."""
+    ys, xs = np.nonzero(~valid)
+    yy, xx = np.indices(valid.shape)
+    return np.sqrt((yy[..., None] - ys) ** 2 + (xx[..., None] - xs) ** 2).min(axis=-1)
+
+
+def test_the_ring_is_half_of_the_valid_pixels_within_its_width_of_a_hole():
+    valid = np.ones((40, 56), bool)
+    valid[12:20, 10:30] = False
+    valid[30:34, 40:44] = False
+    full = valid & (brute_force_distance_to_hole(valid) <= 2)
+    ring = validation_ring(valid, seed=3, width=2)
+    assert not (ring & ~full).any()  # only valid pixels, none further than 2 px from a hole
+    assert ring.sum() == pytest.approx(0.5 * full.sum(), abs=1)  # half of them, by the field's median
+    assert np.array_equal(validation_ring(valid, seed=3, width=2, share=1.0), full)
+    assert np.array_equal(ring, validation_ring(valid, seed=3, width=2))  # seeded
+    assert not np.array_equal(ring, validation_ring(valid, seed=4, width=2))
+    assert not validation_ring(np.ones((40, 56), bool)).any()  # no hole, no ring
+
+
+def test_the_ring_comes_in_patches_not_scattered_pixels():
+    valid = np.ones((96, 128), bool)
+    valid[30:60, 30:90] = False
+    ring = validation_ring(valid, seed=0)
+    # along the hole's top edge (row 29, a ring pixel next to the hole), kept pixels come in runs
+    row = ring[29, 30:90].astype(int)
+    runs = np.count_nonzero(np.diff(row) == 1) + row[0]
+    assert 0 < row.sum() < row.size and runs <= 4
+
+
+def test_ring_width_follows_the_image_size():
+    assert [ring_width((h, 2 * h)) for h in (24, 48, 96, 125, 512)] == [1, 1, 2, 2, 10]
+
+
+def test_best_weight_is_the_least_squares_blend_on_the_grid():
+    rng = np.random.default_rng(0)
+    truth = rng.random((20, 20))
+    kit, paper = truth + 0.3, truth - 0.1  # the blend w·0.3 − (1 − w)·0.1 is 0 at w = 0.25
+    ring = rng.random((20, 20)) < 0.3
+    weight, errors = best_weight(kit, paper, truth, ring)
+    assert weight == 0.25
+    expected = [abs(w * 0.3 - (1 - w) * 0.1) for w in BLEND_WEIGHTS]  # constant offsets: RMSE = |offset|
+    assert np.allclose(errors, expected)
+    # outside the ring nothing counts: a wild value there changes nothing
+    kit[~ring] = 1e6
+    assert best_weight(kit, paper, truth, ring)[0] == 0.25
+    # a tie goes to the kit's fit
+    assert best_weight(truth + 1.0, truth + 1.0, truth, ring)[0] == 1.0
+
+
+def test_blend_paper_returns_the_blend_of_the_two_fits_without_the_ring():
+    depth = tilted_plane(40, 48, slope=0.05)
+    depth[10:30, 12:36] = np.nan  # a 20 × 24 hole: its ring (1 px at this size) has ~45 pixels
+    rgb = np.random.default_rng(1).random(depth.shape + (3,)).astype(np.float32)
+    given = depth.copy()
+    config = FitConfig(**TINY, iterations=15, seed=2, smoothness=1.0, net_input="meshgrid", noise_channels=2)
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        blended = complete_depth(rgb, depth, variant="rgbd", config=config.replace(blend_paper=True))
+        # by hand: the ring held out, the two recipes fitted on what is left, the weight from the ring
+        ring = validation_ring(np.isfinite(depth), seed=2)
+        held_out = np.where(ring, np.nan, depth)
+        kit = complete_depth(rgb, held_out, variant="rgbd", config=config, transform=blended.transform)
+        paper = complete_depth(rgb, held_out, variant="rgbd", transform=blended.transform,
+                               config=config.replace(**get_recipe("paper").overrides))
+    finally:
+        torch.set_num_threads(threads)
+    assert np.array_equal(depth, given, equal_nan=True)  # the caller's array is untouched
+    assert ring.sum() > 20 and not np.array_equal(kit.disparity, paper.disparity)
+    target = blended.transform.to_disparity(depth)
+    errors = [np.sqrt(np.mean((w * kit.disparity[ring] + (1 - w) * paper.disparity[ring] - target[ring]) ** 2))
+              for w in BLEND_WEIGHTS]
+    weight = blended.history["blend_weight"]
+    assert errors[BLEND_WEIGHTS.index(weight)] == pytest.approx(min(errors), rel=1e-6)
+    assert np.allclose(blended.history["blend_ring_errors"], errors, rtol=1e-5)
+    assert np.allclose(blended.disparity, weight * kit.disparity + (1 - weight) * paper.disparity, atol=1e-6)
+    assert blended.fits == 2 and blended.iterations == kit.iterations + paper.iterations
+
+
+def test_blend_paper_without_holes_is_one_plain_fit():
+    depth = np.full((24, 32), 2.0, np.float32)
+    config = FitConfig(**TINY, iterations=5)
+    plain = complete_depth(None, depth, variant="d", config=config)
+    blended = complete_depth(None, depth, variant="d", config=config.replace(blend_paper=True))
+    assert np.array_equal(plain.disparity, blended.disparity) and blended.fits == 1
+
+
+def test_blend_paper_refuses_an_ensemble_and_a_non_bool():
+    with pytest.raises(ValueError, match="config.blend_paper"):
+        FitConfig(blend_paper=True, ensemble=2).validate()
+    with pytest.raises(TypeError, match="config.blend_paper"):
+        FitConfig(blend_paper="yes").validate()
