@@ -229,4 +229,5 @@ STUDY = {
     "holdout-blobs": dict(holdout="blobs"),
     "step3": dict(step_reach=3.0),  # real data: the hole terms off within 3 px of a depth step of the input,
     "step6": dict(step_reach=6.0),  # ... within 6 px (occlusion bands are 2-10 px wide at 125×185)
+    "blend": dict(blend_paper=True),  # the kit's fit and the paper's, blended by a held-out ring (method.blend)
 }
