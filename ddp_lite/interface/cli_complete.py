@@ -239,7 +239,7 @@ def complete_command(args) -> int:
     small_rgb, small_depth = shrink(rgb, depth, shape)
     print(f"{depth.shape[0]}×{depth.shape[1]} (H×W), {holes.mean():.1%} holes; fitting at "
           f"{shape[0]}×{shape[1]} (--max-side {max_side}), profile '{profile.name}'", flush=True)
-    with command_progress(config.resolved_iterations(args.variant) * config.ensemble):  # every fit of the command
+    with command_progress(config.resolved_iterations(args.variant) * config.fit_count()):  # every fit of the command
         result = complete_depth(small_rgb, small_depth, variant=args.variant, config=config)
     filled = fill_holes_at_full_size(depth, result.depth, raw=args.raw)
     comparison = _comparison(depth, rgb, filled, gt)

@@ -58,7 +58,7 @@ def demo_command(args) -> int:
     case = make_case(args.scene, profile, holes=args.holes, seed=args.seed)
     print(f"{case.scene}\n{args.holes} holes: {np.isnan(case.depth).mean():.0%} of the reference view; "
           f"warp loss uses views {[n.name for n in case.neighbors]}")
-    with command_progress(config.resolved_iterations(VARIANT) * config.ensemble):  # every fit of the command
+    with command_progress(config.resolved_iterations(VARIANT) * config.fit_count()):  # every fit of the command
         result = complete_depth(case.rgb, case.depth, case.camera, case.neighbors, variant=VARIANT, config=config,
                                 gt_depth=case.scored_gt, transform=case.transform)
     estimates = {"linear": fill_linear(case.depth), "colorization": fill_colorization(case.depth, case.rgb),

@@ -68,6 +68,7 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
     its weights carry over; the full-size stage sees the coarse noise upsampled bilinearly, the
     same input at twice the resolution. It runs the remaining iterations with ``config`` as
     given (auto-stop included); the learning-rate schedule continues across the two stages.
+    It is one fit: ``config.ensemble`` and ``config.blend_paper`` do not apply.
 
     Args:
         rgb: (H, W, 3) float in [0, 1] (may be None for ``variant="d"``).

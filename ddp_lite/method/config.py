@@ -135,6 +135,10 @@ class FitConfig:
             return int(self.iterations)
         return get_variant(variant).paper_iterations
 
+    def fit_count(self) -> int:
+        """How many fits one call of ``complete_depth`` runs: the ensemble's members, or the blend's two."""
+        return int(self.ensemble) * (2 if self.blend_paper else 1)
+
     def validate(self) -> None:
         """Raise ``TypeError``/``ValueError`` naming the first bad field: every number must be finite and
         of its type (no bool for an int, no 2.7 for an iteration count), every choice one of its values."""

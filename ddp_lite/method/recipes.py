@@ -116,7 +116,8 @@ def describe_method(settings: dict) -> str:
                if settings.get("net_input", "noise") == "meshgrid" else "")
             + (f" + the colour image (blurred, σ {settings.get('image_blur', 1.0):g} px; not for depth-only)"
                if settings.get("image_input", 0.0) else "")
-            + (f", mean of {ensemble} fits" if ensemble > 1 else ""))
+            + (f", mean of {ensemble} fits" if ensemble > 1 else "")
+            + (", blended with the paper recipe's fit by a held-out ring" if settings.get("blend_paper") else ""))
 
 
 # The quality study's other recipes (``benchmarks/bench_quality.py --recipes NAME``): name → FitConfig
