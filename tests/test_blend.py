@@ -61,7 +61,7 @@ def test_best_weight_is_the_least_squares_blend_on_the_grid():
     assert best_weight(truth + 1.0, truth + 1.0, truth, ring)[0] == 1.0
 
 
-def test_blend_paper_returns_the_blend_of_the_two_fits_without_the_ring():
+def test_blend_weight_none_blends_the_two_fits_without_the_ring_by_the_ring():
     depth = tilted_plane(40, 48, slope=0.05)
     depth[10:30, 12:36] = np.nan  # a 20 × 24 hole: its ring (1 px at this size) has ~45 pixels
     rgb = np.random.default_rng(1).random(depth.shape + (3,)).astype(np.float32)
@@ -70,7 +70,7 @@ def test_blend_paper_returns_the_blend_of_the_two_fits_without_the_ring():
     threads = torch.get_num_threads()
     torch.set_num_threads(1)
     try:
-        blended = complete_depth(rgb, depth, variant="rgbd", config=config.replace(blend_paper=True))
+        blended = complete_depth(rgb, depth, variant="rgbd", config=config.replace(blend_paper=True, blend_weight=None))
         # by hand: the ring held out, the two recipes fitted on what is left, the weight from the ring
         ring = validation_ring(np.isfinite(depth), seed=2)
         held_out = np.where(ring, np.nan, depth)
@@ -91,12 +91,35 @@ def test_blend_paper_returns_the_blend_of_the_two_fits_without_the_ring():
     assert blended.fits == 2 and blended.iterations == kit.iterations + paper.iterations
 
 
-def test_blend_paper_without_holes_is_one_plain_fit():
+def test_a_ring_blend_without_holes_is_one_plain_fit():
     depth = np.full((24, 32), 2.0, np.float32)
     config = FitConfig(**TINY, iterations=5)
     plain = complete_depth(None, depth, variant="d", config=config)
-    blended = complete_depth(None, depth, variant="d", config=config.replace(blend_paper=True))
+    blended = complete_depth(None, depth, variant="d", config=config.replace(blend_paper=True, blend_weight=None))
     assert np.array_equal(plain.disparity, blended.disparity) and blended.fits == 1
+
+
+def test_the_photo_recipe_is_the_mean_of_the_kit_fit_and_the_paper_fit():
+    depth = tilted_plane(32, 40, slope=0.05)
+    depth[8:20, 10:28] = np.nan
+    rgb = np.random.default_rng(2).random(depth.shape + (3,)).astype(np.float32)
+    photo = FitConfig.for_profile("ci", variant="rgbd", recipe="photo", progress=False, iterations=12)
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        blended = complete_depth(rgb, depth, variant="rgbd", config=photo)
+        kit = complete_depth(rgb, depth, variant="rgbd", transform=blended.transform,
+                             config=FitConfig.for_profile("ci", variant="rgbd", recipe="kit", progress=False, iterations=12))
+        paper = complete_depth(rgb, depth, variant="rgbd", transform=blended.transform,
+                               config=FitConfig.for_profile("ci", variant="rgbd", recipe="paper", progress=False,
+                                                            iterations=12))
+    finally:
+        torch.set_num_threads(threads)
+    assert photo.blend_paper and photo.blend_weight == 0.5 and blended.history["blend_weight"] == 0.5
+    assert not np.array_equal(kit.disparity, paper.disparity)
+    assert np.allclose(blended.disparity, 0.5 * (kit.disparity + paper.disparity), atol=1e-6)
+    assert np.allclose(blended.rgb, 0.5 * (kit.rgb + paper.rgb), atol=1e-6)
+    assert blended.fits == 2
 
 
 def test_blend_paper_refuses_an_ensemble_and_a_non_bool():
@@ -104,3 +127,5 @@ def test_blend_paper_refuses_an_ensemble_and_a_non_bool():
         FitConfig(blend_paper=True, ensemble=2).validate()
     with pytest.raises(TypeError, match="config.blend_paper"):
         FitConfig(blend_paper="yes").validate()
+    with pytest.raises(ValueError, match="config.blend_weight"):
+        FitConfig(blend_paper=True, blend_weight=1.5).validate()

@@ -17,7 +17,7 @@ from .. import __version__
 
 PROFILES = ("ci", "class", "paper")
 PROFILE_HELP = "ci, class or paper (default: $DDP_PROFILE, else class)"
-RECIPE_NAMES = ("kit", "paper")  # ddp_lite.method.recipes.RECIPES, without importing the method here
+RECIPE_NAMES = ("kit", "paper", "photo")  # ddp_lite.method.recipes.RECIPES, without importing the method here
 EXIT_CODES = ("exit codes: 0 done, 1 failed at run time (nothing half-written), 2 usage error "
               "(the message names the option), 130 interrupted (Ctrl-C)")
 

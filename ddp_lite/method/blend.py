@@ -1,19 +1,21 @@
-"""A self-validated blend of the kit's fit and the paper's (``FitConfig.blend_paper``). Not in the paper.
+"""Blends of the kit's fit and the paper's (``FitConfig.blend_paper``; the ``photo`` recipe). Not in the paper.
 
 The two recipes err in different places. On rendered scenes the kit's hole terms and inputs fill
-large holes far better; on a real photograph's occlusions the paper's plain loss is ahead
-(``docs/real_data.md``). A fixed mean of the two helps the photograph and costs the rendered
-scenes. Here the image decides, as in self-validation for deep priors: a ring of valid input
-around the holes is held out of both fits, and the weight that best predicts it is the one used
-in the holes:
+large holes far better; on the real photograph's occlusions the paper's plain loss is ahead, and
+on its blob holes the two fits' mean beats both (``docs/real_data.md``). ``blend_weight`` w gives
+
+    Z = w·Z_kit + (1 − w)·Z_paper            (w = 0.5: the ``photo`` recipe, the mean)
+
+``blend_weight=None`` lets the image choose w, as self-validation does for deep priors: a ring of
+valid input around the holes is held out of both fits, and the weight that best predicts it wins:
 
     V  = valid pixels within r px of a hole, in patches (half the ring)      validation_ring
     w* = argmin_{w ∈ {0, ¼, ½, ¾, 1}}  RMSE_V( w·Z_kit + (1 − w)·Z_paper − Z_in )   best_weight
-    Z  = w*·Z_kit + (1 − w*)·Z_paper
 
-Both fits see the input without V (V behaves as a hole: the hole terms act there too), so their
-error on V is an honest estimate of how each fills a hole's edge on this image. The two fits run
-side by side on a CPU with two threads (:func:`ddp_lite.method.ensemble.run_members`).
+Measured on the real pair, the ring costs more than it tells: both fits lose the valid pixels that
+matter most (beside an occlusion, the far surface), and its choice is no better than the fixed mean.
+It stays a study lever. The two fits run side by side on a CPU with two threads
+(:func:`ddp_lite.method.ensemble.run_members`).
 """
 from __future__ import annotations
 

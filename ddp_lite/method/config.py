@@ -61,7 +61,8 @@ class FitConfig:
     reg_noise_std: float = 0.0  # DIP input jitter: n + σ·N(0, 1) every iteration
     average_outputs: float = 0.0  # DIP output averaging: EMA weight (0.99 in DIP), 0 = off
     ensemble: int = 1  # fits with seeds seed, seed+1, ...; their disparities are averaged
-    blend_paper: bool = False  # also fit the paper's recipe; blend the two by a held-out ring (method.blend)
+    blend_paper: bool = False  # also fit the paper's recipe and blend the two fits (method.blend)
+    blend_weight: float | None = 0.5  # this config's fit's weight in that blend; None: chosen on a held-out ring
     smoothness: float = 0.0  # weight of an edge-aware second-order smoothness of disparity in the holes (0: the paper)
     smoothness_edge: float = 10.0  # how strongly colour edges relax both hole terms: exp(-edge · |∇I|)
     edge_guide: str = "grey"  # |∇I| of the grey image, or "rgb": the largest over the three channels
@@ -182,6 +183,8 @@ class FitConfig:
         if self.blend_paper and self.ensemble > 1:
             raise ValueError(f"config.blend_paper and config.ensemble > 1 cannot be combined (a blend of two fits "
                              f"is not averaged with more), got ensemble={self.ensemble}")
+        if self.blend_weight is not None:
+            check_real(self.blend_weight, "config.blend_weight", 0.0, 1.0)
         if self.flatness_reach is not None:
             check_real(self.flatness_reach, "config.flatness_reach", 0.0, None)
         if self.step_reach is not None:

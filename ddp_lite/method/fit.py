@@ -136,32 +136,35 @@ def complete_depth(rgb, depth, camera: Camera | None = None, neighbors=(), varia
 
 
 def fit_blended(rgb, depth, camera, neighbors, variant, config, gt_depth, transform, callback, init) -> DepthResult:
-    """``config.blend_paper``: this config's fit and the paper recipe's, both without a ring of the valid
-    input around the holes, blended by the weight that predicts the ring best (:mod:`ddp_lite.method.blend`).
-    ``history`` is the first fit's plus ``blend_weight`` (the first fit's weight) and ``blend_ring_errors``."""
+    """``config.blend_paper``: this config's fit and the paper recipe's, blended with weight
+    ``config.blend_weight``, or (None) with the weight that best predicts a ring of valid input held out
+    of both fits (:mod:`ddp_lite.method.blend`). ``history`` is the first fit's plus ``blend_weight`` and,
+    with the ring, ``blend_ring_errors``."""
     config, depth, _, neighbors, _, transform = check_fit_inputs(rgb, depth, camera, neighbors, variant, config,
                                                                  gt_depth, transform)
-    config = config.replace(blend_paper=False)
-    ring = validation_ring(np.isfinite(depth), config.seed)
-    if (np.isfinite(depth) & ~ring).sum() < MIN_VALID_PIXELS or ring.sum() < MIN_VALID_PIXELS:
-        ring = np.zeros_like(ring)  # too little to judge by (or to fit without): this config's fit alone
+    weight, config = config.blend_weight, config.replace(blend_paper=False)
+    ring = validation_ring(np.isfinite(depth), config.seed) if weight is None else np.zeros(depth.shape, bool)
+    if weight is None and ((np.isfinite(depth) & ~ring).sum() < MIN_VALID_PIXELS or ring.sum() < MIN_VALID_PIXELS):
+        return fit_once(rgb, depth, camera, neighbors, variant, config, gt_depth=gt_depth, transform=transform,
+                        callback=callback, init=init)  # too little to judge by (or to fit without)
     held_out = np.where(ring, np.nan, depth).astype(np.float32)
-    members = [config, config.replace(**get_recipe("paper").overrides)] if ring.any() else [config]
+    members = [config, config.replace(**get_recipe("paper").overrides)]
 
     def fit_member(k: int) -> DepthResult:  # a warm start fits the first fit's net only
         return fit_once(rgb, held_out, camera, neighbors, variant, members[k], gt_depth=gt_depth,
                         transform=transform, callback=callback, init=init if k == 0 else None)
 
-    fits = run_members(fit_member, len(members), parallel_members(config.replace(ensemble=len(members)), variant,
-                                                                  depth.shape, len(neighbors), callback))
-    if len(fits) == 1:
-        return fits[0]
-    weight, errors = best_weight(fits[0].disparity, fits[1].disparity, transform.to_disparity(depth), ring)
+    fits = run_members(fit_member, 2, parallel_members(config.replace(ensemble=2), variant, depth.shape,
+                                                       len(neighbors), callback))
+    history = dict(fits[0].history)
+    if weight is None:
+        weight, history["blend_ring_errors"] = best_weight(fits[0].disparity, fits[1].disparity,
+                                                           transform.to_disparity(depth), ring)
+    history["blend_weight"] = weight
     disparity = (weight * fits[0].disparity + (1.0 - weight) * fits[1].disparity).astype(np.float32)  # (H, W)
     out_rgb = None if fits[0].rgb is None else (weight * fits[0].rgb + (1.0 - weight) * fits[1].rgb).astype(np.float32)
     return DepthResult(depth=transform.to_depth(disparity).astype(np.float32), disparity=disparity, rgb=out_rgb,
-                       history={**fits[0].history, "blend_weight": weight, "blend_ring_errors": errors},
-                       transform=transform, iterations=sum(f.iterations for f in fits),
+                       history=history, transform=transform, iterations=sum(f.iterations for f in fits),
                        best_iteration=fits[0].best_iteration, seconds=sum(f.seconds for f in fits),
                        state=fits[0].state, fits=2)
 
