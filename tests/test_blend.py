@@ -129,3 +129,11 @@ def test_blend_paper_refuses_an_ensemble_and_a_non_bool():
         FitConfig(blend_paper="yes").validate()
     with pytest.raises(ValueError, match="config.blend_weight"):
         FitConfig(blend_paper=True, blend_weight=1.5).validate()
+
+
+def test_the_equation_shows_the_blend_as_not_in_the_paper():
+    from ddp_lite.method.equation import loss_equation
+    photo = loss_equation(FitConfig.for_profile("ci", variant="rgbd", recipe="photo"), "rgbd")
+    kit = loss_equation(FitConfig.for_profile("ci", variant="rgbd", recipe="kit"), "rgbd")
+    assert photo.endswith("\\underbrace{\\hat Z = 0.5\\,Z + 0.5\\,Z_{\\mathrm{paper}}}_{\\text{not in the paper}}")
+    assert photo.startswith(kit) and "Z_{\\mathrm{paper}}" not in kit

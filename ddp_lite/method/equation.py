@@ -52,4 +52,9 @@ def loss_equation(config, variant: str) -> str:
         added.append("\\text{fill}(Z_{\\mathrm{in}})")
     net_input = ", ".join(in_paper + (["\\underbrace{" + ", ".join(added) + "}_{\\text{not in the paper}}"]
                                       if added else []))
-    return f"\\min_\\theta\\ {loss},\\quad {outputs} = f_\\theta({net_input})"
+    equation = f"\\min_\\theta\\ {loss},\\quad {outputs} = f_\\theta({net_input})"
+    if getattr(config, "blend_paper", False):  # two fits, blended (method.blend)
+        w = config.blend_weight
+        mix = "w^* Z + (1 - w^*)\\,Z_{\\mathrm{paper}}" if w is None else f"{w:g}\\,Z + {1 - w:g}\\,Z_{{\\mathrm{{paper}}}}"
+        equation += f",\\quad \\underbrace{{\\hat Z = {mix}}}_{{\\text{{not in the paper}}}}"
+    return equation
