@@ -58,8 +58,12 @@ def run_members(fit_member, members: int, workers: int) -> list:
     return results + [fit_member(k) for k in range(side_by_side, members)]
 
 
-def mean_outputs(members: list) -> tuple[np.ndarray, np.ndarray | None]:
-    """(Z (H, W), I (H, W, 3) or None): the members' mean disparity and colour output, float32."""
-    disparity = np.mean([m.disparity for m in members], axis=0).astype(np.float32)  # (H, W)
+def mean_outputs(members: list, weights=None) -> tuple[np.ndarray, np.ndarray | None]:
+    """(Z (H, W), I (H, W, 3) or None): the members' mean disparity and colour output, float32;
+    with ``weights`` (one per member, summing to 1) their weighted sum (a blend, ``ddp_lite.method.blend``)."""
+    def combine(arrays):
+        if weights is None:
+            return np.mean(arrays, axis=0).astype(np.float32)
+        return sum(w * a for w, a in zip(weights, arrays)).astype(np.float32)
     rgbs = [m.rgb for m in members if m.rgb is not None]
-    return disparity, (np.mean(rgbs, axis=0).astype(np.float32) if rgbs else None)
+    return combine([m.disparity for m in members]), (combine(rgbs) if rgbs else None)

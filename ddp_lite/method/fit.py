@@ -127,10 +127,15 @@ def complete_depth(rgb, depth, camera: Camera | None = None, neighbors=(), varia
 
     workers = parallel_members(config, variant, depth.shape, len(neighbors), callback)
     members = run_members(fit_member, int(config.ensemble), workers)
-    disparity, mean_rgb = mean_outputs(members)
-    return DepthResult(depth=transform.to_depth(disparity).astype(np.float32), disparity=disparity,
-                       rgb=mean_rgb, history=members[0].history,
-                       transform=transform, iterations=sum(m.iterations for m in members),
+    return combined_result(members, transform, members[0].history)
+
+
+def combined_result(members: list, transform, history: dict, weights=None) -> DepthResult:
+    """One result from several fits: their (weighted) mean outputs; totals of iterations and seconds;
+    the first fit's best iteration and weights."""
+    disparity, rgb = mean_outputs(members, weights)
+    return DepthResult(depth=transform.to_depth(disparity).astype(np.float32), disparity=disparity, rgb=rgb,
+                       history=history, transform=transform, iterations=sum(m.iterations for m in members),
                        best_iteration=members[0].best_iteration, seconds=sum(m.seconds for m in members),
                        state=members[0].state, fits=len(members))
 
@@ -143,11 +148,12 @@ def fit_blended(rgb, depth, camera, neighbors, variant, config, gt_depth, transf
     config, depth, _, neighbors, _, transform = check_fit_inputs(rgb, depth, camera, neighbors, variant, config,
                                                                  gt_depth, transform)
     weight, config = config.blend_weight, config.replace(blend_paper=False)
-    ring = validation_ring(np.isfinite(depth), config.seed) if weight is None else np.zeros(depth.shape, bool)
-    if weight is None and ((np.isfinite(depth) & ~ring).sum() < MIN_VALID_PIXELS or ring.sum() < MIN_VALID_PIXELS):
+    valid = np.isfinite(depth)
+    ring = validation_ring(valid, config.seed) if weight is None else np.zeros_like(valid)
+    if weight is None and ((valid & ~ring).sum() < MIN_VALID_PIXELS or ring.sum() < MIN_VALID_PIXELS):
         return fit_once(rgb, depth, camera, neighbors, variant, config, gt_depth=gt_depth, transform=transform,
                         callback=callback, init=init)  # too little to judge by (or to fit without)
-    held_out = np.where(ring, np.nan, depth).astype(np.float32)
+    held_out = np.where(ring, np.nan, depth).astype(np.float32) if ring.any() else depth
     members = [config, config.replace(**get_recipe("paper").overrides)]
 
     def fit_member(k: int) -> DepthResult:  # a warm start fits the first fit's net only
@@ -161,12 +167,7 @@ def fit_blended(rgb, depth, camera, neighbors, variant, config, gt_depth, transf
         weight, history["blend_ring_errors"] = best_weight(fits[0].disparity, fits[1].disparity,
                                                            transform.to_disparity(depth), ring)
     history["blend_weight"] = weight
-    disparity = (weight * fits[0].disparity + (1.0 - weight) * fits[1].disparity).astype(np.float32)  # (H, W)
-    out_rgb = None if fits[0].rgb is None else (weight * fits[0].rgb + (1.0 - weight) * fits[1].rgb).astype(np.float32)
-    return DepthResult(depth=transform.to_depth(disparity).astype(np.float32), disparity=disparity, rgb=out_rgb,
-                       history=history, transform=transform, iterations=sum(f.iterations for f in fits),
-                       best_iteration=fits[0].best_iteration, seconds=sum(f.seconds for f in fits),
-                       state=fits[0].state, fits=2)
+    return combined_result(fits, transform, history, weights=(weight, 1.0 - weight))
 
 
 def fit_once(rgb, depth, camera, neighbors, variant, config, *, gt_depth=None, transform=None, callback=None,
