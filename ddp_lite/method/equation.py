@@ -32,7 +32,10 @@ def loss_equation(config, variant: str) -> str:
     if w_rgb > 0:
         paper.append(_weight(w_rgb) + "L^{\\mathrm{RGB}}")
     if w_warp > 0:
-        paper.append(_weight(w_warp) + "L^{\\mathrm{warp}}")
+        warp = "L^{\\mathrm{warp}}"
+        if getattr(config, "warp_occlusion", False):  # only the pixels the neighbour can see (method.visibility)
+            warp = "\\underbrace{L^{\\mathrm{warp}}_{\\mathrm{visible}}}_{\\text{not in the paper}}"
+        paper.append(_weight(w_warp) + warp)
     kit = []
     if config.smoothness > 0:
         kit.append(_weight(config.smoothness) + "L^{\\mathrm{curv}}_{w}")

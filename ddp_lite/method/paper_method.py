@@ -16,7 +16,8 @@ W_nbr is a neighbour's image warped into the reference view through the predicte
 
 The kit's additions sit beside this, each in its own module: terms in the holes
 (:mod:`ddp_lite.method.hole_terms`) and other net inputs (:mod:`ddp_lite.method.nets`), both off in
-the ``paper`` recipe; auto-stop (:mod:`ddp_lite.method.loop`, a profile's budget), ensembles
+the ``paper`` recipe; the warp term's occlusion test (:mod:`ddp_lite.method.visibility`, off unless
+asked for); auto-stop (:mod:`ddp_lite.method.loop`, a profile's budget), ensembles
 (:mod:`ddp_lite.method.ensemble`, off unless asked for), bfloat16 (:func:`ddp_lite.method.device.use_bf16`).
 """
 from __future__ import annotations
@@ -47,7 +48,8 @@ class PaperLoss:
         self.disp_target = ConstantTarget(target, fit_mask)  # Z_in where the depth is valid (holes → 0)
         self.rgb_target = ConstantTarget(rgb) if rgb is not None else None  # I_in, every pixel
         use_warp = self.w_warp > 0
-        self.warpers = [Warper(camera, cam, device=device) for _, cam in neighbors] if use_warp else []  # T_nbr^ref
+        self.warpers = [Warper(camera, cam, device=device, occlusion=config.warp_occlusion)  # T_nbr^ref; occlusion: the kit's
+                        for _, cam in neighbors] if use_warp else []
         self.neighbor_images = [image for image, _ in neighbors] if use_warp else []  # I_nbr
 
     def __call__(self, disparity: torch.Tensor, colour: torch.Tensor | None = None):

@@ -123,6 +123,7 @@ def describe_method(settings: dict) -> str:
                if settings.get("net_input", "noise") == "meshgrid" else "")
             + (f" + the colour image (blurred, σ {settings.get('image_blur', 1.0):g} px; not for depth-only)"
                if settings.get("image_input", 0.0) else "")
+            + (", the warp term only where the neighbour can see" if settings.get("warp_occlusion") else "")
             + (f", mean of {ensemble} fits" if ensemble > 1 else "")
             + ((", blended with the paper recipe's fit, " + ("weight from a held-out ring" if settings.get("blend_weight", 0.5) is None
                else f"weight {settings.get('blend_weight', 0.5):g}")) if settings.get("blend_paper") else ""))
@@ -239,4 +240,5 @@ STUDY = {
     "step3": dict(step_reach=3.0),  # real data: the hole terms off within 3 px of a depth step of the input,
     "step6": dict(step_reach=6.0),  # ... within 6 px (occlusion bands are 2-10 px wide at 125×185)
     "blend-ring": dict(blend_paper=True, blend_weight=None),  # the photo recipe's blend, its weight from a held-out ring
+    "occl": dict(warp_occlusion=True),  # the warp term skips the pixels the neighbour cannot see (method.visibility)
 }

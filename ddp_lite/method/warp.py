@@ -11,6 +11,9 @@ and sample the neighbour bilinearly at (u', v') with ``grid_sample(align_corners
 maps -1 and +1 to the *centres* of the first and last pixel, matching the convention that
 pixel (0, 0) is the centre of the top-left pixel. A pixel is invalid when the point is behind
 the neighbour (q_z ≤ 0) or lands outside its image; invalid pixels are excluded from the loss.
+
+With ``occlusion=True`` (the kit's, not the paper's) a pixel is also invalid where the reference
+surface hides it from the neighbour (:class:`~ddp_lite.method.visibility.Visibility`).
 """
 from __future__ import annotations
 
@@ -20,6 +23,7 @@ import torch.nn.functional as F
 
 from ..core.camera import Camera, pixel_grid, relative_pose
 from ..core.checks import unmask
+from .visibility import Visibility
 
 __all__ = ["Warper", "warp_to_reference"]
 
@@ -35,8 +39,10 @@ class Warper(torch.nn.Module):
         (True, True)
     """
 
-    def __init__(self, ref_cam: Camera, nbr_cam: Camera, dtype=torch.float32, device=None):
+    def __init__(self, ref_cam: Camera, nbr_cam: Camera, dtype=torch.float32, device=None, occlusion: bool = False):
         super().__init__()
+        self.visibility = Visibility(ref_cam, nbr_cam, dtype, device) if occlusion else None
+        self.hidden, self.calls = None, 0  # the last occlusion mask and the calls since (see VISIBILITY_EVERY)
         nbr_from_ref = relative_pose(ref_cam, nbr_cam)
         K_nbr = torch.tensor(nbr_cam.K, dtype=torch.float64)
         rotation = torch.tensor(nbr_from_ref[:3, :3], dtype=torch.float64)
@@ -67,7 +73,20 @@ class Warper(torch.nn.Module):
             lo, u, v = -self.edge, uv[:, :1], uv[:, 1:]
             valid = ((z > self.eps) & (u >= lo) & (u <= width - 1 - lo) & (v >= lo) & (v <= height - 1 - lo)
                      & torch.isfinite(ref_depth))
+            if self.visibility is not None:
+                valid = valid & ~self.hidden_pixels(ref_depth)
         return warped, valid
+
+    VISIBILITY_EVERY = 10  # calls between two occlusion tests: a fit's depth moves little in 10 steps
+
+    def hidden_pixels(self, ref_depth: torch.Tensor) -> torch.Tensor:
+        """(B, 1, H, W) bool: the occlusion mask of ``ref_depth``, recomputed every ``VISIBILITY_EVERY``
+        calls (the test marches 32 px per pixel, about as long as a step of a small fit) and whenever the
+        shape changes."""
+        if self.hidden is None or self.calls % self.VISIBILITY_EVERY == 0 or self.hidden.shape != ref_depth.shape:
+            self.hidden, self.calls = self.visibility(ref_depth.detach()), 0
+        self.calls += 1
+        return self.hidden
 
 
 def warp_to_reference(nbr_image, ref_depth, ref_cam: Camera, nbr_cam: Camera):
