@@ -99,7 +99,9 @@ def test_a_ring_blend_without_holes_is_one_plain_fit():
     assert np.array_equal(plain.disparity, blended.disparity) and blended.fits == 1
 
 
-def test_the_photo_recipe_is_the_mean_of_the_kit_fit_and_the_paper_fit():
+def test_the_photo_recipe_is_the_mean_of_the_kit_fit_the_paper_fit_and_the_colorization_fill():
+    from ddp_lite.classical.baselines import fill_colorization
+
     depth = tilted_plane(32, 40, slope=0.05)
     depth[8:20, 10:28] = np.nan
     rgb = np.random.default_rng(2).random(depth.shape + (3,)).astype(np.float32)
@@ -115,11 +117,32 @@ def test_the_photo_recipe_is_the_mean_of_the_kit_fit_and_the_paper_fit():
                                                             iterations=12))
     finally:
         torch.set_num_threads(threads)
-    assert photo.blend_paper and photo.blend_weight == 0.5 and blended.history["blend_weight"] == 0.5
+    fill = blended.transform.to_disparity(1.0 / fill_colorization(1.0 / depth, rgb))  # Levin's fill of 1/z
+    assert photo.blend_paper and photo.blend_weight == 0.5 and photo.blend_fill == pytest.approx(1 / 3)
+    assert blended.history["blend_weight"] == 0.5 and blended.history["blend_fill"] == pytest.approx(1 / 3)
     assert not np.array_equal(kit.disparity, paper.disparity)
-    assert np.allclose(blended.disparity, 0.5 * (kit.disparity + paper.disparity), atol=1e-6)
-    assert np.allclose(blended.rgb, 0.5 * (kit.rgb + paper.rgb), atol=1e-6)
+    assert np.allclose(blended.disparity, (kit.disparity + paper.disparity + fill) / 3, atol=1e-6)
+    assert np.allclose(blended.rgb, 0.5 * (kit.rgb + paper.rgb), atol=1e-6)  # the fill has no colour
     assert blended.fits == 2
+
+
+def test_blend_fill_alone_mixes_one_fit_with_the_fill_and_needs_the_colour_image():
+    from ddp_lite.classical.baselines import fill_colorization
+
+    depth = tilted_plane(24, 32, slope=0.05)
+    depth[6:16, 8:20] = np.nan
+    rgb = np.random.default_rng(3).random(depth.shape + (3,)).astype(np.float32)
+    base = FitConfig.for_profile("ci", variant="rgbd", recipe="kit", progress=False, iterations=6)
+    mixed = complete_depth(rgb, depth, variant="rgbd", config=base.replace(blend_fill=0.25))
+    alone = complete_depth(rgb, depth, variant="rgbd", config=base, transform=mixed.transform)
+    fill = mixed.transform.to_disparity(1.0 / fill_colorization(1.0 / depth, rgb))
+    assert np.allclose(mixed.disparity, 0.75 * alone.disparity + 0.25 * fill, atol=1e-6)
+    assert np.allclose(mixed.depth, mixed.transform.to_depth(mixed.disparity))
+    with pytest.raises(ValueError, match="config.blend_fill"):
+        complete_depth(None, depth, variant="d", config=FitConfig.for_profile("ci", variant="d", blend_fill=0.25))
+    for bad in (1.0, -0.1):
+        with pytest.raises(ValueError, match="config.blend_fill"):
+            FitConfig(blend_fill=bad).validate()
 
 
 def test_blend_paper_refuses_an_ensemble_and_a_non_bool():
@@ -135,5 +158,6 @@ def test_the_equation_shows_the_blend_as_not_in_the_paper():
     from ddp_lite.method.equation import loss_equation
     photo = loss_equation(FitConfig.for_profile("ci", variant="rgbd", recipe="photo"), "rgbd")
     kit = loss_equation(FitConfig.for_profile("ci", variant="rgbd", recipe="kit"), "rgbd")
-    assert photo.endswith("\\underbrace{\\hat Z = 0.5\\,Z + 0.5\\,Z_{\\mathrm{paper}}}_{\\text{not in the paper}}")
+    assert photo.endswith("\\underbrace{\\hat Z = 0.333\\,Z + 0.333\\,Z_{\\mathrm{paper}} + 0.333\\,\\mathrm{fill}(Z_{\\mathrm{in}})}"
+                          "_{\\text{not in the paper}}")
     assert photo.startswith(kit) and "Z_{\\mathrm{paper}}" not in kit

@@ -1,10 +1,11 @@
-"""Blends of the kit's fit and the paper's (``FitConfig.blend_paper``; the ``photo`` recipe). Not in the paper.
+"""Blends of the kit's fit, the paper's and a classical fill (``FitConfig.blend_paper``, ``blend_fill``;
+the ``photo`` recipe). Not in the paper.
 
 The two recipes err in different places. On rendered scenes the kit's hole terms and inputs fill
 large holes far better; on the real photograph's occlusions the paper's plain loss is ahead, and
 on its blob holes the two fits' mean beats both (``docs/real_data.md``). ``blend_weight`` w gives
 
-    Z = w·Z_kit + (1 − w)·Z_paper            (w = 0.5: the ``photo`` recipe, the mean)
+    Z = w·Z_kit + (1 − w)·Z_paper            (w = 0.5 in the ``photo`` recipe)
 
 ``blend_weight=None`` lets the image choose w, as self-validation does for deep priors: a ring of
 valid input around the holes is held out of both fits, and the weight that best predicts it wins:
@@ -16,13 +17,19 @@ Measured on the real pair, the ring costs more than it tells: both fits lose the
 matter most (beside an occlusion, the far surface), and its choice is no better than the fixed mean.
 It stays a study lever. The two fits run side by side on a CPU with two threads
 (:func:`ddp_lite.method.ensemble.run_members`).
+
+``blend_fill`` f mixes in a third estimate that errs in yet other places: Levin et al.'s colorization
+fill of the input (:func:`fill_disparity`), the best classical fill on the real photograph's
+occlusions and textured blobs. The ``photo`` recipe takes the three in equal shares:
+
+    Z = (1 − f)·(w·Z_kit + (1 − w)·Z_paper) + f·Z_fill          (photo: w = ½, f = ⅓)
 """
 from __future__ import annotations
 
 import numpy as np
 from scipy import ndimage
 
-__all__ = ["BLEND_WEIGHTS", "validation_ring", "best_weight", "ring_width"]
+__all__ = ["BLEND_WEIGHTS", "validation_ring", "best_weight", "ring_width", "fill_disparity"]
 
 BLEND_WEIGHTS = (0.0, 0.25, 0.5, 0.75, 1.0)  # the kit fit's weight; 0 is the paper's fit alone
 RING_SHARE = 0.5  # the share of the ring held out: the rest keeps the holes' edges where they are
@@ -75,3 +82,22 @@ def best_weight(kit: np.ndarray, paper: np.ndarray, target: np.ndarray, ring: np
               for w in weights]
     best = min(range(len(weights)), key=lambda k: (errors[k], -weights[k]))
     return float(weights[best]), errors
+
+
+def fill_disparity(depth: np.ndarray, rgb: np.ndarray, transform) -> np.ndarray:
+    """(H, W) float32: the colorization fill of ``depth`` (H, W) metres with NaN holes, guided by ``rgb``
+    (H, W, 3) in [0, 1], in ``transform``'s normalised disparity. The fill works on inverse depth 1/z,
+    where the kit's classical fills work (linear is exact on planes there); valid pixels keep their value.
+
+    Example:
+        >>> from ddp_lite.method.disparity import DisparityTransform
+        >>> depth = np.array([[1.0, np.nan, 0.5]] * 3, np.float32)
+        >>> transform = DisparityTransform.from_depth(depth)
+        >>> z = fill_disparity(depth, np.zeros((3, 3, 3), np.float32), transform)
+        >>> bool(np.allclose(transform.to_depth(z[:, 1]), 1 / 1.5, rtol=1e-3))  # the mean of 1/1 and 1/0.5, inverted
+        True
+    """
+    from ..classical.baselines import fill_colorization
+
+    inverse = fill_colorization(1.0 / np.asarray(depth, np.float64), rgb)  # (H, W) 1/m
+    return np.asarray(transform.to_disparity(1.0 / inverse), np.float32)

@@ -14,7 +14,7 @@ checks (:mod:`ddp_lite.method.fit_inputs`), :func:`~ddp_lite.method.dip.fit_imag
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import torch
@@ -25,7 +25,7 @@ from ..core.checks import MIN_VALID_PIXELS, check_callback, check_depth, unmask
 from .config import FitConfig
 from .device import resolve_device
 from .disparity import DisparityTransform
-from .blend import best_weight, validation_ring
+from .blend import best_weight, fill_disparity, validation_ring
 from .ensemble import mean_outputs, parallel_members, run_members
 from .fit_inputs import check_fit_inputs
 from .hole_terms import HoleTerms
@@ -110,6 +110,8 @@ def complete_depth(rgb, depth, camera: Camera | None = None, neighbors=(), varia
     get_variant(variant)  # a bad name fails here, before any config is built
     config = FitConfig.for_profile(variant=variant) if config is None else config
     check_callback(callback, config.callback_every if isinstance(config, FitConfig) else None)
+    if isinstance(config, FitConfig) and config.blend_fill > 0:
+        return fit_with_fill(rgb, depth, camera, neighbors, variant, config, gt_depth, transform, callback, init)
     if isinstance(config, FitConfig) and config.blend_paper:
         return fit_blended(rgb, depth, camera, neighbors, variant, config, gt_depth, transform, callback, init)
     if not isinstance(config, FitConfig) or config.ensemble == 1:
@@ -168,6 +170,22 @@ def fit_blended(rgb, depth, camera, neighbors, variant, config, gt_depth, transf
                                                            transform.to_disparity(depth), ring)
     history["blend_weight"] = weight
     return combined_result(fits, transform, history, weights=(weight, 1.0 - weight))
+
+
+def fit_with_fill(rgb, depth, camera, neighbors, variant, config, gt_depth, transform, callback, init) -> DepthResult:
+    """``config.blend_fill`` f: the result of ``config`` without it (one fit, a blend or an ensemble) and
+    the input's colorization fill (:func:`ddp_lite.method.blend.fill_disparity`), mixed in disparity as
+    (1 − f)·Z_fit + f·Z_fill. ``history`` gets ``blend_fill``."""
+    config, depth, rgb, neighbors, gt_depth, transform = check_fit_inputs(rgb, depth, camera, neighbors, variant,
+                                                                           config, gt_depth, transform)
+    if rgb is None:
+        raise ValueError("config.blend_fill needs the colour image: pass rgb (H, W, 3), or set blend_fill=0")
+    share = config.blend_fill
+    fitted = complete_depth(rgb, depth, camera, neighbors, variant, config.replace(blend_fill=0.0), gt_depth=gt_depth,
+                            transform=transform, callback=callback, init=init)
+    disparity = ((1.0 - share) * fitted.disparity + share * fill_disparity(depth, rgb, transform)).astype(np.float32)
+    return replace(fitted, disparity=disparity, depth=transform.to_depth(disparity).astype(np.float32),
+                               history={**fitted.history, "blend_fill": share})
 
 
 def fit_once(rgb, depth, camera, neighbors, variant, config, *, gt_depth=None, transform=None, callback=None,

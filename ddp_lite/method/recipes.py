@@ -10,9 +10,9 @@ A profile (``ci``, ``class``, ``paper``; ``DDP_PROFILE``) sets the size and the 
   profile (:data:`KIT_AT`): the curvature and flatness terms in the holes, relaxed at colour edges
   (:mod:`ddp_lite.method.hole_terms`); the pixel coordinates and the blurred colour image as the net's
   input (:mod:`ddp_lite.method.nets`). At ``paper`` it is the paper's method.
-- ``photo``: for real photographs, the mean of a ``kit`` fit and a ``paper`` fit (two fits,
-  :mod:`ddp_lite.method.blend`): ahead of both on the real Middlebury pair, behind ``kit`` on the
-  rendered scenes.
+- ``photo``: for real photographs, the mean of a ``kit`` fit, a ``paper`` fit and the input's
+  colorization fill (two fits, :mod:`ddp_lite.method.blend`): ahead of each on the real Middlebury
+  pair, behind ``kit`` on the rendered scenes.
 
 Every profile runs with every recipe, so ``FitConfig.for_profile("ci", recipe="paper")`` is the
 paper's method in seconds. The quality study's other recipes are :data:`STUDY`. The numbers
@@ -84,12 +84,14 @@ RECIPES = {
     # (the colour-edge strength, the blur of an image that is not in the input) but bf16 at class, the
     # precision the net runs in, not what it optimises
     "paper": Recipe("paper", dict(smoothness=0.0, flatness=0.0, image_input=0.0, fill_input=0.0, net_input="noise",
-                                  noise_channels=16, blend_paper=False),
+                                  noise_channels=16, blend_paper=False, blend_fill=0.0),
                     "the paper's losses (Eq. 2-5) from its 16-channel noise input, nothing added", base="kit"),
-    # for real photographs: the two recipes err in different places there (the kit on occlusions, the
-    # paper on blob holes), and their mean beats both (docs/real_data.md); on the rendered scenes it costs
-    "photo": Recipe("photo", dict(blend_paper=True, blend_weight=0.5),
-                    "for real photographs: the mean of the kit's fit and the paper's, two fits", base="kit"),
+    # for real photographs: the two recipes and the colorization fill err in different places there (the
+    # kit on occlusions, the paper on blob holes, the fill where colour misleads), and their mean beats
+    # each (docs/real_data.md); on the rendered scenes it costs
+    "photo": Recipe("photo", dict(blend_paper=True, blend_weight=0.5, blend_fill=1 / 3),
+                    "for real photographs: the mean of the kit's fit, the paper's and a colorization fill, two fits",
+                    base="kit"),
 }
 
 
@@ -126,7 +128,9 @@ def describe_method(settings: dict) -> str:
             + (", the warp term only where the neighbour can see" if settings.get("warp_occlusion") else "")
             + (f", mean of {ensemble} fits" if ensemble > 1 else "")
             + ((", blended with the paper recipe's fit, " + ("weight from a held-out ring" if settings.get("blend_weight", 0.5) is None
-               else f"weight {settings.get('blend_weight', 0.5):g}")) if settings.get("blend_paper") else ""))
+               else f"weight {settings.get('blend_weight', 0.5):g}")) if settings.get("blend_paper") else "")
+            + (f", and with the input's colorization fill, share {settings['blend_fill']:.3g}"
+               if settings.get("blend_fill") else ""))
 
 
 # The quality study's other recipes (``benchmarks/bench_quality.py --recipes NAME``): name → FitConfig
