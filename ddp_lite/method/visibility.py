@@ -46,44 +46,38 @@ class Visibility(torch.nn.Module):
 
     def __init__(self, ref_cam: Camera, nbr_cam: Camera, dtype=torch.float32, device=None):
         super().__init__()
-        ref_from_nbr = np.linalg.inv(relative_pose(ref_cam, nbr_cam))
-        K = torch.tensor(ref_cam.K, dtype=torch.float64)
-        K_inv = torch.linalg.inv(K)
-        rays = (K_inv @ pixel_grid(ref_cam.height, ref_cam.width, torch.float64))  # (3, H·W), z = 1
-        self.register_buffer("K", K.to(dtype=dtype, device=device))
-        self.register_buffer("K_inv_xy", K_inv[:, :2].to(dtype=dtype, device=device))  # (3, 2): pixel steps → ray steps
-        self.register_buffer("rays", rays.reshape(1, 3, ref_cam.height, ref_cam.width).to(dtype=dtype, device=device))
-        self.register_buffer("pixels", pixel_grid(ref_cam.height, ref_cam.width, torch.float64)[:2]
-                             .reshape(1, 2, ref_cam.height, ref_cam.width).to(dtype=dtype, device=device))
-        centre = torch.tensor(ref_from_nbr[:3, 3], dtype=torch.float64)
-        self.register_buffer("centre", centre.reshape(1, 3, 1, 1).to(dtype=dtype, device=device))
-        self.register_buffer("steps", torch.arange(1, self.REACH + 1, dtype=dtype, device=device).reshape(1, -1, 1, 1, 1))
-        scale = torch.tensor([2.0 / max(ref_cam.width - 1, 1), 2.0 / max(ref_cam.height - 1, 1)], dtype=dtype)
-        self.register_buffer("to_grid", scale.reshape(1, 1, 2, 1, 1).to(device=device))
-        self.size = (ref_cam.height, ref_cam.width)
+        height, width = ref_cam.height, ref_cam.width
+        centre = torch.tensor(np.linalg.inv(relative_pose(ref_cam, nbr_cam))[:3, 3], dtype=torch.float64)  # C, ref frame
+        epipole = torch.tensor(ref_cam.K, dtype=torch.float64) @ centre  # e = K C, homogeneous
+        pixels = pixel_grid(height, width, torch.float64)[:2].reshape(2, height, width)  # (2, H, W) p
+        # P + tD (D = C - P) projects from p along depth·(e_xy - p·e_z), whatever the depth: the
+        # epipolar line's direction, the same every call, and so are the marched pixels s_k = p + k·dir
+        velocity = epipole[:2, None, None] - pixels * epipole[2]  # (2, H, W)
+        speed = velocity.norm(dim=0, keepdim=True)  # (1, H, W) |e_xy - p·e_z|
+        steps = torch.arange(1, self.REACH + 1, dtype=torch.float64).reshape(-1, 1, 1, 1)  # (N, 1, 1, 1)
+        at = pixels + steps * velocity / speed.clamp_min(1e-12)  # (N, 2, H, W)
+        inside = (at[:, 0] >= 0) & (at[:, 0] <= width - 1) & (at[:, 1] >= 0) & (at[:, 1] <= height - 1)  # (N, H, W)
+        scale = torch.tensor([2.0 / max(width - 1, 1), 2.0 / max(height - 1, 1)], dtype=torch.float64).reshape(1, 2, 1, 1)
+        grid = (at * scale - 1.0).permute(0, 2, 3, 1).reshape(1, -1, width, 2)  # (1, N·H, W, 2) for grid_sample
+        as_buffer = dict(dtype=dtype, device=device)
+        self.register_buffer("speed", speed[None].to(**as_buffer))  # (1, 1, H, W)
+        self.register_buffer("steps", steps[None, :, 0].to(**as_buffer))  # (1, N, 1, 1)
+        self.register_buffer("centre_z", centre[2].reshape(1, 1, 1, 1).to(**as_buffer))  # C_z
+        self.register_buffer("grid", grid.to(**as_buffer))
+        self.register_buffer("inside", inside[None].to(device=device))  # (1, N, H, W)
+        self.size = (height, width)
 
     @torch.no_grad()
     def forward(self, depth: torch.Tensor) -> torch.Tensor:
         """``depth`` (B, 1, H, W) metres, finite → (B, 1, H, W) bool: True where the neighbour cannot see."""
         batch, (height, width) = depth.shape[0], self.size
-        point = depth * self.rays  # (B, 3, H, W) P, with P_z = depth
-        towards = self.centre - point  # (B, 3, H, W) D = C - P
-        # P + tD projects to h(t) / h_z(t) with h(t) = K P + t K D; at t = 0 that is p, moving along
-        # velocity = (K D)_xy P_z - (K P)_xy D_z (up to a positive factor): the epipolar line's direction
-        q, dq = torch.einsum("ij,bjhw->bihw", self.K, point), torch.einsum("ij,bjhw->bihw", self.K, towards)
-        velocity = dq[:, :2] * depth - q[:, :2] * towards[:, 2:]  # (B, 2, H, W)
-        speed = velocity.norm(dim=1, keepdim=True)  # (B, 1, H, W)
-        direction = velocity / speed.clamp_min(1e-12)
-        # the segment reaches k px from p at t_k = k P_z² / (|velocity| - k P_z D_z) (none where ≤ 0),
-        # at depth z_k = P_z + t_k D_z
-        steps = self.steps[:, :, 0]  # (1, N, 1, 1)
-        denominator = speed - steps * depth * towards[:, 2:]  # (B, N, H, W)
-        t = steps * depth * depth / denominator.clamp_min(1e-12)
-        z = depth + t * towards[:, 2:]
-        at = self.pixels[:, None] + self.steps * direction[:, None]  # (B, N, 2, H, W) s_k = p + k·dir, pixels
-        grid = (at * self.to_grid - 1.0).permute(0, 1, 3, 4, 2).reshape(batch, -1, width, 2)  # (B, N·H, W, 2)
-        surface = F.grid_sample(depth, grid, mode="bilinear", padding_mode="border", align_corners=True)
-        surface = surface.reshape(batch, -1, height, width)  # (B, N, H, W) the depth map at s_k
-        inside = (at[:, :, 0] >= 0) & (at[:, :, 0] <= width - 1) & (at[:, :, 1] >= 0) & (at[:, :, 1] <= height - 1)
-        behind = inside & (denominator > 0) & (t <= 1) & (surface < z * (1.0 - self.MARGIN))
+        # with D_z = C_z - P_z, the segment reaches s_k at t_k = k P_z / (|e_xy - p·e_z| - k D_z) (none where
+        # that is ≤ 0), at depth z_k = P_z + t_k D_z
+        towards_z = self.centre_z - depth  # (B, 1, H, W) D_z
+        denominator = self.speed - self.steps * towards_z  # (B, N, H, W)
+        t = self.steps * depth / denominator.clamp_min(1e-12)
+        z = depth + t * towards_z
+        surface = F.grid_sample(depth, self.grid.expand(batch, -1, -1, -1), mode="bilinear", padding_mode="border",
+                                align_corners=True).reshape(batch, -1, height, width)  # (B, N, H, W) the depth at s_k
+        behind = self.inside & (denominator > 0) & (t <= 1) & (surface < z * (1.0 - self.MARGIN))
         return behind.any(dim=1, keepdim=True)

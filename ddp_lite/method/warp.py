@@ -81,7 +81,7 @@ class Warper(torch.nn.Module):
 
     def hidden_pixels(self, ref_depth: torch.Tensor) -> torch.Tensor:
         """(B, 1, H, W) bool: the occlusion mask of ``ref_depth``, recomputed every ``VISIBILITY_EVERY``
-        calls (the test marches 32 px per pixel, about as long as a step of a small fit) and whenever the
+        calls (the test marches 32 px per pixel: about 7 ms at 125×185 on two threads) and whenever the
         shape changes."""
         if self.hidden is None or self.calls % self.VISIBILITY_EVERY == 0 or self.hidden.shape != ref_depth.shape:
             self.hidden, self.calls = self.visibility(ref_depth.detach()), 0
