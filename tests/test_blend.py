@@ -145,6 +145,23 @@ def test_blend_fill_alone_mixes_one_fit_with_the_fill_and_needs_the_colour_image
             FitConfig(blend_fill=bad).validate()
 
 
+def test_coarse_to_fine_mixes_the_fill_into_its_full_size_result():
+    from ddp_lite.classical.baselines import fill_colorization
+    from ddp_lite.method.coarse_to_fine import complete_depth_coarse_to_fine
+
+    depth = tilted_plane(24, 32, slope=0.05)
+    depth[6:16, 8:20] = np.nan
+    rgb = np.random.default_rng(4).random(depth.shape + (3,)).astype(np.float32)
+    base = FitConfig.for_profile("ci", variant="rgbd", recipe="kit", progress=False, iterations=6)
+    mixed = complete_depth_coarse_to_fine(rgb, depth, variant="rgbd", config=base.replace(blend_fill=0.2))
+    alone = complete_depth_coarse_to_fine(rgb, depth, variant="rgbd", config=base, transform=mixed.transform)
+    fill = mixed.transform.to_disparity(1.0 / fill_colorization(1.0 / depth, rgb))
+    assert np.allclose(mixed.disparity, 0.8 * alone.disparity + 0.2 * fill, atol=1e-6)
+    assert mixed.history["blend_fill"] == 0.2 and "stage_iterations" in mixed.history
+    with pytest.raises(ValueError, match="config.blend_fill"):
+        complete_depth_coarse_to_fine(None, depth, variant="d", config=base.replace(blend_fill=0.2))
+
+
 def test_blend_paper_refuses_an_ensemble_and_a_non_bool():
     with pytest.raises(ValueError, match="config.blend_paper"):
         FitConfig(blend_paper=True, ensemble=2).validate()

@@ -28,6 +28,7 @@ ADDITIONS = (
     ("curvature in the holes", ("smoothness", "smoothness_edge", "edge_guide")),
     ("flatness in the holes", ("flatness", "flatness_reach")),
     ("the blurred colour image as input", ("image_input", "image_blur")),
+    ("a share of the colorization fill in the result", ("blend_fill",)),
 )
 
 

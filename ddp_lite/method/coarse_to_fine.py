@@ -13,7 +13,7 @@ import torch
 from ..core.camera import Camera
 from .config import FitConfig
 from .disparity import DisparityTransform
-from .fit import DepthResult, fit_once
+from .fit import DepthResult, fit_once, mixed_with_fill
 from .fit_inputs import check_fit_inputs
 from .nets import make_input
 
@@ -68,7 +68,8 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
     its weights carry over; the full-size stage sees the coarse noise upsampled bilinearly, the
     same input at twice the resolution. It runs the remaining iterations with ``config`` as
     given (auto-stop included); the learning-rate schedule continues across the two stages.
-    It is one fit: ``config.ensemble`` and ``config.blend_paper`` do not apply.
+    It is one fit: ``config.ensemble`` and ``config.blend_paper`` do not apply; ``config.blend_fill`` does,
+    to the full-size result.
 
     Args:
         rgb: (H, W, 3) float in [0, 1] (may be None for ``variant="d"``).
@@ -95,6 +96,8 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
         raise ValueError(f"coarse_fraction must lie in (0, 1), got {coarse_fraction!r}")
     config, depth, rgb, neighbors, gt_depth, transform = check_fit_inputs(
         rgb, depth, camera, neighbors, variant, config, gt_depth, transform)
+    if config.blend_fill > 0 and rgb is None:
+        raise ValueError("config.blend_fill needs the colour image: pass rgb (H, W, 3), or set blend_fill=0")
     scale = int(scale)
     H, W = depth.shape
     iterations = config.resolved_iterations(variant)
@@ -135,6 +138,7 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
                                             np.ones(len(fine.history["eval_iteration"]), int)])
     history["stage_iterations"] = np.array([coarse.iterations, fine.iterations])
     history["stage_seconds"] = np.array([coarse.seconds, fine.seconds])
-    return dataclasses.replace(fine, history=history, iterations=coarse.iterations + fine.iterations,
-                               best_iteration=coarse.iterations + fine.best_iteration,
-                               seconds=coarse.seconds + fine.seconds)
+    result = dataclasses.replace(fine, history=history, iterations=coarse.iterations + fine.iterations,
+                                 best_iteration=coarse.iterations + fine.best_iteration,
+                                 seconds=coarse.seconds + fine.seconds)
+    return mixed_with_fill(result, depth, rgb, config.blend_fill) if config.blend_fill > 0 else result

@@ -35,7 +35,7 @@ from .paper_method import PaperLoss
 from .recipes import get_recipe
 from .variants import get_variant
 
-__all__ = ["DepthResult", "complete_depth", "merge", "fit_once"]
+__all__ = ["DepthResult", "complete_depth", "merge", "fit_once", "mixed_with_fill"]
 
 
 @dataclass
@@ -180,12 +180,19 @@ def fit_with_fill(rgb, depth, camera, neighbors, variant, config, gt_depth, tran
                                                                            config, gt_depth, transform)
     if rgb is None:
         raise ValueError("config.blend_fill needs the colour image: pass rgb (H, W, 3), or set blend_fill=0")
-    share = config.blend_fill
     fitted = complete_depth(rgb, depth, camera, neighbors, variant, config.replace(blend_fill=0.0), gt_depth=gt_depth,
                             transform=transform, callback=callback, init=init)
-    disparity = ((1.0 - share) * fitted.disparity + share * fill_disparity(depth, rgb, transform)).astype(np.float32)
-    return replace(fitted, disparity=disparity, depth=transform.to_depth(disparity).astype(np.float32),
-                               history={**fitted.history, "blend_fill": share})
+    return mixed_with_fill(fitted, depth, rgb, config.blend_fill)
+
+
+def mixed_with_fill(result: DepthResult, depth: np.ndarray, rgb: np.ndarray, share: float) -> DepthResult:
+    """``result`` with ``share`` of the colorization fill of the input ``depth`` (H, W) metres (NaN holes),
+    guided by ``rgb`` (H, W, 3), mixed into its disparity: (1 − share)·Z + share·Z_fill, in the result's
+    transform (:func:`ddp_lite.method.blend.fill_disparity`). ``history`` gets ``blend_fill``."""
+    transform = result.transform
+    disparity = ((1.0 - share) * result.disparity + share * fill_disparity(depth, rgb, transform)).astype(np.float32)
+    return replace(result, disparity=disparity, depth=transform.to_depth(disparity).astype(np.float32),
+                   history={**result.history, "blend_fill": share})
 
 
 def fit_once(rgb, depth, camera, neighbors, variant, config, *, gt_depth=None, transform=None, callback=None,
