@@ -23,6 +23,10 @@ fill of the input (:func:`fill_disparity`), the best classical fill on the real 
 occlusions and textured blobs. The ``photo`` recipe takes the three in equal shares:
 
     Z = (1 − f)·(w·Z_kit + (1 − w)·Z_paper) + f·Z_fill          (photo: w = ½, f = ⅓)
+
+The ``kit`` recipe at ``class`` takes one fit and a fifth of the fill (w = 1, f = 0.2): a small share
+gains on the real pair about in proportion to f, and costs the rendered scenes about as f², since
+there the fill is the worse of the two (``docs/real_data.md``).
 """
 from __future__ import annotations
 
