@@ -228,6 +228,25 @@ def test_complete_keeps_valid_pixels_exactly_fills_the_holes_and_writes_a_previe
     assert np.isfinite(raw).all() and not np.array_equal(raw[valid], depth[valid])  # the net's own output
 
 
+def test_complete_raw_writes_the_nets_output_with_no_fill_mixed_in(tmp_path, monkeypatch):
+    import ddp_lite.method.fit as fit
+    _pair(tmp_path)
+    shares, real_complete_depth = [], fit.complete_depth
+
+    def recording(*args, **kwargs):  # the real fit, the fill share of the command's config noted
+        shares.append(kwargs["config"].blend_fill if "config" in kwargs else args[5].blend_fill)
+        return real_complete_depth(*args, **kwargs)
+
+    monkeypatch.setattr(fit, "complete_depth", recording)
+    argv = ["complete", "--rgb", str(tmp_path / "rgb.png"), "--depth", str(tmp_path / "depth.npy"),
+            "--profile", "class", "--recipe", "kit", "--variant", "rgbd", "--iterations", "3", "--max-side", "48"]
+    assert main(argv + ["--out", str(tmp_path / "kit.npy")]) == 0
+    assert shares[0] == 0.2  # class's kit mixes a fifth of the colorization fill into the fit's result
+    shares.clear()
+    assert main(argv + ["--raw", "--out", str(tmp_path / "raw.npy")]) == 0
+    assert shares == [0.0]  # --raw: the net's output alone
+
+
 def test_complete_refuses_an_implausible_scale_before_fitting_and_names_a_better_one(tmp_path, capsys):
     depth, _ = _pair(tmp_path)
     np.save(tmp_path / "mm.npy", depth * 1000)  # millimetres, read as metres

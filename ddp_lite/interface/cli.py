@@ -157,7 +157,8 @@ def build_parser() -> argparse.ArgumentParser:
                           help="fit at this longer side (px) and bring the fill back to full size in the holes "
                                "(default: the profile's image size; class 128)")
     complete.add_argument("--raw", action="store_true",
-                          help="write the net's own output everywhere (default: keep the valid input pixels exactly)")
+                          help="write the net's own output everywhere, with no classical fill mixed in "
+                               "(default: keep the valid input pixels exactly)")
     complete.add_argument("--preview", default=None,
                           help="preview figure: input, filled, holes (default: OUT's name with .preview.png)")
     complete.add_argument("--gt", default=None,

@@ -7,7 +7,8 @@ read as metres) is refused with the scale that would make it plausible.
 
 The fit runs at a working size (``--max-side``, default the profile's longer side) and its
 completed depth is brought back to full size in disparity, in the holes only: the valid input
-pixels keep their exact values (``--raw``: the net's own output everywhere), see
+pixels keep their exact values (``--raw``: the net's own output everywhere, without the share of a
+colorization fill the ``kit`` recipe mixes in at ``class``), see
 ``ddp_lite.sequences.working_size``. Then one line compares the fill with a classical one computed here at
 full size (linear interpolation; their mean absolute difference in the holes), or, with ``--gt``,
 prints the hole RMSE of DDP, linear and Navier-Stokes fills; and a preview figure (input, filled,
@@ -210,7 +211,8 @@ def complete_command(args) -> int:
     profile = get_profile(args.profile)
     config = FitConfig.for_profile(profile, variant=args.variant, recipe=args.recipe, device=args.device,
                                    seed=args.seed, max_memory_gb=args.max_memory_gb,
-                                   **({"iterations": args.iterations} if args.iterations else {}))
+                                   **({"iterations": args.iterations} if args.iterations else {}),
+                                   **({"blend_fill": 0.0} if args.raw else {}))  # the net's alone: no fill's share
     config.validate()  # --device, before the inputs are read
     rgb = _read_rgb(args.rgb)
     depth = _read_depth(args.depth, args.depth_scale)
