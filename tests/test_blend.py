@@ -126,16 +126,25 @@ def test_the_photo_recipe_is_the_mean_of_the_kit_fit_the_paper_fit_and_the_color
     assert blended.fits == 2
 
 
-def test_blend_fill_alone_mixes_one_fit_with_the_fill_and_needs_the_colour_image():
-    from ddp_lite.classical.baselines import fill_colorization
-
+def fill_case(seed):
+    """A tilted plane with one hole, a random colour image and a short `ci` config: (depth, rgb, config)."""
     depth = tilted_plane(24, 32, slope=0.05)
     depth[6:16, 8:20] = np.nan
-    rgb = np.random.default_rng(3).random(depth.shape + (3,)).astype(np.float32)
-    base = FitConfig.for_profile("ci", variant="rgbd", recipe="kit", progress=False, iterations=6)
+    rgb = np.random.default_rng(seed).random(depth.shape + (3,)).astype(np.float32)
+    return depth, rgb, FitConfig.for_profile("ci", variant="rgbd", recipe="kit", progress=False, iterations=6)
+
+
+def colorization_disparity(depth, rgb, transform):
+    """The colorization fill of 1/z, computed here from the classical fill, in ``transform``'s disparity."""
+    from ddp_lite.classical.baselines import fill_colorization
+    return transform.to_disparity(1.0 / fill_colorization(1.0 / depth, rgb))
+
+
+def test_blend_fill_alone_mixes_one_fit_with_the_fill_and_needs_the_colour_image():
+    depth, rgb, base = fill_case(3)
     mixed = complete_depth(rgb, depth, variant="rgbd", config=base.replace(blend_fill=0.25))
     alone = complete_depth(rgb, depth, variant="rgbd", config=base, transform=mixed.transform)
-    fill = mixed.transform.to_disparity(1.0 / fill_colorization(1.0 / depth, rgb))
+    fill = colorization_disparity(depth, rgb, mixed.transform)
     assert np.allclose(mixed.disparity, 0.75 * alone.disparity + 0.25 * fill, atol=1e-6)
     assert np.allclose(mixed.depth, mixed.transform.to_depth(mixed.disparity))
     with pytest.raises(ValueError, match="config.blend_fill"):
@@ -146,16 +155,12 @@ def test_blend_fill_alone_mixes_one_fit_with_the_fill_and_needs_the_colour_image
 
 
 def test_coarse_to_fine_mixes_the_fill_into_its_full_size_result():
-    from ddp_lite.classical.baselines import fill_colorization
     from ddp_lite.method.coarse_to_fine import complete_depth_coarse_to_fine
 
-    depth = tilted_plane(24, 32, slope=0.05)
-    depth[6:16, 8:20] = np.nan
-    rgb = np.random.default_rng(4).random(depth.shape + (3,)).astype(np.float32)
-    base = FitConfig.for_profile("ci", variant="rgbd", recipe="kit", progress=False, iterations=6)
+    depth, rgb, base = fill_case(4)
     mixed = complete_depth_coarse_to_fine(rgb, depth, variant="rgbd", config=base.replace(blend_fill=0.2))
     alone = complete_depth_coarse_to_fine(rgb, depth, variant="rgbd", config=base, transform=mixed.transform)
-    fill = mixed.transform.to_disparity(1.0 / fill_colorization(1.0 / depth, rgb))
+    fill = colorization_disparity(depth, rgb, mixed.transform)
     assert np.allclose(mixed.disparity, 0.8 * alone.disparity + 0.2 * fill, atol=1e-6)
     assert mixed.history["blend_fill"] == 0.2 and "stage_iterations" in mixed.history
     with pytest.raises(ValueError, match="config.blend_fill"):

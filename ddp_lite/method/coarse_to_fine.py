@@ -96,8 +96,6 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
         raise ValueError(f"coarse_fraction must lie in (0, 1), got {coarse_fraction!r}")
     config, depth, rgb, neighbors, gt_depth, transform = check_fit_inputs(
         rgb, depth, camera, neighbors, variant, config, gt_depth, transform)
-    if config.blend_fill > 0 and rgb is None:
-        raise ValueError("config.blend_fill needs the colour image: pass rgb (H, W, 3), or set blend_fill=0")
     scale = int(scale)
     H, W = depth.shape
     iterations = config.resolved_iterations(variant)

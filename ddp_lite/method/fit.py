@@ -178,8 +178,6 @@ def fit_with_fill(rgb, depth, camera, neighbors, variant, config, gt_depth, tran
     (1 − f)·Z_fit + f·Z_fill. ``history`` gets ``blend_fill``."""
     config, depth, rgb, neighbors, gt_depth, transform = check_fit_inputs(rgb, depth, camera, neighbors, variant,
                                                                            config, gt_depth, transform)
-    if rgb is None:
-        raise ValueError("config.blend_fill needs the colour image: pass rgb (H, W, 3), or set blend_fill=0")
     fitted = complete_depth(rgb, depth, camera, neighbors, variant, config.replace(blend_fill=0.0), gt_depth=gt_depth,
                             transform=transform, callback=callback, init=init)
     return mixed_with_fill(fitted, depth, rgb, config.blend_fill)
