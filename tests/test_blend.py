@@ -5,7 +5,8 @@ import pytest
 import torch
 
 from ddp_lite import FitConfig, complete_depth
-from ddp_lite.method.blend import BLEND_WEIGHTS, best_weight, ring_width, validation_ring
+from ddp_lite.method.blend import (BLEND_WEIGHTS, FILL_SHARES, best_fill_share, best_weight, fill_holdout, ring_width,
+                                  validation_ring)
 from ddp_lite.method.recipes import get_recipe
 from conftest import TINY, tilted_plane
 
@@ -165,6 +166,64 @@ def test_coarse_to_fine_mixes_the_fill_into_its_full_size_result():
     assert mixed.history["blend_fill"] == 0.2 and "stage_iterations" in mixed.history
     with pytest.raises(ValueError, match="config.blend_fill"):
         complete_depth_coarse_to_fine(None, depth, variant="d", config=base.replace(blend_fill=0.2))
+    chosen = complete_depth_coarse_to_fine(rgb, depth, variant="rgbd", config=base.replace(blend_fill=None))
+    assert chosen.history["blend_fill"] in FILL_SHARES and len(chosen.history["blend_fill_errors"]) == len(FILL_SHARES)
+
+
+def test_best_fill_share_is_the_least_squares_share_on_the_grid():
+    rng = np.random.default_rng(5)
+    truth = rng.random((20, 20))
+    fit, fill = truth + 0.15, truth - 0.6  # (1 − f)·0.15 − f·0.6 is 0 at f = 0.2
+    held = rng.random((20, 20)) < 0.3
+    share, errors = best_fill_share(fit, fill, truth, held)
+    assert share == 0.2
+    assert np.allclose(errors, [abs((1 - f) * 0.15 - f * 0.6) for f in FILL_SHARES])  # RMSE of a constant offset
+    assert best_fill_share(truth + 1.0, truth + 1.0, truth, held)[0] == 0.0  # a tie goes to the fit
+    assert best_fill_share(truth + 1.0, truth, truth, held)[0] == max(FILL_SHARES)  # at most the grid's largest
+
+
+def test_the_fill_holdout_is_blobs_of_one_twentieth_of_the_valid_pixels():
+    from scipy import ndimage
+
+    valid = np.ones((96, 128), bool)
+    valid[30:60, 30:90] = False
+    held = fill_holdout(valid, seed=1)
+    assert not (held & ~valid).any() and held.sum() == pytest.approx(0.05 * valid.sum(), rel=0.02)
+    labels, count = ndimage.label(held)
+    assert count < held.sum() / 10  # patches of tens of pixels, not scattered ones
+    assert np.array_equal(held, fill_holdout(valid, seed=1)) and not np.array_equal(held, fill_holdout(valid, seed=2))
+
+
+def test_blend_fill_none_chooses_the_share_on_depth_held_out_of_the_fit():
+    depth, rgb, base = fill_case(6)
+    given = depth.copy()
+    chosen = complete_depth(rgb, depth, variant="rgbd", config=base.replace(blend_fill=None))
+    assert np.array_equal(depth, given, equal_nan=True)  # the caller's array is untouched
+    # by hand: the blobs held out of the fit, the fill of what is left, the share from the blobs
+    held = fill_holdout(np.isfinite(depth), seed=base.seed)
+    held_out = np.where(held, np.nan, depth)
+    alone = complete_depth(rgb, held_out, variant="rgbd", config=base, transform=chosen.transform)
+    target = chosen.transform.to_disparity(depth)
+    fill_held = colorization_disparity(held_out, rgb, chosen.transform)
+    errors = [np.sqrt(np.mean(((1 - f) * alone.disparity[held] + f * fill_held[held] - target[held]) ** 2))
+              for f in FILL_SHARES]
+    share = chosen.history["blend_fill"]
+    assert held.sum() > 10 and share in FILL_SHARES
+    assert errors[FILL_SHARES.index(share)] == pytest.approx(min(errors), rel=1e-6)
+    assert np.allclose(chosen.history["blend_fill_errors"], errors, rtol=1e-5)
+    # the result mixes that share of the fill of the *whole* input into the fit without the blobs
+    fill = colorization_disparity(depth, rgb, chosen.transform)
+    assert np.allclose(chosen.disparity, (1 - share) * alone.disparity + share * fill, atol=1e-6)
+
+
+def test_blend_fill_none_without_enough_depth_to_hold_out_is_the_fit_alone():
+    depth = np.full((24, 32), np.nan, np.float32)
+    depth[:4, :6] = 2.0  # 24 valid pixels: too few to hold any out
+    rgb = np.random.default_rng(0).random(depth.shape + (3,)).astype(np.float32)
+    config = FitConfig(**TINY, iterations=5)
+    alone = complete_depth(rgb, depth, variant="rgbd", config=config)
+    chosen = complete_depth(rgb, depth, variant="rgbd", config=config.replace(blend_fill=None))
+    assert np.array_equal(alone.disparity, chosen.disparity) and chosen.history["blend_fill"] == 0.0
 
 
 def test_blend_paper_refuses_an_ensemble_and_a_non_bool():

@@ -253,6 +253,8 @@ def complete_command(args) -> int:
         from ..evaluation.fusion import fuse_depths, save_ply
         save_ply(fuse_depths([filled], [camera], [rgb], min_views=0), _ply_path(args))  # one view: every pixel once
     print(comparison)
-    print(f"filled {holes.mean():.1%} holes in {time.perf_counter() - start:.1f} s (the fit {result.seconds:.1f} s) "
+    share = result.history.get("blend_fill", 0.0)
+    print(f"filled {holes.mean():.1%} holes in {time.perf_counter() - start:.1f} s (the fit {result.seconds:.1f} s"
+          + (f", with a {share:.0%} share of the colorization fill" if share else "") + ") "
           f"→ {args.out}; preview {_preview_path(args)}" + (f"; point cloud {_ply_path(args)}" if camera else ""))
     return 0

@@ -24,19 +24,31 @@ occlusions and textured blobs. The ``photo`` recipe takes the three in equal sha
 
     Z = (1 − f)·(w·Z_kit + (1 − w)·Z_paper) + f·Z_fill          (photo: w = ½, f = ⅓)
 
-The ``kit`` recipe at ``class`` takes one fit and a fifth of the fill (w = 1, f = 0.2): a small share
-gains on the real pair about in proportion to f, and costs the rendered scenes about as f², since
-there the fill is the worse of the two (``docs/real_data.md``).
+``blend_fill=None`` lets the image choose f, on valid depth the fit never saw: 5 % of the valid
+pixels, in smooth blobs like holes, are held out of the fit (and of a fill computed for the choice),
+and the share that best predicts them wins:
+
+    B  = blobs of valid pixels (5 %), held out of the fit and of the fill        fill_holdout
+    f* = argmin_{f ∈ {0, 0.1, …, 0.5}}  RMSE_B( (1 − f)·Z_fit + f·Z_fill − Z_in )    best_fill_share
+
+The result mixes f* of the fill of the *whole* input into that fit. f stays at most ½, so the result
+is mostly the network's. On the real photograph the choice is high (the fill predicts the held-out
+blobs better, as it does the holes), on the rendered scenes low; the blobs, unlike a ring around
+the holes, cost the fit almost nothing (``docs/real_data.md``). The ``kit`` recipe at ``class``
+chooses f this way.
 """
 from __future__ import annotations
 
 import numpy as np
 from scipy import ndimage
 
-__all__ = ["BLEND_WEIGHTS", "validation_ring", "best_weight", "ring_width", "fill_disparity"]
+__all__ = ["BLEND_WEIGHTS", "FILL_SHARES", "validation_ring", "best_weight", "ring_width", "fill_disparity",
+           "fill_holdout", "best_fill_share"]
 
 BLEND_WEIGHTS = (0.0, 0.25, 0.5, 0.75, 1.0)  # the kit fit's weight; 0 is the paper's fit alone
 RING_SHARE = 0.5  # the share of the ring held out: the rest keeps the holes' edges where they are
+FILL_SHARES = (0.0, 0.1, 0.2, 0.3, 0.4, 0.5)  # the fill's shares blend_fill=None chooses among: the fit keeps half
+FILL_HOLDOUT = 0.05  # the share of the valid pixels held out to choose it
 
 
 def ring_width(shape) -> int:
@@ -105,3 +117,34 @@ def fill_disparity(depth: np.ndarray, rgb: np.ndarray, transform) -> np.ndarray:
 
     inverse = fill_colorization(1.0 / np.asarray(depth, np.float64), rgb)  # (H, W) 1/m
     return np.asarray(transform.to_disparity(1.0 / inverse), np.float32)
+
+
+def fill_holdout(valid: np.ndarray, seed: int = 0) -> np.ndarray:
+    """(H, W) bool: the valid pixels held out to choose the fill's share, ``FILL_HOLDOUT`` of them in
+    smooth random blobs (seeded; :func:`ddp_lite.method.loop.holdout_mask` with ``shape="blobs"``).
+    Blobs, not scattered pixels: a scattered pixel is predicted from its neighbours by any smooth fit.
+
+    Example:
+        >>> valid = np.ones((48, 64), bool); valid[20:28, 20:40] = False
+        >>> held = fill_holdout(valid, seed=0)
+        >>> bool((held & ~valid).any()), round(float(held.sum() / valid.sum()), 2)
+        (False, 0.05)
+    """
+    from .loop import holdout_mask
+
+    return holdout_mask(np.asarray(valid, bool), FILL_HOLDOUT, seed + 777, "blobs")
+
+
+def best_fill_share(fit: np.ndarray, fill: np.ndarray, target: np.ndarray, heldout: np.ndarray,
+                    shares=FILL_SHARES) -> tuple[float, list[float]]:
+    """The share f in (1 − f)·fit + f·fill whose RMSE against ``target`` on ``heldout`` is least (ties:
+    the smaller f, the fit's), and the RMSE of every share. All (H, W), one unit.
+
+    Example:
+        >>> target = np.zeros((2, 2)); heldout = np.ones((2, 2), bool)
+        >>> best_fill_share(target + 1.0, target - 1.0, target, heldout, shares=(0.0, 0.25, 0.5))
+        (0.5, [1.0, 0.5, 0.0])
+    """
+    _, errors = best_weight(fit, fill, target, heldout, [1.0 - f for f in shares])
+    best = min(range(len(shares)), key=lambda k: (errors[k], shares[k]))
+    return float(shares[best]), errors

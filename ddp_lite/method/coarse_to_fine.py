@@ -13,7 +13,7 @@ import torch
 from ..core.camera import Camera
 from .config import FitConfig
 from .disparity import DisparityTransform
-from .fit import DepthResult, fit_once, mixed_with_fill
+from .fit import DepthResult, fit_once, with_fill
 from .fit_inputs import check_fit_inputs
 from .nets import make_input
 
@@ -69,7 +69,8 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
     same input at twice the resolution. It runs the remaining iterations with ``config`` as
     given (auto-stop included); the learning-rate schedule continues across the two stages.
     It is one fit: ``config.ensemble`` and ``config.blend_paper`` do not apply; ``config.blend_fill`` does,
-    to the full-size result.
+    to the full-size result (None: both stages fit without the held-out blobs that choose the share,
+    as :func:`~ddp_lite.method.fit.with_fill` does for :func:`complete_depth`).
 
     Args:
         rgb: (H, W, 3) float in [0, 1] (may be None for ``variant="d"``).
@@ -96,6 +97,10 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
         raise ValueError(f"coarse_fraction must lie in (0, 1), got {coarse_fraction!r}")
     config, depth, rgb, neighbors, gt_depth, transform = check_fit_inputs(
         rgb, depth, camera, neighbors, variant, config, gt_depth, transform)
+    if config.blend_fill != 0:  # the fill's share mixes into the full-size result, and may hold out depth to choose it
+        return with_fill(lambda held_out: complete_depth_coarse_to_fine(
+            rgb, held_out, camera, neighbors, variant, config.replace(blend_fill=0.0), gt_depth, transform,
+            coarse_fraction, scale), depth, rgb, config)
     scale = int(scale)
     H, W = depth.shape
     iterations = config.resolved_iterations(variant)
@@ -139,4 +144,4 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
     result = dataclasses.replace(fine, history=history, iterations=coarse.iterations + fine.iterations,
                                  best_iteration=coarse.iterations + fine.best_iteration,
                                  seconds=coarse.seconds + fine.seconds)
-    return mixed_with_fill(result, depth, rgb, config.blend_fill) if config.blend_fill > 0 else result
+    return result

@@ -64,7 +64,8 @@ class FitConfig:
     ensemble: int = 1  # fits with seeds seed, seed+1, ...; their disparities are averaged
     blend_paper: bool = False  # also fit the paper's recipe and blend the two fits (method.blend)
     blend_weight: float | None = 0.5  # this config's fit's weight in that blend; None: chosen on a held-out ring
-    blend_fill: float = 0.0  # share of the input's colorization fill in the final disparity (method.blend; 0: none)
+    blend_fill: float | None = 0.0  # share of the input's colorization fill in the final disparity (method.blend;
+    # 0: none; None: chosen on held-out blobs of the valid input)
     smoothness: float = 0.0  # weight of an edge-aware second-order smoothness of disparity in the holes (0: the paper)
     smoothness_edge: float = 10.0  # how strongly colour edges relax both hole terms: exp(-edge · |∇I|)
     edge_guide: str = "grey"  # |∇I| of the grey image, or "rgb": the largest over the three channels
@@ -189,7 +190,8 @@ class FitConfig:
                              f"is not averaged with more), got ensemble={self.ensemble}")
         if self.blend_weight is not None:
             check_real(self.blend_weight, "config.blend_weight", 0.0, 1.0)
-        check_real(self.blend_fill, "config.blend_fill", 0.0, 1.0, high_open=True)  # 1 would be the fill alone
+        if self.blend_fill is not None:
+            check_real(self.blend_fill, "config.blend_fill", 0.0, 1.0, high_open=True)  # 1 would be the fill alone
         if self.flatness_reach is not None:
             check_real(self.flatness_reach, "config.flatness_reach", 0.0, None)
         if self.step_reach is not None:

@@ -57,15 +57,19 @@ def loss_equation(config, variant: str) -> str:
                                       if added else []))
     equation = f"\\min_\\theta\\ {loss},\\quad {outputs} = f_\\theta({net_input})"
     paper_fit, fill = getattr(config, "blend_paper", False), getattr(config, "blend_fill", 0.0)
-    if paper_fit or fill > 0:  # fits and a fill, blended (method.blend)
+    if paper_fit or fill != 0:  # fits and a fill, blended (method.blend)
         w = config.blend_weight if paper_fit else 1.0
-        if w is None:
+        if fill is None:  # the share chosen on held-out depth
+            fits = "Z" if w == 1.0 else ("(w^* Z + (1 - w^*)\\,Z_{\\mathrm{paper}})" if w is None else
+                                         f"({w:.3g}\\,Z + {1 - w:.3g}\\,Z_{{\\mathrm{{paper}}}})")
+            mix = f"(1 - f^*)\\,{fits} + f^*\\,\\mathrm{{fill}}(Z_{{\\mathrm{{in}}}})"
+        elif w is None:
             mix = "w^* Z + (1 - w^*)\\,Z_{\\mathrm{paper}}"
+            if fill > 0:
+                mix = f"{1 - fill:.3g}\\,({mix}) + {fill:.3g}\\,\\mathrm{{fill}}(Z_{{\\mathrm{{in}}}})"
         else:
             mix = " + ".join(f"{share:.3g}\\,{term}" for share, term in
                              (((1 - fill) * w, "Z"), ((1 - fill) * (1 - w), "Z_{\\mathrm{paper}}"),
                               (fill, "\\mathrm{fill}(Z_{\\mathrm{in}})")) if share > 0)
-        if w is None and fill > 0:
-            mix = f"{1 - fill:.3g}\\,({mix}) + {fill:.3g}\\,\\mathrm{{fill}}(Z_{{\\mathrm{{in}}}})"
         equation += f",\\quad \\underbrace{{\\hat Z = {mix}}}_{{\\text{{not in the paper}}}}"
     return equation

@@ -25,7 +25,7 @@ from ..core.checks import MIN_VALID_PIXELS, check_callback, check_depth, unmask
 from .config import FitConfig
 from .device import resolve_device
 from .disparity import DisparityTransform
-from .blend import best_weight, fill_disparity, validation_ring
+from .blend import best_fill_share, best_weight, fill_disparity, fill_holdout, validation_ring
 from .ensemble import mean_outputs, parallel_members, run_members
 from .fit_inputs import check_fit_inputs
 from .hole_terms import HoleTerms
@@ -35,7 +35,7 @@ from .paper_method import PaperLoss
 from .recipes import get_recipe
 from .variants import get_variant
 
-__all__ = ["DepthResult", "complete_depth", "merge", "fit_once", "mixed_with_fill"]
+__all__ = ["DepthResult", "complete_depth", "merge", "fit_once", "mixed_with_fill", "with_fill"]
 
 
 @dataclass
@@ -110,7 +110,7 @@ def complete_depth(rgb, depth, camera: Camera | None = None, neighbors=(), varia
     get_variant(variant)  # a bad name fails here, before any config is built
     config = FitConfig.for_profile(variant=variant) if config is None else config
     check_callback(callback, config.callback_every if isinstance(config, FitConfig) else None)
-    if isinstance(config, FitConfig) and config.blend_fill > 0:
+    if isinstance(config, FitConfig) and config.blend_fill != 0:
         return fit_with_fill(rgb, depth, camera, neighbors, variant, config, gt_depth, transform, callback, init)
     if isinstance(config, FitConfig) and config.blend_paper:
         return fit_blended(rgb, depth, camera, neighbors, variant, config, gt_depth, transform, callback, init)
@@ -173,14 +173,38 @@ def fit_blended(rgb, depth, camera, neighbors, variant, config, gt_depth, transf
 
 
 def fit_with_fill(rgb, depth, camera, neighbors, variant, config, gt_depth, transform, callback, init) -> DepthResult:
-    """``config.blend_fill`` f: the result of ``config`` without it (one fit, a blend or an ensemble) and
-    the input's colorization fill (:func:`ddp_lite.method.blend.fill_disparity`), mixed in disparity as
-    (1 − f)·Z_fit + f·Z_fill. ``history`` gets ``blend_fill``."""
+    """``config.blend_fill``: the result of ``config`` without it (one fit, a blend or an ensemble) with a
+    share of the input's colorization fill mixed in (:func:`with_fill`)."""
     config, depth, rgb, neighbors, gt_depth, transform = check_fit_inputs(rgb, depth, camera, neighbors, variant,
                                                                            config, gt_depth, transform)
-    fitted = complete_depth(rgb, depth, camera, neighbors, variant, config.replace(blend_fill=0.0), gt_depth=gt_depth,
-                            transform=transform, callback=callback, init=init)
-    return mixed_with_fill(fitted, depth, rgb, config.blend_fill)
+    def fit(held_out: np.ndarray) -> DepthResult:
+        return complete_depth(rgb, held_out, camera, neighbors, variant, config.replace(blend_fill=0.0),
+                              gt_depth=gt_depth, transform=transform, callback=callback, init=init)
+    return with_fill(fit, depth, rgb, config)
+
+
+def with_fill(fit, depth: np.ndarray, rgb: np.ndarray, config: FitConfig) -> DepthResult:
+    """``fit(depth) -> DepthResult`` with ``config.blend_fill`` f of the colorization fill of ``depth`` (H, W)
+    metres (NaN holes) mixed in (:func:`mixed_with_fill`). f = None: ``fit`` runs on ``depth`` with
+    blobs of its valid pixels held out (:func:`~ddp_lite.method.blend.fill_holdout`), and f is the share
+    that best predicts them against a fill of the same held-out input
+    (:func:`~ddp_lite.method.blend.best_fill_share`); ``history`` gets ``blend_fill_errors`` (RMSE per
+    share, normalised disparity). Too little valid depth to hold any out: the fit alone (f = 0)."""
+    share = config.blend_fill
+    if share is not None:
+        return mixed_with_fill(fit(depth), depth, rgb, share)
+    valid = np.isfinite(depth)
+    heldout = fill_holdout(valid, config.seed)
+    if heldout.sum() < MIN_VALID_PIXELS or (valid & ~heldout).sum() < MIN_VALID_PIXELS:
+        return mixed_with_fill(fit(depth), depth, rgb, 0.0)
+    held_out = np.where(heldout, np.nan, depth).astype(np.float32)
+    fitted = fit(held_out)
+    transform = fitted.transform
+    share, errors = best_fill_share(fitted.disparity, fill_disparity(held_out, rgb, transform),
+                                    transform.to_disparity(depth), heldout)
+    result = mixed_with_fill(fitted, depth, rgb, share)
+    result.history["blend_fill_errors"] = errors
+    return result
 
 
 def mixed_with_fill(result: DepthResult, depth: np.ndarray, rgb: np.ndarray, share: float) -> DepthResult:
@@ -188,7 +212,9 @@ def mixed_with_fill(result: DepthResult, depth: np.ndarray, rgb: np.ndarray, sha
     guided by ``rgb`` (H, W, 3), mixed into its disparity: (1 − share)·Z + share·Z_fill, in the result's
     transform (:func:`ddp_lite.method.blend.fill_disparity`). ``history`` gets ``blend_fill``."""
     transform = result.transform
-    disparity = ((1.0 - share) * result.disparity + share * fill_disparity(depth, rgb, transform)).astype(np.float32)
+    disparity = result.disparity
+    if share > 0:  # (share 0 leaves the fit's output as it is, bit for bit)
+        disparity = ((1.0 - share) * disparity + share * fill_disparity(depth, rgb, transform)).astype(np.float32)
     return replace(result, disparity=disparity, depth=transform.to_depth(disparity).astype(np.float32),
                    history={**result.history, "blend_fill": share})
 

@@ -104,7 +104,7 @@ def check_fit_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth, t
     H, W = depth.shape
     check_input_size(config.net, config.channels, H, W)
     rgb = check_image(rgb, "rgb", (H, W)) if spec.uses_rgb or rgb is not None else None
-    if config.blend_fill > 0 and rgb is None:  # the fill is guided by the colour image
+    if config.blend_fill != 0 and rgb is None:  # the fill is guided by the colour image (None: a share chosen)
         raise ValueError("config.blend_fill needs the colour image: pass rgb (H, W, 3), or set blend_fill=0")
     neighbors = _check_neighbors(neighbors)
     if camera is not None and not isinstance(camera, Camera):

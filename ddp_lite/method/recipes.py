@@ -134,8 +134,10 @@ def describe_method(settings: dict) -> str:
             + (f", mean of {ensemble} fits" if ensemble > 1 else "")
             + ((", blended with the paper recipe's fit, " + ("weight from a held-out ring" if settings.get("blend_weight", 0.5) is None
                else f"weight {settings.get('blend_weight', 0.5):g}")) if settings.get("blend_paper") else "")
-            + (f", and with the input's colorization fill, share {settings['blend_fill']:.3g} (not for depth-only)"
-               if settings.get("blend_fill") else ""))
+            + (", and with the input's colorization fill, " + (
+                "its share (0–0.5) chosen on held-out blobs of the valid depth" if settings["blend_fill"] is None
+                else f"share {settings['blend_fill']:.3g}") + " (not for depth-only)"
+               if settings.get("blend_fill", 0.0) != 0 else ""))
 
 
 # The quality study's other recipes (``benchmarks/bench_quality.py --recipes NAME``): name → FitConfig
@@ -250,6 +252,7 @@ STUDY = {
     "step6": dict(step_reach=6.0),  # ... within 6 px (occlusion bands are 2-10 px wide at 125×185)
     "blend-ring": dict(blend_paper=True, blend_weight=None),  # the photo recipe's blend, its weight from a held-out ring
     "occl": dict(warp_occlusion=True),  # the warp term skips the pixels the neighbour cannot see (method.visibility)
+    "fill-chosen": dict(blend_fill=None),  # the fill's share (0-0.5) chosen on held-out blobs of the valid depth
 }
 # every recipe above ran before `class` mixed a share of the colorization fill into its result
 STUDY = {name: {"blend_fill": 0.0, **overrides} for name, overrides in STUDY.items()}
