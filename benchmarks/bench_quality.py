@@ -14,6 +14,8 @@ The suite is fixed (cases are never dropped because DDP loses on them):
 - the real Middlebury Motorcycle pair (``ddp_lite.evaluation.real_cases``) pooled to 125×185 (``motorcycle-4``)
   and 250×370 (``motorcycle-2``): three blob patterns, real SGBM holes, left-right-check (occlusion)
   holes; the right view as the warp loss's neighbour. These keep their own size whatever the profile.
+- with ``--middlebury FOLDER ...``, the same five hole kinds on other Middlebury 2014 pairs (``data_fetch``
+  fetches them; ``middlebury:FOLDER-F/holes``), pooled by F to about twice the profile's pixels.
 SGM runs at 3× the working size below 96 rows and keeps each block's centre (as the notebooks do).
 ``--suite synthetic`` (the default), ``real`` (motorcycle-4), ``real-half`` (motorcycle-2), ``all``
 (synthetic and motorcycle-4). The report prints each size apart, then every recipe over all its cases.
@@ -45,7 +47,7 @@ from ddp_lite import baselines  # noqa: E402
 from ddp_lite.evaluation.experiments import Case, make_case, sgm_depth_at_scale  # noqa: E402
 from ddp_lite.classical.holes import random_holes  # noqa: E402
 from ddp_lite.data.middlebury import load_middlebury, make_middlebury_fixture  # noqa: E402
-from ddp_lite.evaluation.real_cases import REAL_HOLES, make_real_case  # noqa: E402
+from ddp_lite.evaluation.real_cases import REAL_HOLES, factor_for_profile, make_real_case  # noqa: E402
 from ddp_lite.method.recipes import RECIPES as KIT_RECIPES, STUDY  # noqa: E402
 from ddp_lite.data.resample import resize_scene  # noqa: E402
 from ddp_lite.world.scenes import SCENES  # noqa: E402
@@ -66,8 +68,10 @@ def organic_scenes() -> tuple[str, ...]:
 
 
 def suite(quick: bool = False, kind: str = "synthetic") -> list[str]:
-    """The case names of a suite: ``synthetic``, ``real`` (125×185), ``real-half`` (250×370) or ``all``."""
+    """The case names of a suite: ``synthetic``, ``real`` (125×185), ``real-half`` (250×370), ``all`` or ``none``."""
     real = {factor: [f"motorcycle-{factor}/{holes}" for holes in REAL_HOLES] for factor in (4, 2)}
+    if kind == "none":
+        return []
     if kind in ("real", "real-half"):
         return real[4 if kind == "real" else 2]
     names = [f"{scene}/{holes}" for scene in NAMED + organic_scenes() for holes in HOLES] + ["fixture/sgm-dense"]
@@ -77,12 +81,29 @@ def suite(quick: bool = False, kind: str = "synthetic") -> list[str]:
     return names + (real[4] if kind == "all" else [])
 
 
+MIDDLEBURY = "middlebury:"  # the prefix of the cases of other Middlebury pairs: middlebury:FOLDER-F/holes
+
+
+def middlebury_cases(folders, profile) -> list[str]:
+    """The real cases of other Middlebury 2014 pairs: each folder's ``REAL_HOLES``, pooled by the factor
+    that brings its image to about twice the profile's pixels."""
+    return [f"{MIDDLEBURY}{folder}-{factor_for_profile(profile, load_middlebury(folder)[0].depth.shape)}/{holes}"
+            for folder in folders for holes in REAL_HOLES]
+
+
+def is_real(name: str) -> bool:
+    """Whether a case is a real photograph (Motorcycle or another Middlebury pair)."""
+    return name.startswith(("motorcycle", MIDDLEBURY))
+
+
 def build_case(name: str, profile) -> tuple[Case, float]:
     """The case ``scene/holes`` at the profile's size and its f·B (px · m) for disparity in pixels."""
-    scene_name, holes = name.split("/")
+    scene_name, holes = name.rsplit("/", 1)
     H, W = profile.size
-    if scene_name.startswith("motorcycle-"):
-        case = make_real_case(holes, factor=int(scene_name.split("-")[1]))
+    if scene_name.startswith(("motorcycle-", MIDDLEBURY)):
+        folder, factor = scene_name.rsplit("-", 1)
+        case = make_real_case(holes, factor=int(factor),
+                              scene=folder[len(MIDDLEBURY):] if folder.startswith(MIDDLEBURY) else None)
         return case, case.fb
     if scene_name == "fixture":
         with tempfile.TemporaryDirectory(prefix="ddp-quality-") as tmp:
@@ -147,7 +168,7 @@ def _split_top(body: str) -> list[str]:
 
 def run(args) -> None:
     profile = profile_from_args(args)
-    names = args.cases or suite(args.quick, args.suite)
+    names = (args.cases or suite(args.quick, args.suite)) + middlebury_cases(args.middlebury, profile)
     lane, lanes = (int(v) for v in args.lane.split("/"))
     recipes = [parse_recipe(r) for r in args.recipes]
     out = open(args.out, "a") if args.out else None
@@ -321,8 +342,8 @@ def report_together(rows: list[dict]) -> None:
     print("\n=== together: mean ratio to the best classical fill (each case at its own size) ===\n"
           + header + "\n" + "-" * len(header))
     for (recipe, variant), per_case in sorted(ratios.items()):
-        real = [v for (c, _), v in per_case.items() if c.startswith("motorcycle")]
-        synthetic = [v for (c, _), v in per_case.items() if not c.startswith("motorcycle")]
+        real = [v for (c, _), v in per_case.items() if is_real(c)]
+        synthetic = [v for (c, _), v in per_case.items() if not is_real(c)]
         mean = lambda x: np.mean(x) if x else np.nan
         print(f"{recipe:<18}{variant:<11}{mean(synthetic):>10.3f}{len(synthetic):>4}{mean(real):>8.3f}{len(real):>4}"
               f"{(max(real) if real else np.nan):>9.3f}{mean(synthetic + real):>8.3f}")
@@ -385,8 +406,12 @@ def main() -> None:
     add_profile_args(parser)
     parser.add_argument("--quick", action="store_true", help="a small subset of the suite, for iterating")
     parser.add_argument("--cases", nargs="+", help="case names (scene/holes); default: the whole suite")
-    parser.add_argument("--suite", choices=("synthetic", "real", "real-half", "all"), default="synthetic",
-                        help="which cases (the real ones: the Middlebury Motorcycle pair at 125×185 or 250×370)")
+    parser.add_argument("--suite", choices=("synthetic", "real", "real-half", "all", "none"), default="synthetic",
+                        help="which cases (the real ones: the Middlebury Motorcycle pair at 125×185 or 250×370; "
+                             "none: only --cases and --middlebury)")
+    parser.add_argument("--middlebury", nargs="+", default=[], metavar="FOLDER",
+                        help="other Middlebury 2014 pairs (im0/im1.png, disp0.pfm, calib.txt): their five real hole "
+                             "kinds join the suite")
     parser.add_argument("--recipes", nargs="+", default=["default"])
     parser.add_argument("--variants", nargs="+", default=["rgbd", "rgbd+warp"])
     parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1])

@@ -21,3 +21,22 @@ def test_report_pairs_each_recipe_with_the_default_on_the_same_fits(tmp_path, ca
     line = next(l for l in capsys.readouterr().out.splitlines() if l.startswith("x ") and "±" in l)
     # differences -0.5 and 0: mean -0.25, standard error 0.25; log ratios ln 0.5 and 0: -0.347 ± 0.347
     assert line.split() == ["x", "rgbd", "2", "-0.250", "±", "0.250", "-0.347", "±", "0.347", "1/2"]
+
+
+def test_other_middlebury_pairs_join_the_suite_as_real_cases(tmp_path):
+    import numpy as np
+
+    from ddp_lite.data.middlebury import make_middlebury_fixture
+    from ddp_lite.evaluation.real_cases import REAL_HOLES, make_real_case
+    from ddp_lite.method.profiles import get_profile
+
+    folder = make_middlebury_fixture(tmp_path / "Desk", size=(96, 128), seed=2)
+    names = bench_quality.middlebury_cases([str(folder)], get_profile("ci"))
+    # 96×128 holds 12288 pixels; ci's 48×64 doubled is 6144, so the pair is pooled by 2
+    assert names == [f"middlebury:{folder}-2/{holes}" for holes in REAL_HOLES]
+    assert all(bench_quality.is_real(n) for n in names) and not bench_quality.is_real("hills/blobs")
+    case, fb = bench_quality.build_case(names[0], get_profile("ci"))
+    expected = make_real_case("blobs-1", factor=2, scene=folder)
+    assert case.depth.shape == (48, 64) and fb == expected.fb
+    assert np.array_equal(case.depth, expected.depth, equal_nan=True)
+    assert bench_quality.suite(kind="none") == []

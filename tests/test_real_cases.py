@@ -98,3 +98,45 @@ def test_the_pair_written_in_middlebury_format_reads_back_as_loaded(tmp_path, mo
     np.testing.assert_array_equal(read[0].rgb, motorcycle[0].rgb)
     np.testing.assert_allclose(read[0].depth, motorcycle[0].depth, rtol=1e-6)  # NaN where unknown, in both
     np.testing.assert_allclose(read.right[0].camera.K, motorcycle.right[0].camera.K)
+
+
+def test_another_middlebury_folder_gives_the_same_cases_as_the_pair_it_holds(tmp_path):
+    from ddp_lite.data.middlebury import write_motorcycle_folder
+
+    folder = write_motorcycle_folder(tmp_path / "Motorcycle")  # the pair, read back from Middlebury's file format
+    for holes in ("blobs-2", "occlusion"):
+        shipped, read = make_real_case(holes, factor=8), make_real_case(holes, factor=8, scene=folder)
+        assert read.name == f"Motorcycle/{holes}" and shipped.name == f"motorcycle/{holes}"
+        np.testing.assert_allclose(read.gt, shipped.gt, rtol=1e-5)
+        assert np.array_equal(np.isfinite(read.depth), np.isfinite(shipped.depth))
+        assert read.fb == pytest.approx(shipped.fb, rel=1e-6)
+
+
+def test_another_pair_is_pooled_and_holed_where_sgbm_fails_and_cropped_to_a_multiple_of_four(tmp_path):
+    from skimage.measure import block_reduce
+
+    from ddp_lite.classical.stereo import sgm_left_right_failures
+    from ddp_lite.data.middlebury import load_middlebury, make_middlebury_fixture
+
+    folder = make_middlebury_fixture(tmp_path / "Desk", size=(96, 128), seed=1)
+    case = make_real_case("occlusion", factor=2, scene=folder)
+    assert case.name == "Desk/occlusion" and case.depth.shape == case.gt.shape == (48, 64)
+    # a pooled pixel is a hole if SGBM's left-right check failed anywhere in its 2×2 block
+    expected = block_reduce(sgm_left_right_failures(load_middlebury(folder), 0), (2, 2), np.max)
+    known_truth = np.isfinite(case.gt)
+    assert expected.any() and np.array_equal(np.isnan(case.depth) & known_truth, expected & known_truth)
+    known = np.isfinite(case.depth)
+    np.testing.assert_array_equal(case.depth[known], case.gt[known])  # elsewhere the input is the truth
+    odd = load_middlebury(make_middlebury_fixture(tmp_path / "Odd", size=(99, 130), seed=1))
+    blobs = make_real_case("blobs-1", factor=2, scene=odd)  # a loaded Scene works as a folder does
+    assert blobs.depth.shape == (48, 64) and blobs.name == "Odd/blobs-1"  # 99×130 cropped to 96×128
+    assert 0.2 <= np.isnan(blobs.depth).mean() < 0.35
+
+
+def test_a_scene_without_a_right_view_or_a_bad_factor_is_refused():
+    view = View(np.zeros((8, 8, 3), np.float32), np.ones((8, 8), np.float32), Camera(np.eye(3), np.eye(4), 8, 8))
+    with pytest.raises(ValueError, match="scene must be a Middlebury stereo pair"):
+        make_real_case("blobs-1", factor=2, scene=Scene("x", [view], [], {"baseline": 0.1, "doffs": 0.0}))
+    for bad in (0, 2.5, True):
+        with pytest.raises(ValueError, match="factor must be a positive integer"):
+            make_real_case("blobs-1", factor=bad)

@@ -1,4 +1,5 @@
-"""Real completion cases: the Middlebury *Motorcycle* pair (``middlebury.load_motorcycle``) with holes.
+"""Real completion cases: the Middlebury *Motorcycle* pair (``middlebury.load_motorcycle``), or any other
+Middlebury 2014 pair (``middlebury.load_middlebury``), with holes.
 
 The synthetic scenes flatter DDP: their colour edges are depth edges and their surfaces are clean.
 A real photograph has texture everywhere, soft shading, and depth edges without colour edges. These
@@ -18,6 +19,8 @@ colour and the depth of a pixel averaged over the same block. Hole kinds (``REAL
   view does not see, mostly), pooled as a hole wherever a block has one.
 
 The truth's unknown pixels are holes in every input and are never scored (``RealCase.scored_holes``).
+Another pair (``make_real_case(..., scene=folder)``) is cut the same way: cropped to a multiple of 4
+rows and columns, pooled, holed; judge a method on several, not on Motorcycle alone.
 """
 from __future__ import annotations
 
@@ -30,7 +33,7 @@ from .experiments import Case
 from ..method.config import FitConfig
 from ..method.fit import complete_depth
 from ..classical.holes import random_holes
-from ..data.middlebury import load_motorcycle
+from ..data.middlebury import load_middlebury, load_motorcycle
 from ..method.profiles import get_profile
 from ..classical.stereo import sgm_disparity, sgm_left_right_failures
 from ..core.views import Scene, View
@@ -39,8 +42,8 @@ __all__ = ["REAL_HOLES", "REAL_FACTORS", "make_real_case", "pool_scene", "RealCa
            "compare_fills"]
 
 REAL_HOLES = ("blobs-1", "blobs-2", "blobs-3", "sgbm", "occlusion")
-REAL_FACTORS = {8: "62x92", 4: "125x185", 2: "250x370", 1: "500x740"}
-_CROP_WIDTH = 740  # 741 columns: one dropped so that 4 divides the width
+REAL_FACTORS = {8: "62x92", 4: "125x185", 2: "250x370", 1: "500x740"}  # Motorcycle's pooled sizes
+_CROP_MULTIPLE = 4  # rows and columns cropped to a multiple of 4 (Motorcycle: 741 → 740 columns)
 
 
 @dataclass
@@ -112,46 +115,63 @@ def pool_scene(scene: Scene, factor: int) -> Scene:
     return Scene(scene.name, [pooled(v) for v in scene.views], [pooled(v) for v in scene.right], meta)
 
 
-def make_real_case(holes: str = "sgbm", factor: int = 4) -> RealCase:
-    """The Motorcycle pair pooled by ``factor`` (4 or 2) with holes of kind ``holes`` (one of
-    ``REAL_HOLES``) → :class:`RealCase` (the right view as the warp loss's neighbour). Deterministic.
+def make_real_case(holes: str = "sgbm", factor: int = 4, scene=None) -> RealCase:
+    """A real stereo pair pooled by ``factor`` with holes of kind ``holes`` (one of ``REAL_HOLES``) →
+    :class:`RealCase` named ``"<scene>/<holes>"`` (the right view as the warp loss's neighbour). Deterministic.
+
+    ``scene``: None for the Motorcycle pair (``REAL_FACTORS`` gives its pooled sizes), or another
+    Middlebury 2014 pair: a folder (``middlebury.load_middlebury``) or a loaded one-view stereo
+    :class:`~ddp_lite.core.views.Scene` with a right view and ``meta`` ``baseline`` (m), ``doffs`` (px)
+    and ``ndisp``, at the size SGBM should run at. ``factor``: a positive integer.
 
     Example:
         >>> case = make_real_case("blobs-1", factor=4)
-        >>> case.depth.shape, round(float(np.isnan(case.depth).mean()), 2) >= 0.2
-        ((125, 185), True)
+        >>> case.name, case.depth.shape, round(float(np.isnan(case.depth).mean()), 2) >= 0.2
+        ('motorcycle/blobs-1', (125, 185), True)
     """
     if holes not in REAL_HOLES:
         raise ValueError(f"holes must be one of {REAL_HOLES}, got {holes!r}")
-    if factor not in REAL_FACTORS:
-        raise ValueError(f"factor must be one of {sorted(REAL_FACTORS)}, got {factor!r}")
-    full = _cropped(load_motorcycle())
+    if isinstance(factor, bool) or not isinstance(factor, (int, np.integer)) or factor < 1:
+        raise ValueError(f"factor must be a positive integer, got {factor!r}")
+    if scene is None:
+        full, name = load_motorcycle(), "motorcycle"
+    else:
+        full = scene if isinstance(scene, Scene) else load_middlebury(scene)
+        if not full.right or not {"baseline", "doffs"} <= set(full.meta):
+            raise ValueError("scene must be a Middlebury stereo pair: a right view and meta 'baseline' and 'doffs' "
+                             f"(load_middlebury gives them), got right views {len(full.right)}, meta {sorted(full.meta)}")
+        name = full.name
+    full = _cropped(full)
     scene = pool_scene(full, factor)
     view, gt = scene[0], scene[0].depth
     H, W = gt.shape
     if holes.startswith("blobs"):
         depth, _ = random_holes(gt, fraction=0.2, seed=int(holes.split("-")[1]), blob_size=min(H, W) / 10)
     elif holes == "sgbm":
-        disparity, _ = sgm_disparity(full, 0, "dense")  # (500, 740) px, NaN holes
+        disparity, _ = sgm_disparity(full, 0, "dense")  # (H·f, W·f) px, NaN holes
         shifted = disparity + float(full.meta["doffs"])
         with np.errstate(invalid="ignore", divide="ignore"):
             sgbm = np.where(shifted > 0, float(full[0].camera.focal * full.meta["baseline"]) / shifted, np.nan)
         depth = _pool_depth(sgbm.astype(np.float32), factor)
     else:  # occlusion
-        failed = sgm_left_right_failures(full, 0, "dense")  # (500, 740) bool
+        failed = sgm_left_right_failures(full, 0, "dense")  # (H·f, W·f) bool
         blocks = failed[:H * factor, :W * factor].reshape(H, factor, W, factor).any(axis=(1, 3))
         depth = np.where(blocks, np.nan, gt).astype(np.float32)
     fb = float(view.camera.focal * scene.meta["baseline"])
-    return RealCase(f"motorcycle/{holes}", view.rgb, depth, gt, view.camera, [scene.right[0]], None, scene, 0,
+    return RealCase(f"{name}/{holes}", view.rgb, depth, gt, view.camera, [scene.right[0]], None, scene, 0,
                     None, fb=fb)
 
 
-def factor_for_profile(profile=None) -> int:
-    """The pooling factor of the real cases for a profile: the smallest whose image has at most twice the
-    profile's pixels (``ci`` 48×64 → 8, ``class`` 96×128 → 4, ``paper`` → 1)."""
+def factor_for_profile(profile=None, shape=(500, 741)) -> int:
+    """The pooling factor of a real pair of full size ``shape`` (H, W; Motorcycle's by default) for a
+    profile: the smallest whose image has at most twice the profile's pixels (Motorcycle: ``ci`` 48×64 → 8,
+    ``class`` 96×128 → 4, ``paper`` → 1)."""
     H, W = get_profile(profile).size
-    small_enough = [f for f in sorted(REAL_FACTORS) if (500 // f) * (_CROP_WIDTH // f) <= 2 * H * W]
-    return small_enough[0] if small_enough else max(REAL_FACTORS)
+    rows, columns = (n - n % _CROP_MULTIPLE for n in shape)
+    factor = 1
+    while (rows // factor) * (columns // factor) > 2 * H * W:
+        factor *= 2
+    return factor
 
 
 def compare_fills(case: RealCase, profile=None, recipes=("paper", "kit"), variant: str = "rgbd", seed: int = 0,
@@ -174,8 +194,11 @@ def compare_fills(case: RealCase, profile=None, recipes=("paper", "kit"), varian
 
 
 def _cropped(scene: Scene) -> Scene:
-    """The full-size pair cropped to ``_CROP_WIDTH`` columns (the right-most dropped; K unchanged)."""
+    """The full-size pair cropped to a multiple of ``_CROP_MULTIPLE`` rows and columns (the bottom and
+    right-most dropped; K unchanged)."""
+    rows, columns = (n - n % _CROP_MULTIPLE for n in scene[0].depth.shape)
+
     def crop(view: View) -> View:
-        camera = view.camera.__class__(view.camera.K, view.camera.cam_from_world, _CROP_WIDTH, view.camera.height)
-        return View(view.rgb[:, :_CROP_WIDTH], view.depth[:, :_CROP_WIDTH], camera, view.name)
+        camera = view.camera.__class__(view.camera.K, view.camera.cam_from_world, columns, rows)
+        return View(view.rgb[:rows, :columns], view.depth[:rows, :columns], camera, view.name)
     return Scene(scene.name, [crop(v) for v in scene.views], [crop(v) for v in scene.right], dict(scene.meta))
