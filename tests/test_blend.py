@@ -112,7 +112,8 @@ def test_the_photo_recipe_is_the_mean_of_the_kit_fit_the_paper_fit_and_the_color
     try:
         blended = complete_depth(rgb, depth, variant="rgbd", config=photo)
         kit = complete_depth(rgb, depth, variant="rgbd", transform=blended.transform,
-                             config=FitConfig.for_profile("ci", variant="rgbd", recipe="kit", progress=False, iterations=12))
+                             config=FitConfig.for_profile("ci", variant="rgbd", recipe="kit", progress=False, iterations=12,
+                                                          blend_fill=0.0))  # the kit's fit alone
         paper = complete_depth(rgb, depth, variant="rgbd", transform=blended.transform,
                                config=FitConfig.for_profile("ci", variant="rgbd", recipe="paper", progress=False,
                                                             iterations=12))
@@ -128,11 +129,12 @@ def test_the_photo_recipe_is_the_mean_of_the_kit_fit_the_paper_fit_and_the_color
 
 
 def fill_case(seed):
-    """A tilted plane with one hole, a random colour image and a short `ci` config: (depth, rgb, config)."""
+    """A tilted plane with one hole, a random colour image and a short `ci` config of the fit alone: (depth, rgb, config)."""
     depth = tilted_plane(24, 32, slope=0.05)
     depth[6:16, 8:20] = np.nan
     rgb = np.random.default_rng(seed).random(depth.shape + (3,)).astype(np.float32)
-    return depth, rgb, FitConfig.for_profile("ci", variant="rgbd", recipe="kit", progress=False, iterations=6)
+    return depth, rgb, FitConfig.for_profile("ci", variant="rgbd", recipe="kit", progress=False, iterations=6,
+                                             blend_fill=0.0)
 
 
 def colorization_disparity(depth, rgb, transform):
@@ -238,7 +240,7 @@ def test_blend_paper_refuses_an_ensemble_and_a_non_bool():
 def test_the_equation_shows_the_blend_as_not_in_the_paper():
     from ddp_lite.method.equation import loss_equation
     photo = loss_equation(FitConfig.for_profile("ci", variant="rgbd", recipe="photo"), "rgbd")
-    kit = loss_equation(FitConfig.for_profile("ci", variant="rgbd", recipe="kit"), "rgbd")
+    kit = loss_equation(FitConfig.for_profile("ci", variant="rgbd", recipe="kit", blend_fill=0.0), "rgbd")  # the fit alone
     assert photo.endswith("\\underbrace{\\hat Z = 0.333\\,Z + 0.333\\,Z_{\\mathrm{paper}} + 0.333\\,\\mathrm{fill}(Z_{\\mathrm{in}})}"
                           "_{\\text{not in the paper}}")
     assert photo.startswith(kit) and "Z_{\\mathrm{paper}}" not in kit

@@ -88,7 +88,12 @@ def test_ctrl_c_prints_one_line_exits_130_and_leaves_no_file(tmp_path):
             break
     time.sleep(1.0)
     process.send_signal(signal.SIGINT)
-    _, err = process.communicate(timeout=60)
+    try:
+        _, err = process.communicate(timeout=60)
+    except subprocess.TimeoutExpired:  # a hang: end it, and show where the command was
+        process.kill()
+        out, err = process.communicate()
+        pytest.fail(f"ddp-lite demo still running 60 s after Ctrl-C; its last output:\n{out[-1500:]}\n{err[-1500:]}")
     assert process.returncode == 130, err
     assert "Traceback" not in err and "KeyboardInterrupt" not in err
     assert [line for line in err.splitlines() if line.startswith("ddp-lite")] == [

@@ -26,16 +26,16 @@ EXPECTED = {
         lr_milestones=(90, 128), lr_gamma=0.3, smoothness=1.0, smoothness_edge=100.0, flatness=0.6, patience=60),
     ('ci', 'kit', 'rgbd', 'unet'): dict(
         channels=(16, 32, 64, 128), image_input=1.0, image_blur=0.5, lr=0.01, iterations=150, lr_milestones=(90,
-        128), lr_gamma=0.3, smoothness=1.0, smoothness_edge=100.0, flatness=0.6, patience=60),
+        128), lr_gamma=0.3, smoothness=1.0, smoothness_edge=100.0, flatness=0.6, patience=60, blend_fill=0.2),
     ('ci', 'kit', 'rgbd', 'skip'): dict(
         net='skip', channels=(32, 32, 32, 32), image_input=1.0, image_blur=0.5, lr=0.01, iterations=150,
-        lr_milestones=(90, 128), lr_gamma=0.3, smoothness=1.0, smoothness_edge=100.0, flatness=0.6, patience=60),
+        lr_milestones=(90, 128), lr_gamma=0.3, smoothness=1.0, smoothness_edge=100.0, flatness=0.6, patience=60, blend_fill=0.2),
     ('ci', 'kit', 'rgbd+warp', 'unet'): dict(
         channels=(16, 32, 64, 128), image_input=1.0, image_blur=0.5, lr=0.01, iterations=150, lr_milestones=(90,
-        128), lr_gamma=0.3, smoothness=1.0, smoothness_edge=100.0, flatness=0.6, patience=60),
+        128), lr_gamma=0.3, smoothness=1.0, smoothness_edge=100.0, flatness=0.6, patience=60, blend_fill=0.2),
     ('ci', 'kit', 'rgbd+warp', 'skip'): dict(
         net='skip', channels=(32, 32, 32, 32), image_input=1.0, image_blur=0.5, lr=0.01, iterations=150,
-        lr_milestones=(90, 128), lr_gamma=0.3, smoothness=1.0, smoothness_edge=100.0, flatness=0.6, patience=60),
+        lr_milestones=(90, 128), lr_gamma=0.3, smoothness=1.0, smoothness_edge=100.0, flatness=0.6, patience=60, blend_fill=0.2),
     ('ci', 'paper', 'd', 'unet'): dict(
         channels=(16, 32, 64, 128), image_blur=0.5, lr=0.01, iterations=150, lr_milestones=(90, 128),
         lr_gamma=0.3, smoothness_edge=100.0, patience=60),
@@ -127,7 +127,8 @@ EXPECTED = {
 DESCRIBED = {
     "ci": "profile 'ci': 48×64 images, UNet 16-32-64-128, 150 iterations (depth-only 150), lr 0.01, auto-stop off, "
           "hole curvature weight 1, hole flatness weight 0.6 (relaxed at colour edges by exp(-100·|∇grey|)) + the "
-          "colour image (blurred, σ 0.5 px; not for depth-only)",
+          "colour image (blurred, σ 0.5 px; not for depth-only), and with the input's colorization fill, share 0.2 "
+          "(not for depth-only)",
     "class": "profile 'class': 96×128 images, UNet 16-32-64-128-256, ≤ 600 iterations (depth-only 600), lr 0.01, "
              "auto-stop on, hole curvature weight 1, hole flatness weight 0.6 (relaxed at colour edges by "
              "exp(-300·|∇grey|)), input: the pixel coordinates + the colour image (blurred, σ 1 px; not for depth-only), "

@@ -74,7 +74,8 @@ def test_a_colour_guided_fill_never_enters_a_depth_only_result():
     assert FitConfig.for_profile("class", variant="rgbd", recipe="kit").blend_fill == 0.2
     assert FitConfig.for_profile("class", variant="d", recipe="kit").blend_fill == 0.0
     assert FitConfig.for_profile("class", variant="d", recipe="photo").blend_fill == 0.0
-    assert FitConfig.for_profile("ci", variant="rgbd", recipe="kit").blend_fill == 0.0  # ci shows the fit alone
+    assert FitConfig.for_profile("ci", variant="rgbd", recipe="kit").blend_fill == 0.2  # as at class
+    assert FitConfig.for_profile("ci", variant="d", recipe="kit").blend_fill == 0.0
 
 
 @pytest.mark.parametrize("profile", ["ci", "class", "paper"])

@@ -39,7 +39,7 @@ def addition_steps(profile=None) -> dict[str, dict]:
 
     Example:
         >>> list(addition_steps("ci"))  # ci's kit keeps the noise input
-        ['paper', '+ curvature in the holes', '+ flatness in the holes', '+ the blurred colour image as input']
+        ['paper', '+ curvature in the holes', '+ flatness in the holes', '+ the blurred colour image as input', '+ a share of the colorization fill in the result']
     """
     name = get_profile(profile).name
     paper, kit = get_recipe("paper").settings(name), get_recipe("kit").settings(name)
