@@ -31,7 +31,7 @@ from scipy import ndimage
 from ..classical.baselines import BASELINES
 from .experiments import Case
 from ..method.config import FitConfig
-from ..method.fit import complete_depth
+from ..method.fit import blend_members, combined_result, complete_depth, mixed_with_fill
 from ..classical.holes import random_holes
 from ..data.middlebury import load_middlebury, load_motorcycle
 from ..method.profiles import get_profile
@@ -181,16 +181,37 @@ def compare_fills(case: RealCase, profile=None, recipes=("paper", "kit"), varian
 
     The classical fills fill the disparity map (d = f·B/Z); DDP fits its own normalised disparity,
     from the input depth's range, with the profile's size and budget (``rgbd+warp`` warps the right
-    view). Names: the fills' keys, then ``"DDP <recipe>"``.
+    view). Names: the fills' keys, then ``"DDP <recipe>"``. A blend of two recipes listed before it
+    (``photo`` after ``paper`` and ``kit``) is built from their fits: two fits fewer, the same method.
     """
     disparity_in = case.fb / case.depth  # (H, W) px (plus doffs: a constant, it cancels in every error)
     out = {name: fill(disparity_in, case.rgb) for name, fill in BASELINES.items()}
+    fitted = []  # (config without the fill's share, its result): a blend of fits done here fits nothing again
     for recipe in recipes:
         config = FitConfig.for_profile(profile, variant=variant, recipe=recipe, seed=seed, progress=progress)
-        neighbors = case.neighbors if variant == "rgbd+warp" else ()
-        result = complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant, config=config)
-        out[f"DDP {recipe}"] = case.fb / result.merged(case.depth)
+        out[f"DDP {recipe}"] = case.fb / _fit_reusing(case, variant, config, fitted).merged(case.depth)
     return out
+
+
+def _fit_reusing(case: RealCase, variant: str, config: FitConfig, fitted: list):
+    """``complete_depth`` of ``case`` under ``config``, built from the fits in ``fitted`` where it is a
+    blend of them (``photo`` after ``kit`` and ``paper``, same seed: the two fits it would run again).
+    Each fit done here is appended to ``fitted``, without its share of the fill, which is mixed in after."""
+    neighbors = case.neighbors if variant == "rgbd+warp" else ()
+    share = config.blend_fill
+    if share is None:  # the share is chosen on depth held out of the fit: a fit of its own
+        return complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant, config=config)
+    base = config.replace(blend_fill=0.0)
+    done = lambda wanted: next((result for c, result in fitted if c == wanted), None)
+    members = [done(m) for m in blend_members(base)] if base.blend_paper and base.blend_weight is not None else []
+    if members and all(m is not None for m in members):
+        weight = base.blend_weight
+        result = combined_result(members, members[0].transform, {**members[0].history, "blend_weight": weight},
+                                 weights=(weight, 1.0 - weight))
+    else:
+        result = complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant, config=base)
+        fitted.append((base, result))
+    return mixed_with_fill(result, case.depth, case.rgb, share) if share else result
 
 
 def _cropped(scene: Scene) -> Scene:

@@ -32,10 +32,11 @@ and the share that best predicts them wins:
     f* = argmin_{f ∈ {0, 0.1, …, 0.5}}  RMSE_B( (1 − f)·Z_fit + f·Z_fill − Z_in )    best_fill_share
 
 The result mixes f* of the fill of the *whole* input into that fit. f stays at most ½, so the result
-is mostly the network's. On the real photograph the choice is high (the fill predicts the held-out
-blobs better, as it does the holes), on the rendered scenes low; the blobs, unlike a ring around
-the holes, cost the fit almost nothing (``docs/real_data.md``). The ``kit`` recipe at ``class``
-chooses f this way.
+is mostly the network's. The blobs, unlike a ring around the holes, cost the fit almost nothing, but
+measured, the choice does not tell the photograph from the rendered scenes: the held-out valid depth
+prefers the fill on both, so it only buys a larger share with its cost (``docs/real_data.md``). It
+stays a study lever (recipe ``fill-chosen``); the ``kit`` recipe takes a fixed f = 0.2 where the
+variant sees colour.
 """
 from __future__ import annotations
 

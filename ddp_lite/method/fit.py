@@ -35,7 +35,8 @@ from .paper_method import PaperLoss
 from .recipes import get_recipe
 from .variants import get_variant
 
-__all__ = ["DepthResult", "complete_depth", "merge", "fit_once", "mixed_with_fill", "with_fill"]
+__all__ = ["DepthResult", "complete_depth", "merge", "fit_once", "mixed_with_fill", "with_fill", "blend_members",
+           "combined_result"]
 
 
 @dataclass
@@ -149,14 +150,14 @@ def fit_blended(rgb, depth, camera, neighbors, variant, config, gt_depth, transf
     with the ring, ``blend_ring_errors``."""
     config, depth, _, neighbors, _, transform = check_fit_inputs(rgb, depth, camera, neighbors, variant, config,
                                                                  gt_depth, transform)
-    weight, config = config.blend_weight, config.replace(blend_paper=False)
+    weight, members = config.blend_weight, blend_members(config)
+    config = members[0]
     valid = np.isfinite(depth)
     ring = validation_ring(valid, config.seed) if weight is None else np.zeros_like(valid)
     if weight is None and ((valid & ~ring).sum() < MIN_VALID_PIXELS or ring.sum() < MIN_VALID_PIXELS):
         return fit_once(rgb, depth, camera, neighbors, variant, config, gt_depth=gt_depth, transform=transform,
                         callback=callback, init=init)  # too little to judge by (or to fit without)
     held_out = np.where(ring, np.nan, depth).astype(np.float32) if ring.any() else depth
-    members = [config, config.replace(**get_recipe("paper").overrides)]
 
     def fit_member(k: int) -> DepthResult:  # a warm start fits the first fit's net only
         return fit_once(rgb, held_out, camera, neighbors, variant, members[k], gt_depth=gt_depth,
@@ -170,6 +171,13 @@ def fit_blended(rgb, depth, camera, neighbors, variant, config, gt_depth, transf
                                                            transform.to_disparity(depth), ring)
     history["blend_weight"] = weight
     return combined_result(fits, transform, history, weights=(weight, 1.0 - weight))
+
+
+def blend_members(config: FitConfig) -> tuple[FitConfig, FitConfig]:
+    """The two fits ``config.blend_paper`` blends: this config's own fit and the paper recipe's, at the
+    same size, budget and seed. ``config.blend_fill`` is left to the caller (it mixes into the blend)."""
+    own = config.replace(blend_paper=False)
+    return own, own.replace(**get_recipe("paper").overrides)
 
 
 def fit_with_fill(rgb, depth, camera, neighbors, variant, config, gt_depth, transform, callback, init) -> DepthResult:
