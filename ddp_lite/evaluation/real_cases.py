@@ -31,7 +31,7 @@ from scipy import ndimage
 from ..classical.baselines import BASELINES
 from .experiments import Case
 from ..method.config import FitConfig
-from ..method.fit import blend_members, combined_result, complete_depth, mixed_with_fill
+from ..method.fit import blend_members, blended_result, complete_depth, mixed_with_fill
 from ..classical.holes import random_holes
 from ..data.middlebury import load_middlebury, load_motorcycle
 from ..method.profiles import get_profile
@@ -202,12 +202,9 @@ def _fit_reusing(case: RealCase, variant: str, config: FitConfig, fitted: list):
     if share is None:  # the share is chosen on depth held out of the fit: a fit of its own
         return complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant, config=config)
     base = config.replace(blend_fill=0.0)
-    done = lambda wanted: next((result for c, result in fitted if c == wanted), None)
-    members = [done(m) for m in blend_members(base)] if base.blend_paper and base.blend_weight is not None else []
-    if members and all(m is not None for m in members):
-        weight = base.blend_weight
-        result = combined_result(members, members[0].transform, {**members[0].history, "blend_weight": weight},
-                                 weights=(weight, 1.0 - weight))
+    done = [result for wanted in blend_members(base) for c, result in fitted if c == wanted]
+    if base.blend_paper and base.blend_weight is not None and len(done) == 2:
+        result = blended_result(done, done[0].transform, base.blend_weight)
     else:
         result = complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant, config=base)
         fitted.append((base, result))

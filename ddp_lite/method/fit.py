@@ -36,7 +36,7 @@ from .recipes import get_recipe
 from .variants import get_variant
 
 __all__ = ["DepthResult", "complete_depth", "merge", "fit_once", "mixed_with_fill", "with_fill", "blend_members",
-           "combined_result"]
+           "blended_result"]
 
 
 @dataclass
@@ -165,12 +165,18 @@ def fit_blended(rgb, depth, camera, neighbors, variant, config, gt_depth, transf
 
     fits = run_members(fit_member, 2, parallel_members(config.replace(ensemble=2), variant, depth.shape,
                                                        len(neighbors), callback))
-    history = dict(fits[0].history)
+    extra = {}
     if weight is None:
-        weight, history["blend_ring_errors"] = best_weight(fits[0].disparity, fits[1].disparity,
-                                                           transform.to_disparity(depth), ring)
-    history["blend_weight"] = weight
-    return combined_result(fits, transform, history, weights=(weight, 1.0 - weight))
+        weight, extra["blend_ring_errors"] = best_weight(fits[0].disparity, fits[1].disparity,
+                                                         transform.to_disparity(depth), ring)
+    return blended_result(fits, transform, weight, extra)
+
+
+def blended_result(fits: list, transform, weight: float, history: dict | None = None) -> DepthResult:
+    """The two fits of :func:`blend_members` as one result, weight·Z_own + (1 − weight)·Z_paper; ``history``
+    is the first fit's, plus ``history`` and ``blend_weight``."""
+    return combined_result(fits, transform, {**fits[0].history, **(history or {}), "blend_weight": weight},
+                           weights=(weight, 1.0 - weight))
 
 
 def blend_members(config: FitConfig) -> tuple[FitConfig, FitConfig]:
