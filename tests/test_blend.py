@@ -100,9 +100,7 @@ def test_a_ring_blend_without_holes_is_one_plain_fit():
     assert np.array_equal(plain.disparity, blended.disparity) and blended.fits == 1
 
 
-def test_the_photo_recipe_is_the_mean_of_the_kit_fit_the_paper_fit_and_the_colorization_fill():
-    from ddp_lite.classical.baselines import fill_colorization
-
+def test_the_photo_recipe_is_the_mean_of_the_kit_fit_the_paper_fit_and_the_two_fills():
     depth = tilted_plane(32, 40, slope=0.05)
     depth[8:20, 10:28] = np.nan
     rgb = np.random.default_rng(2).random(depth.shape + (3,)).astype(np.float32)
@@ -119,7 +117,7 @@ def test_the_photo_recipe_is_the_mean_of_the_kit_fit_the_paper_fit_and_the_color
                                                             iterations=12))
     finally:
         torch.set_num_threads(threads)
-    fill = blended.transform.to_disparity(1.0 / fill_colorization(1.0 / depth, rgb))  # Levin's fill of 1/z
+    fill = two_fills_disparity(depth, rgb, blended.transform)
     assert photo.blend_paper and photo.blend_weight == 0.5 and photo.blend_fill == pytest.approx(1 / 3)
     assert blended.history["blend_weight"] == 0.5 and blended.history["blend_fill"] == pytest.approx(1 / 3)
     assert not np.array_equal(kit.disparity, paper.disparity)
@@ -137,17 +135,19 @@ def fill_case(seed):
                                              blend_fill=0.0)
 
 
-def colorization_disparity(depth, rgb, transform):
-    """The colorization fill of 1/z, computed here from the classical fill, in ``transform``'s disparity."""
-    from ddp_lite.classical.baselines import fill_colorization
-    return transform.to_disparity(1.0 / fill_colorization(1.0 / depth, rgb))
+def two_fills_disparity(depth, rgb, transform):
+    """The mean of the colorization fill and the bilateral solver's of 1/z, computed here from the two
+    classical fills, in ``transform``'s disparity."""
+    from ddp_lite.classical.baselines import fill_bilateral_solver, fill_colorization
+    inverse = 1.0 / depth
+    return transform.to_disparity(2.0 / (fill_colorization(inverse, rgb) + fill_bilateral_solver(inverse, rgb)))
 
 
 def test_blend_fill_alone_mixes_one_fit_with_the_fill_and_needs_the_colour_image():
     depth, rgb, base = fill_case(3)
     mixed = complete_depth(rgb, depth, variant="rgbd", config=base.replace(blend_fill=0.25))
     alone = complete_depth(rgb, depth, variant="rgbd", config=base, transform=mixed.transform)
-    fill = colorization_disparity(depth, rgb, mixed.transform)
+    fill = two_fills_disparity(depth, rgb, mixed.transform)
     assert np.allclose(mixed.disparity, 0.75 * alone.disparity + 0.25 * fill, atol=1e-6)
     assert np.allclose(mixed.depth, mixed.transform.to_depth(mixed.disparity))
     with pytest.raises(ValueError, match="config.blend_fill"):
@@ -163,7 +163,7 @@ def test_coarse_to_fine_mixes_the_fill_into_its_full_size_result():
     depth, rgb, base = fill_case(4)
     mixed = complete_depth_coarse_to_fine(rgb, depth, variant="rgbd", config=base.replace(blend_fill=0.2))
     alone = complete_depth_coarse_to_fine(rgb, depth, variant="rgbd", config=base, transform=mixed.transform)
-    fill = colorization_disparity(depth, rgb, mixed.transform)
+    fill = two_fills_disparity(depth, rgb, mixed.transform)
     assert np.allclose(mixed.disparity, 0.8 * alone.disparity + 0.2 * fill, atol=1e-6)
     assert mixed.history["blend_fill"] == 0.2 and "stage_iterations" in mixed.history
     with pytest.raises(ValueError, match="config.blend_fill"):
@@ -206,7 +206,7 @@ def test_blend_fill_none_chooses_the_share_on_depth_held_out_of_the_fit():
     held_out = np.where(held, np.nan, depth)
     alone = complete_depth(rgb, held_out, variant="rgbd", config=base, transform=chosen.transform)
     target = chosen.transform.to_disparity(depth)
-    fill_held = colorization_disparity(held_out, rgb, chosen.transform)
+    fill_held = two_fills_disparity(held_out, rgb, chosen.transform)
     errors = [np.sqrt(np.mean(((1 - f) * alone.disparity[held] + f * fill_held[held] - target[held]) ** 2))
               for f in FILL_SHARES]
     share = chosen.history["blend_fill"]
@@ -214,7 +214,7 @@ def test_blend_fill_none_chooses_the_share_on_depth_held_out_of_the_fit():
     assert errors[FILL_SHARES.index(share)] == pytest.approx(min(errors), rel=1e-6)
     assert np.allclose(chosen.history["blend_fill_errors"], errors, rtol=1e-5)
     # the result mixes that share of the fill of the *whole* input into the fit without the blobs
-    fill = colorization_disparity(depth, rgb, chosen.transform)
+    fill = two_fills_disparity(depth, rgb, chosen.transform)
     assert np.allclose(chosen.disparity, (1 - share) * alone.disparity + share * fill, atol=1e-6)
 
 

@@ -246,7 +246,7 @@ def test_complete_raw_writes_the_nets_output_with_no_fill_mixed_in(tmp_path, mon
     argv = ["complete", "--rgb", str(tmp_path / "rgb.png"), "--depth", str(tmp_path / "depth.npy"),
             "--profile", "class", "--recipe", "kit", "--variant", "rgbd", "--iterations", "3", "--max-side", "48"]
     assert main(argv + ["--out", str(tmp_path / "kit.npy")]) == 0
-    assert shares[0] == 0.2  # class's kit mixes a fifth of the colorization fill into the fit's result
+    assert shares[0] == 0.25  # class's kit mixes a quarter of the colour-guided fill into the fit's result
     shares.clear()
     assert main(argv + ["--raw", "--out", str(tmp_path / "raw.npy")]) == 0
     assert shares == [0.0]  # --raw: the net's output alone

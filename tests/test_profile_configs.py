@@ -26,16 +26,16 @@ EXPECTED = {
         lr_milestones=(90, 128), lr_gamma=0.3, smoothness=1.0, smoothness_edge=100.0, flatness=0.6, patience=60),
     ('ci', 'kit', 'rgbd', 'unet'): dict(
         channels=(16, 32, 64, 128), image_input=1.0, image_blur=0.5, lr=0.01, iterations=150, lr_milestones=(90,
-        128), lr_gamma=0.3, smoothness=1.0, smoothness_edge=100.0, flatness=0.6, patience=60, blend_fill=0.2),
+        128), lr_gamma=0.3, smoothness=1.0, smoothness_edge=100.0, flatness=0.6, patience=60, blend_fill=0.25),
     ('ci', 'kit', 'rgbd', 'skip'): dict(
         net='skip', channels=(32, 32, 32, 32), image_input=1.0, image_blur=0.5, lr=0.01, iterations=150,
-        lr_milestones=(90, 128), lr_gamma=0.3, smoothness=1.0, smoothness_edge=100.0, flatness=0.6, patience=60, blend_fill=0.2),
+        lr_milestones=(90, 128), lr_gamma=0.3, smoothness=1.0, smoothness_edge=100.0, flatness=0.6, patience=60, blend_fill=0.25),
     ('ci', 'kit', 'rgbd+warp', 'unet'): dict(
         channels=(16, 32, 64, 128), image_input=1.0, image_blur=0.5, lr=0.01, iterations=150, lr_milestones=(90,
-        128), lr_gamma=0.3, smoothness=1.0, smoothness_edge=100.0, flatness=0.6, patience=60, blend_fill=0.2),
+        128), lr_gamma=0.3, smoothness=1.0, smoothness_edge=100.0, flatness=0.6, patience=60, blend_fill=0.25),
     ('ci', 'kit', 'rgbd+warp', 'skip'): dict(
         net='skip', channels=(32, 32, 32, 32), image_input=1.0, image_blur=0.5, lr=0.01, iterations=150,
-        lr_milestones=(90, 128), lr_gamma=0.3, smoothness=1.0, smoothness_edge=100.0, flatness=0.6, patience=60, blend_fill=0.2),
+        lr_milestones=(90, 128), lr_gamma=0.3, smoothness=1.0, smoothness_edge=100.0, flatness=0.6, patience=60, blend_fill=0.25),
     ('ci', 'paper', 'd', 'unet'): dict(
         channels=(16, 32, 64, 128), image_blur=0.5, lr=0.01, iterations=150, lr_milestones=(90, 128),
         lr_gamma=0.3, smoothness_edge=100.0, patience=60),
@@ -65,19 +65,19 @@ EXPECTED = {
     ('class', 'kit', 'rgbd', 'unet'): dict(
         channels=(16, 32, 64, 128, 256), noise_channels=2, net_input='meshgrid', image_input=1.0, lr=0.01,
         iterations=600, lr_milestones=(), lr_gamma=0.3, smoothness=1.0, smoothness_edge=300.0, flatness=0.6,
-        auto_stop=True, patience=50, plateau_decays=1, bf16=None, blend_fill=0.2),
+        auto_stop=True, patience=50, plateau_decays=1, bf16=None, blend_fill=0.25),
     ('class', 'kit', 'rgbd', 'skip'): dict(
         net='skip', channels=(128, 128, 128, 128, 128), noise_channels=2, net_input='meshgrid', image_input=1.0,
         lr=0.01, iterations=600, lr_milestones=(), lr_gamma=0.3, smoothness=1.0, smoothness_edge=300.0,
-        flatness=0.6, auto_stop=True, patience=50, plateau_decays=1, bf16=None, blend_fill=0.2),
+        flatness=0.6, auto_stop=True, patience=50, plateau_decays=1, bf16=None, blend_fill=0.25),
     ('class', 'kit', 'rgbd+warp', 'unet'): dict(
         channels=(16, 32, 64, 128, 256), noise_channels=2, net_input='meshgrid', image_input=1.0, lr=0.01,
         iterations=600, lr_milestones=(), lr_gamma=0.3, smoothness=1.0, smoothness_edge=300.0, flatness=0.6,
-        auto_stop=True, patience=50, plateau_decays=1, bf16=None, blend_fill=0.2),
+        auto_stop=True, patience=50, plateau_decays=1, bf16=None, blend_fill=0.25),
     ('class', 'kit', 'rgbd+warp', 'skip'): dict(
         net='skip', channels=(128, 128, 128, 128, 128), noise_channels=2, net_input='meshgrid', image_input=1.0,
         lr=0.01, iterations=600, lr_milestones=(), lr_gamma=0.3, smoothness=1.0, smoothness_edge=300.0,
-        flatness=0.6, auto_stop=True, patience=50, plateau_decays=1, bf16=None, blend_fill=0.2),
+        flatness=0.6, auto_stop=True, patience=50, plateau_decays=1, bf16=None, blend_fill=0.25),
     ('class', 'paper', 'd', 'unet'): dict(
         channels=(16, 32, 64, 128, 256), lr=0.01, iterations=600, lr_milestones=(), lr_gamma=0.3,
         smoothness_edge=300.0, auto_stop=True, patience=50, plateau_decays=1, bf16=None),
@@ -127,12 +127,12 @@ EXPECTED = {
 DESCRIBED = {
     "ci": "profile 'ci': 48×64 images, UNet 16-32-64-128, 150 iterations (depth-only 150), lr 0.01, auto-stop off, "
           "hole curvature weight 1, hole flatness weight 0.6 (relaxed at colour edges by exp(-100·|∇grey|)) + the "
-          "colour image (blurred, σ 0.5 px; not for depth-only), and with the input's colorization fill, share 0.2 "
+          "colour image (blurred, σ 0.5 px; not for depth-only), and with the input's colour-guided fill (colorization and bilateral solver, averaged), share 0.25 "
           "(not for depth-only)",
     "class": "profile 'class': 96×128 images, UNet 16-32-64-128-256, ≤ 600 iterations (depth-only 600), lr 0.01, "
              "auto-stop on, hole curvature weight 1, hole flatness weight 0.6 (relaxed at colour edges by "
              "exp(-300·|∇grey|)), input: the pixel coordinates + the colour image (blurred, σ 1 px; not for depth-only), "
-             "and with the input's colorization fill, share 0.2 (not for depth-only)",
+             "and with the input's colour-guided fill (colorization and bilateral solver, averaged), share 0.25 (not for depth-only)",
     "paper": "profile 'paper': 512×960 images, UNet 32-64-128-256-512, 16000 iterations (depth-only 6000), lr 5e-05, "
              "auto-stop off",
 }

@@ -63,7 +63,7 @@ def test_the_loss_equation_marks_exactly_the_kits_additions():
     kit = loss_equation(FitConfig.for_profile("class", variant="rgbd", recipe="kit"), "rgbd")
     assert kit.count("not in the paper") == 3  # the hole terms, the input, and the fill's share in the result
     assert "1\\,L^{\\mathrm{curv}}_{w} + 0.6\\,L^{\\mathrm{flat}}_{w}" in kit and "u, v, G_{1} * I" in kit
-    assert "\\hat Z = 0.8\\,Z + 0.2\\,\\mathrm{fill}(Z_{\\mathrm{in}})" in kit
+    assert "\\hat Z = 0.75\\,Z + 0.25\\,\\mathrm{fill}(Z_{\\mathrm{in}})" in kit
     depth_only = loss_equation(FitConfig.for_profile("class", variant="d", recipe="kit"), "d")
     assert "G_" not in depth_only and "L^{\\mathrm{RGB}}" not in depth_only  # no image for depth-only
     assert "fill" not in depth_only  # nor a colour-guided fill in its result
@@ -71,10 +71,10 @@ def test_the_loss_equation_marks_exactly_the_kits_additions():
 
 def test_a_colour_guided_fill_never_enters_a_depth_only_result():
     from ddp_lite.method.config import FitConfig
-    assert FitConfig.for_profile("class", variant="rgbd", recipe="kit").blend_fill == 0.2
+    assert FitConfig.for_profile("class", variant="rgbd", recipe="kit").blend_fill == 0.25
     assert FitConfig.for_profile("class", variant="d", recipe="kit").blend_fill == 0.0
     assert FitConfig.for_profile("class", variant="d", recipe="photo").blend_fill == 0.0
-    assert FitConfig.for_profile("ci", variant="rgbd", recipe="kit").blend_fill == 0.2  # as at class
+    assert FitConfig.for_profile("ci", variant="rgbd", recipe="kit").blend_fill == 0.25  # as at class
     assert FitConfig.for_profile("ci", variant="d", recipe="kit").blend_fill == 0.0
 
 

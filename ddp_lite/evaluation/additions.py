@@ -28,7 +28,7 @@ ADDITIONS = (
     ("curvature in the holes", ("smoothness", "smoothness_edge", "edge_guide")),
     ("flatness in the holes", ("flatness", "flatness_reach")),
     ("the blurred colour image as input", ("image_input", "image_blur")),
-    ("a share of the colorization fill in the result", ("blend_fill",)),
+    ("a share of a colour-guided fill in the result", ("blend_fill",)),
 )
 
 
@@ -39,7 +39,7 @@ def addition_steps(profile=None) -> dict[str, dict]:
 
     Example:
         >>> list(addition_steps("ci"))  # ci's kit keeps the noise input
-        ['paper', '+ curvature in the holes', '+ flatness in the holes', '+ the blurred colour image as input', '+ a share of the colorization fill in the result']
+        ['paper', '+ curvature in the holes', '+ flatness in the holes', '+ the blurred colour image as input', '+ a share of a colour-guided fill in the result']
     """
     name = get_profile(profile).name
     paper, kit = get_recipe("paper").settings(name), get_recipe("kit").settings(name)

@@ -8,7 +8,7 @@ read as metres) is refused with the scale that would make it plausible.
 The fit runs at a working size (``--max-side``, default the profile's longer side) and its
 completed depth is brought back to full size in disparity, in the holes only: the valid input
 pixels keep their exact values (``--raw``: the net's own output everywhere, without the share of a
-colorization fill the ``kit`` recipe mixes in at ``class``), see
+colour-guided fill the ``kit`` recipe mixes in), see
 ``ddp_lite.sequences.working_size``. Then one line compares the fill with a classical one computed here at
 full size (linear interpolation; their mean absolute difference in the holes), or, with ``--gt``,
 prints the hole RMSE of DDP, linear and Navier-Stokes fills; and a preview figure (input, filled,
@@ -255,6 +255,6 @@ def complete_command(args) -> int:
     print(comparison)
     share = result.history.get("blend_fill", 0.0)
     print(f"filled {holes.mean():.1%} holes in {time.perf_counter() - start:.1f} s (the fit {result.seconds:.1f} s"
-          + (f", with a {share:.0%} share of the colorization fill" if share else "") + ") "
+          + (f", with a {share:.0%} share of a colour-guided fill" if share else "") + ") "
           f"→ {args.out}; preview {_preview_path(args)}" + (f"; point cloud {_ply_path(args)}" if camera else ""))
     return 0

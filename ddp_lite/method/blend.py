@@ -18,9 +18,11 @@ matter most (beside an occlusion, the far surface), and its choice is no better 
 It stays a study lever. The two fits run side by side on a CPU with two threads
 (:func:`ddp_lite.method.ensemble.run_members`).
 
-``blend_fill`` f mixes in a third estimate that errs in yet other places: Levin et al.'s colorization
-fill of the input (:func:`fill_disparity`), the best classical fill on the real photograph's
-occlusions and textured blobs. The ``photo`` recipe takes the three in equal shares:
+``blend_fill`` f mixes in a third estimate that errs in yet other places: a colour-guided fill of the
+input (:func:`fill_disparity`), the mean of Levin et al.'s colorization fill and Barron & Poole's fast
+bilateral solver, which between them are the best classical fill on every real case (colorization on
+the occlusions and the textured blob, the solver on the rest). The ``photo`` recipe takes the three in
+equal shares:
 
     Z = (1 − f)·(w·Z_kit + (1 − w)·Z_paper) + f·Z_fill          (photo: w = ½, f = ⅓)
 
@@ -35,8 +37,8 @@ The result mixes f* of the fill of the *whole* input into that fit. f stays at m
 is mostly the network's. The blobs, unlike a ring around the holes, cost the fit almost nothing, but
 measured, the choice does not tell the photograph from the rendered scenes: the held-out valid depth
 prefers the fill on both, so it only buys a larger share with its cost (``docs/real_data.md``). It
-stays a study lever (recipe ``fill-chosen``); the ``kit`` recipe takes a fixed f = 0.2 where the
-variant sees colour.
+stays a study lever (recipe ``fill-chosen``); the ``kit`` recipe takes a fixed share where the variant
+sees colour (:data:`~ddp_lite.method.recipes.KIT_AT`).
 """
 from __future__ import annotations
 
@@ -44,12 +46,16 @@ import numpy as np
 from scipy import ndimage
 
 __all__ = ["BLEND_WEIGHTS", "FILL_SHARES", "validation_ring", "best_weight", "ring_width", "fill_disparity",
-           "fill_holdout", "best_fill_share"]
+           "FILL_MEMBERS", "fill_holdout", "best_fill_share"]
 
 BLEND_WEIGHTS = (0.0, 0.25, 0.5, 0.75, 1.0)  # the kit fit's weight; 0 is the paper's fit alone
 RING_SHARE = 0.5  # the share of the ring held out: the rest keeps the holes' edges where they are
 FILL_SHARES = (0.0, 0.1, 0.2, 0.3, 0.4, 0.5)  # the fill's shares blend_fill=None chooses among: the fit keeps half
 FILL_HOLDOUT = 0.05  # the share of the valid pixels held out to choose it
+# the classical fills averaged into the one mixed in: on the real pair the bilateral solver is the best fill
+# in three of five cases and colorization in two, and their mean lets the share grow without costing the
+# rendered scenes (docs/real_data.md)
+FILL_MEMBERS = ("colorization", "bilateral-solver")
 
 
 def ring_width(shape) -> int:
@@ -102,9 +108,12 @@ def best_weight(kit: np.ndarray, paper: np.ndarray, target: np.ndarray, ring: np
 
 
 def fill_disparity(depth: np.ndarray, rgb: np.ndarray, transform) -> np.ndarray:
-    """(H, W) float32: the colorization fill of ``depth`` (H, W) metres with NaN holes, guided by ``rgb``
-    (H, W, 3) in [0, 1], in ``transform``'s normalised disparity. The fill works on inverse depth 1/z,
-    where the kit's classical fills work (linear is exact on planes there); valid pixels keep their value.
+    """(H, W) float32: the fill of ``depth`` (H, W) metres with NaN holes that the kit mixes into its
+    result, guided by ``rgb`` (H, W, 3) in [0, 1], in ``transform``'s normalised disparity: the mean of
+    the classical fills :data:`FILL_MEMBERS` (Levin et al.'s colorization and Barron & Poole's fast
+    bilateral solver), which err in different places on a real photograph. The fills work on inverse
+    depth 1/z, where the kit's classical fills work (linear is exact on planes there); valid pixels keep
+    their value.
 
     Example:
         >>> from ddp_lite.method.disparity import DisparityTransform
@@ -114,10 +123,11 @@ def fill_disparity(depth: np.ndarray, rgb: np.ndarray, transform) -> np.ndarray:
         >>> bool(np.allclose(transform.to_depth(z[:, 1]), 1 / 1.5, rtol=1e-3))  # the mean of 1/1 and 1/0.5, inverted
         True
     """
-    from ..classical.baselines import fill_colorization
+    from ..classical.baselines import BASELINES
 
-    inverse = fill_colorization(1.0 / np.asarray(depth, np.float64), rgb)  # (H, W) 1/m
-    return np.asarray(transform.to_disparity(1.0 / inverse), np.float32)
+    inverse = 1.0 / np.asarray(depth, np.float64)  # (H, W) 1/m, NaN in the holes
+    filled = np.mean([BASELINES[name](inverse, rgb) for name in FILL_MEMBERS], axis=0, dtype=np.float64)
+    return np.asarray(transform.to_disparity(1.0 / filled), np.float32)
 
 
 def fill_holdout(valid: np.ndarray, seed: int = 0) -> np.ndarray:

@@ -64,7 +64,7 @@ class FitConfig:
     ensemble: int = 1  # fits with seeds seed, seed+1, ...; their disparities are averaged
     blend_paper: bool = False  # also fit the paper's recipe and blend the two fits (method.blend)
     blend_weight: float | None = 0.5  # this config's fit's weight in that blend; None: chosen on a held-out ring
-    blend_fill: float | None = 0.0  # share of the input's colorization fill in the final disparity (method.blend;
+    blend_fill: float | None = 0.0  # share of the input's colour-guided fill in the final disparity (method.blend;
     # 0: none; None: chosen on held-out blobs of the valid input)
     smoothness: float = 0.0  # weight of an edge-aware second-order smoothness of disparity in the holes (0: the paper)
     smoothness_edge: float = 10.0  # how strongly colour edges relax both hole terms: exp(-edge · |∇I|)

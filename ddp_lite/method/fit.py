@@ -188,7 +188,7 @@ def blend_members(config: FitConfig) -> tuple[FitConfig, FitConfig]:
 
 def fit_with_fill(rgb, depth, camera, neighbors, variant, config, gt_depth, transform, callback, init) -> DepthResult:
     """``config.blend_fill``: the result of ``config`` without it (one fit, a blend or an ensemble) with a
-    share of the input's colorization fill mixed in (:func:`with_fill`)."""
+    share of the input's colour-guided fill mixed in (:func:`with_fill`)."""
     config, depth, rgb, neighbors, gt_depth, transform = check_fit_inputs(rgb, depth, camera, neighbors, variant,
                                                                            config, gt_depth, transform)
     def fit(held_out: np.ndarray) -> DepthResult:
@@ -198,7 +198,7 @@ def fit_with_fill(rgb, depth, camera, neighbors, variant, config, gt_depth, tran
 
 
 def with_fill(fit, depth: np.ndarray, rgb: np.ndarray, config: FitConfig) -> DepthResult:
-    """``fit(depth) -> DepthResult`` with ``config.blend_fill`` f of the colorization fill of ``depth`` (H, W)
+    """``fit(depth) -> DepthResult`` with ``config.blend_fill`` f of the colour-guided fill of ``depth`` (H, W)
     metres (NaN holes) mixed in (:func:`mixed_with_fill`). f = None: ``fit`` runs on ``depth`` with
     blobs of its valid pixels held out (:func:`~ddp_lite.method.blend.fill_holdout`), and f is the share
     that best predicts them against a fill of the same held-out input
@@ -222,7 +222,7 @@ def with_fill(fit, depth: np.ndarray, rgb: np.ndarray, config: FitConfig) -> Dep
 
 
 def mixed_with_fill(result: DepthResult, depth: np.ndarray, rgb: np.ndarray, share: float) -> DepthResult:
-    """``result`` with ``share`` of the colorization fill of the input ``depth`` (H, W) metres (NaN holes),
+    """``result`` with ``share`` of the colour-guided fill of the input ``depth`` (H, W) metres (NaN holes),
     guided by ``rgb`` (H, W, 3), mixed into its disparity: (1 − share)·Z + share·Z_fill, in the result's
     transform (:func:`ddp_lite.method.blend.fill_disparity`). ``history`` gets ``blend_fill``."""
     transform = result.transform

@@ -92,7 +92,7 @@ def fill_channel(disparity: np.ndarray, rgb: np.ndarray | None, scale: float = 1
     hole's depth is whatever function of them fits the valid pixels best.
 
     Example:
-        >>> fill_channel(np.array([[0.2, np.nan, 0.6], [0.2, 0.4, 0.6]]), None).round(3).tolist()
+        >>> fill_channel(np.array([[0.2, np.nan, 0.6], [0.2, 0.4, 0.6]]), None).astype(float).round(3).tolist()
         [[0.2, 0.4, 0.6], [0.2, 0.4, 0.6]]
     """
     shifted = disparity + 1.0  # the fills take positive values (they are written for metres); 0 is a valid disparity

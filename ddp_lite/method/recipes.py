@@ -9,11 +9,11 @@ A profile (``ci``, ``class``, ``paper``; ``DDP_PROFILE``) sets the size and the 
 - ``kit`` (the default): the paper's losses *plus* what the kit found to help at laptop sizes, per
   profile (:data:`KIT_AT`): the curvature and flatness terms in the holes, relaxed at colour edges
   (:mod:`ddp_lite.method.hole_terms`); the pixel coordinates and the blurred colour image as the net's
-  input (:mod:`ddp_lite.method.nets`); at ``class``, a fifth of the input's colorization fill mixed into
-  the result where the variant sees colour (:mod:`ddp_lite.method.blend`). At ``paper`` it is the
+  input (:mod:`ddp_lite.method.nets`); a share of a colour-guided fill of the input mixed into the result
+  where the variant sees colour (:mod:`ddp_lite.method.blend`). At ``paper`` it is the
   paper's method.
 - ``photo``: for real photographs, the mean of a ``kit`` fit, a ``paper`` fit and the input's
-  colorization fill (two fits, :mod:`ddp_lite.method.blend`): ahead of each on the real Middlebury
+  colour-guided fill (two fits, :mod:`ddp_lite.method.blend`): ahead of each on the real Middlebury
   pair, behind ``kit`` on the rendered scenes.
 
 Every profile runs with every recipe, so ``FitConfig.for_profile("ci", recipe="paper")`` is the
@@ -65,9 +65,10 @@ KIT_AT = {
         flatness=0.6,  # first order in the holes: a hole at the border levels off (with edge 100: 1.53× → 1.38×)
         image_input=1.0,  # the colour image in the net's input puts depth edges at colour edges (2.24× → 1.53×)
         image_blur=0.5,  # ... blurred by 0.5 px, class's 1 px at ci's half size (1 px: 1.73×, none: 1.93×)
-        # class's fifth of the input's colorization fill (variants with colour): at ci it helps both suites, the
-        # real pair 1.33× → 1.23× (rgbd, 15 of 15 fits) and the rendered scenes 1.64× → 1.54× (14 of 22)
-        blend_fill=0.2,
+        # class's quarter of the input's colour-guided fill (variants with colour): the real pair 1.330× → 1.201×
+        # (rgbd), 1.315× → 1.188× (with the warp term); the rendered scenes' geometric mean 1.246× → 1.210× (rgbd),
+        # 1.194× → 1.178× (their plain mean 1.64× → 1.58×: the bilateral solver costs on desk/blobs at 48×64)
+        blend_fill=0.25,
     ),
     "class": dict(
         smoothness=1.0,  # curvature in the holes, as at ci (1.34× → 1.22× when it came in)
@@ -78,9 +79,10 @@ KIT_AT = {
         image_input=1.0,  # the colour image in the net's input puts depth edges at colour edges (0.904× → 0.875×)
         image_blur=1.0,  # ... blurred by 1 px (none: 0.880×, 2 px: 0.873× against 0.869× on one seed)
         bf16=None,  # the net in bfloat16 where the CPU has it natively: 0.825× vs 0.857× in fp32, 20.4 vs 23.0 s
-        # a fifth of the input's colorization fill in the result (variants with colour): on the real Middlebury
-        # pair 1.205× → 1.123× with the warp term, 1.227× → 1.146× without; the rendered scenes +0.018 ± 0.011
-        blend_fill=0.2,
+        # a quarter of the input's fill (the mean of the colorization and bilateral-solver fills) in the result
+        # (variants with colour): on the real Middlebury pair 1.227× → 1.123× (rgbd), 1.205× → 1.102× (with the
+        # warp term); the rendered scenes 0.852× → 0.867× (rgbd, two seeds), 0.833× → 0.853× (with the warp term)
+        blend_fill=0.25,
     ),
     "paper": {},  # at the paper's size, the paper's method
 }
@@ -94,11 +96,11 @@ RECIPES = {
     "paper": Recipe("paper", dict(smoothness=0.0, flatness=0.0, image_input=0.0, fill_input=0.0, net_input="noise",
                                   noise_channels=16, blend_paper=False, blend_fill=0.0),
                     "the paper's losses (Eq. 2-5) from its 16-channel noise input, nothing added", base="kit"),
-    # for real photographs: the two recipes and the colorization fill err in different places there (the
+    # for real photographs: the two recipes and the colour-guided fill err in different places there (the
     # kit on occlusions, the paper on blob holes, the fill where colour misleads), and their mean beats
     # each (docs/real_data.md); on the rendered scenes it costs
     "photo": Recipe("photo", dict(blend_paper=True, blend_weight=0.5, blend_fill=1 / 3),
-                    "for real photographs: the mean of the kit's fit, the paper's and a colorization fill, two fits",
+                    "for real photographs: the mean of the kit's fit, the paper's and a colour-guided fill, two fits",
                     base="kit"),
 }
 
@@ -137,7 +139,7 @@ def describe_method(settings: dict) -> str:
             + (f", mean of {ensemble} fits" if ensemble > 1 else "")
             + ((", blended with the paper recipe's fit, " + ("weight from a held-out ring" if settings.get("blend_weight", 0.5) is None
                else f"weight {settings.get('blend_weight', 0.5):g}")) if settings.get("blend_paper") else "")
-            + (", and with the input's colorization fill, " + (
+            + (", and with the input's colour-guided fill (colorization and bilateral solver, averaged), " + (
                 "its share (0–0.5) chosen on held-out blobs of the valid depth" if settings["blend_fill"] is None
                 else f"share {settings['blend_fill']:.3g}") + " (not for depth-only)"
                if settings.get("blend_fill", 0.0) != 0 else ""))
