@@ -24,12 +24,13 @@ import numpy as np
 import bench_quality as bq
 from data_fetch.atomic import atomic_path
 from ddp_lite.classical.baselines import BASELINES
+from ddp_lite.method.blend import FILL_MEMBERS
 from _common import add_profile_args, profile_from_args
 
 MEMBERS = {
     "col": ("colorization",),
     "bs": ("bilateral-solver",),
-    "col+bs": ("colorization", "bilateral-solver"),  # the kit's (ddp_lite.method.blend.FILL_MEMBERS)
+    "col+bs": FILL_MEMBERS,  # the kit's
     "col+bs+gf": ("colorization", "bilateral-solver", "guided-filter"),
 }
 SHARES = (0.0, 0.2, 0.25, 0.3)
@@ -71,10 +72,9 @@ def report(out: dict, reference: tuple[str, float]) -> None:
         for member in MEMBERS:
             for share in SHARES[1:]:
                 value = np.array([out[k][(member, share)] for k in keys])
-                change = value - ref
-                spread = change.std(ddof=1) / np.sqrt(len(change)) if len(change) > 1 else float("nan")
-                print(f"  {member:<10} {share:<5} {value.mean():.3f}  {change.mean():+.3f} ± {spread:.3f} "
-                      f"({(change < 0).sum()}/{len(change)} gain)  geometric {np.exp(np.log(value).mean()):.3f}")
+                change = bq.paired_difference(value, ref)
+                print(f"  {member:<10} {share:<5} {value.mean():.3f}  {change['mean']:+.3f} ± {change['se']:.3f} "
+                      f"({change['better']}/{change['n']} gain)  geometric {np.exp(np.log(value).mean()):.3f}")
 
 
 def main() -> None:
