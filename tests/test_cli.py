@@ -306,7 +306,8 @@ def test_a_terminal_bar_shows_the_whole_commands_share_and_time_left(monkeypatch
             if i == 49:
                 break  # the first fit stops early: its 50 unrun iterations are handed back
         first.close()
-        assert clock.done == 100 and clock.summary() == "all 50%, 0:50 left"  # 50 s for 100, 100 to go
+        # 50 s for the 50 iterations run, 100 to go: the 50 handed back count as done, not as time spent
+        assert clock.done == 100 and clock.summary() == "all 50%, 1:40 left"
         second = progress(range(100), desc="fit 2", stream=screen)
         for _ in second:
             clock_now[0] += 1.0
@@ -317,6 +318,28 @@ def test_a_terminal_bar_shows_the_whole_commands_share_and_time_left(monkeypatch
         for _ in progress(range(10), desc="fit", stream=log):
             clock_now[0] += 1.0
     assert log.getvalue().splitlines()[0].endswith("(all 10%, 0:09 left)")
+
+
+def test_time_left_skips_set_up_and_expects_an_auto_stop(monkeypatch):
+    """Set-up before the first iteration is no iteration; a fit that may stop by itself expects to run
+    its expected share, until its stopper says more (hand-computed figures, one second per iteration)."""
+    from ddp_lite import progress as progress_module
+    from ddp_lite.core.progress import command_progress, progress
+    now = [0.0]
+    monkeypatch.setattr(progress_module.time, "perf_counter", lambda: now[0])
+    with command_progress(400, expected_share=0.5) as clock:  # two fits of ≤ 200, expected to run half
+        now[0] += 100.0  # set-up: 100 s before the first iteration
+        bar = progress(range(200), desc="fit", stream=_Terminal())
+        for i in bar:
+            now[0] += 1.0
+            if i == 19:
+                break
+        # 20 run at 1 s each: this fit's 180 to its cap expected at half (90), the next fit's 200 too (100)
+        assert clock.summary() == "all 5%, 3:10 left"
+        bar.expect(150)  # its stopper now expects it to run 150 in all: 130 more, and the next fit 100
+        assert clock.summary() == "all 5%, 3:50 left"
+        bar.close()  # it stopped at 20: 180 handed back, the next fit expected at 100
+        assert clock.summary() == "all 50%, 1:40 left"
 
 
 def test_complete_with_intrinsics_writes_the_frame_as_a_point_cloud(tmp_path, capsys):

@@ -9,9 +9,12 @@ The choice follows the stream the bar writes to (stderr, as tqdm does): a bar on
 a bar even when stdout is redirected, and a redirected stderr gets lines.
 
 A command that runs several fits (a demo, an ensemble) opens :func:`command_progress` with the
-iterations it expects in all; every bar opened inside counts toward it and shows the whole
-command's share and time left beside its own (``all 40%, 1:12 left``). A fit that stops early
-hands its unrun iterations back, so the estimate shrinks instead of stalling.
+iterations it plans in all; every bar opened inside counts toward it and shows the whole
+command's share and time left beside its own (``all 40%, 1:12 left``). The time left is the rate
+of the iterations run so far (from the first one: set-up before it is not an iteration) times the
+iterations still expected. A fit that may stop by itself expects to run ``expected_share`` of its
+cap until it says better (:meth:`CommandClock.expect`, from its stopper's state); a fit that stops
+early hands its unrun iterations back, so the share jumps ahead and the time left shrinks.
 """
 from __future__ import annotations
 
@@ -23,22 +26,68 @@ __all__ = ["progress", "LineProgress", "command_progress", "CommandClock"]
 
 
 class CommandClock:
-    """Iterations done of a whole command's ``total``, and the time left at the rate so far."""
+    """Iterations done of a whole command's ``total``, and the time left at the rate so far.
 
-    def __init__(self, total: int):
+    ``expected_share``: the share of its iterations a fit is expected to run (below 1 where fits stop
+    by themselves); the open bar's own expectation (:meth:`expect`) replaces it for that bar.
+    """
+
+    def __init__(self, total: int, expected_share: float = 1.0):
         if not (isinstance(total, int) and total >= 1):
             raise ValueError(f"total must be a positive number of iterations, got {total!r}")
-        self.total, self.done, self.start = total, 0, time.perf_counter()
+        if not 0 < expected_share <= 1:
+            raise ValueError(f"expected_share must be in (0, 1], got {expected_share!r}")
+        self.total, self.expected_share = total, float(expected_share)
+        self.ran = self.skipped = 0  # iterations run; iterations handed back unrun by fits that stopped early
+        self.first = self.last = None  # when the first and the latest iteration started: the rate's span
+        self.bar_left = None  # (planned, expected) iterations left of the open bar, when it has said so
+        self.start = time.perf_counter()
+
+    @property
+    def done(self) -> int:
+        """Iterations run or handed back, of ``total``."""
+        return min(self.total, self.ran + self.skipped)
 
     def advance(self, n: int = 1) -> None:
-        self.done = min(self.total, self.done + n)
+        """``n`` iterations were run."""
+        self.last = time.perf_counter()
+        if self.first is None:
+            self.first = self.last  # the rate is measured from here: set-up before it is no iteration
+        self.ran += n
+
+    def hand_back(self, n: int) -> None:
+        """A fit stopped ``n`` iterations before its cap: they will not run."""
+        self.skipped += n
+        self.bar_left = None
+
+    def expect(self, planned_left: int, expected_left: int) -> None:
+        """The open bar has ``planned_left`` iterations to its cap and expects to run ``expected_left`` of them."""
+        self.bar_left = (max(0, int(planned_left)), max(0, int(expected_left)))
+
+    def seconds_left(self) -> float | None:
+        """Seconds still expected, or None before a rate can be measured."""
+        if self.first is None:
+            return None
+        if self.ran >= 2:
+            rate = (self.last - self.first) / (self.ran - 1)  # seconds per iteration since the first
+        else:
+            rate = time.perf_counter() - self.first  # the first iteration, still running or just done
+        if rate <= 0:
+            return None
+        planned_left = self.total - self.done
+        expected_left = planned_left * self.expected_share
+        if self.bar_left is not None:
+            bar_planned, bar_expected = self.bar_left
+            bar_planned = min(bar_planned, planned_left)
+            expected_left = bar_expected + (planned_left - bar_planned) * self.expected_share
+        return rate * expected_left
 
     def summary(self) -> str:
-        """``all 40%, 1:12 left`` (no time until something is done)."""
+        """``all 40%, 1:12 left`` (no time until a rate is measured)."""
         share = self.done / self.total
-        if not self.done:
+        left = self.seconds_left()
+        if left is None:
             return f"all {share:.0%}"
-        left = (time.perf_counter() - self.start) * (self.total - self.done) / self.done
         minutes, seconds = divmod(int(round(left)), 60)
         return f"all {share:.0%}, {minutes}:{seconds:02d} left"
 
@@ -47,9 +96,10 @@ _COMMAND: list[CommandClock] = []  # the innermost open command_progress, if any
 
 
 @contextlib.contextmanager
-def command_progress(total: int):
-    """Count every bar opened inside the block toward ``total`` iterations (a whole command's)."""
-    clock = CommandClock(total)
+def command_progress(total: int, expected_share: float = 1.0):
+    """Count every bar opened inside the block toward ``total`` iterations (a whole command's), of
+    which fits that may stop by themselves are expected to run ``expected_share``."""
+    clock = CommandClock(total, expected_share)
     _COMMAND.append(clock)
     try:
         yield clock
@@ -79,8 +129,14 @@ class _Counted:
 
     def _hand_back(self) -> None:
         if self.total and self.n < self.total:  # stopped early: the rest will not run
-            self.clock.advance(self.total - self.n)
+            self.clock.hand_back(self.total - self.n)
             self.total = self.n
+        self.clock.bar_left = None
+
+    def expect(self, expected_total: int) -> None:
+        """This bar now expects to run ``expected_total`` iterations in all (its stopper's estimate)."""
+        if self.total:
+            self.clock.expect(self.total - self.n, min(expected_total, self.total) - self.n)
 
     def close(self) -> None:
         self._hand_back()

@@ -8,6 +8,7 @@ Only the net runs under bfloat16 autocast (:func:`ddp_lite.method.loop.run`); th
 from __future__ import annotations
 
 import functools
+import os
 
 import torch
 
@@ -28,13 +29,23 @@ def use_bf16(bf16: bool | None, device: torch.device) -> bool:
 
 @functools.lru_cache(maxsize=1)
 def _cpu_has_native_bf16() -> bool:
-    # oneDNN reports bf16 "supported" on any AVX-512 CPU, emulated or not: ask the CPU itself
+    # oneDNN reports bf16 "supported" on any AVX-512 CPU, emulated or not: ask the CPU itself, and
+    # whether torch may use it (ATEN_CPU_CAPABILITY / ONEDNN_MAX_CPU_ISA cap the kernels at AVX2, as on
+    # most laptops: there bfloat16 would be emulated, several times slower than float32)
     try:
         with open("/proc/cpuinfo") as handle:
             flags = next((line.split(":", 1)[1].split() for line in handle if line.startswith("flags")), [])
     except OSError:
         return False
-    return "avx512_bf16" in flags or "amx_bf16" in flags
+    return ("avx512_bf16" in flags or "amx_bf16" in flags) and not _isa_capped_below_avx512()
+
+
+def _isa_capped_below_avx512() -> bool:
+    """Whether torch's or oneDNN's kernels are held below AVX-512 (by the environment variables above)."""
+    if torch.backends.cpu.get_cpu_capability() not in ("AVX512", "AVX512_BF16", "AMX"):
+        return True
+    isa = os.environ.get("ONEDNN_MAX_CPU_ISA", os.environ.get("DNNL_MAX_CPU_ISA", "ALL")).upper()
+    return isa != "ALL" and not isa.startswith(("AVX512", "AVX10", "AMX"))
 
 
 def resolve_device(config) -> torch.device:
