@@ -52,15 +52,16 @@ lab-command:
 	@echo '$(LAB_CMD)'
 
 # The tests and notebooks run in $(TEST_WORKERS) processes (pytest-xdist; each file stays in one, so a
-# notebook's cells run in order in one kernel; tests/conftest.py puts the notebooks first and the
-# student copies right after them, which read the notebooks' fits from the session's fit cache),
+# notebook's cells run in order in one kernel, but the student copies are spread one per notebook;
+# tests/conftest.py puts the notebooks first, slowest first, and the student copies right after them,
+# which read the notebooks' fits from the session's fit cache),
 # each with one torch thread: on 2 cores, two 1-thread processes finish sooner than
 # one 2-thread process, because most of a test is Python, not arithmetic. TEST_WORKERS=0 runs
 # everything in one process (torch then takes 2 threads).
 TEST_WORKERS ?= 2
 
 test: $(STAMP)
-	DDP_PROFILE=ci MPLBACKEND=Agg $(if $(filter 0,$(TEST_WORKERS)),,OMP_NUM_THREADS=1) $(PY) -m pytest tests --nbval-lax --nbval-current-env notebooks -p no:cacheprovider -n $(TEST_WORKERS) --dist loadfile --no-loadscope-reorder
+	DDP_PROFILE=ci MPLBACKEND=Agg $(if $(filter 0,$(TEST_WORKERS)),,OMP_NUM_THREADS=1) $(PY) -m pytest tests --nbval-lax --nbval-current-env notebooks -p no:cacheprovider -n $(TEST_WORKERS) --dist loadgroup --no-loadscope-reorder
 
 # The classroom kit (README, "For instructors"). notebooks/ is the instructor version; `student`
 # strips solutions and outputs, `solutions` executes every notebook at $(SOLUTIONS_PROFILE) (class:

@@ -42,15 +42,35 @@ def _fit_cache_only_where_marked(request, monkeypatch):
         monkeypatch.delenv("DDP_CACHE", raising=False)
 
 
-def pytest_collection_modifyitems(config, items):
-    """`make test` spreads whole files over its workers (``--dist loadfile``: a notebook's cells share
-    one kernel; a module's fixtures are built once), in collection order. The slow files go first,
-    so the short ones fill the tails: the notebooks, then the student copies (which read the
-    notebooks' fits from the session's cache, so they come after them), then the rest."""
-    def rank(item):
-        return 0 if item.path.suffix == ".ipynb" else 1 if item.path.name == "test_student_copies.py" else 2
+# The notebooks that take longest at `ci`, longest first: started first, they do not end the run alone.
+SLOW_NOTEBOOKS = ("10_", "12_", "05_", "06_", "11_", "07_")
 
-    items.sort(key=rank)
+
+def pytest_collection_modifyitems(config, items):
+    """`make test` spreads groups of tests over its workers (``--dist loadgroup``), in collection order. A
+    group is a whole file (a notebook's cells share one kernel; a module's fixtures are built once),
+    except the student copies: one group per notebook, so both workers share them. The slow files go
+    first, so the short ones fill the tails: the notebooks, slowest first, then the student copies in
+    the same order (they read the notebooks' fits from the session's cache, so they come after
+    them: a copy started before its notebook has ended would fit again), then the rest."""
+    def notebook_rank(name: str) -> int:
+        return next((i for i, prefix in enumerate(SLOW_NOTEBOOKS) if name.startswith(prefix)), len(SLOW_NOTEBOOKS))
+
+    def rank(item):
+        if item.path.suffix == ".ipynb":
+            return 0, notebook_rank(item.path.name)
+        if item.path.name == "test_student_copies.py":
+            source = getattr(item, "callspec", None) and item.callspec.params.get("source")
+            return 1, notebook_rank(source.name) if source is not None else -1
+        return 2, 0
+
+    for item in items:
+        group = item.path.name
+        if item.path.name == "test_student_copies.py" and getattr(item, "callspec", None):
+            source = item.callspec.params.get("source")
+            group = f"student copy of {source.name}" if source is not None else group
+        item.add_marker(pytest.mark.xdist_group(group))
+    items.sort(key=rank)  # stable: a file's tests and a notebook's cells keep their order
 
 
 # What several test files share; they import it with ``from conftest import ...`` (tests/ is on sys.path).

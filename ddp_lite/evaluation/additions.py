@@ -13,7 +13,7 @@ import numpy as np
 from ..classical.baselines import BASELINES
 from ..classical.stereo import pixel_disparity
 from ..method.config import FitConfig
-from ..method.fit import complete_depth
+from ..method.fit import complete_depth, mixed_with_fill
 from ..method.profiles import get_profile
 from ..method.recipes import get_recipe
 from .experiments import Case, make_case
@@ -93,16 +93,26 @@ def run_additions(cases: dict[str, Case], profile=None, seeds=(0, 1, 2), variant
     for case_name, case in cases.items():
         out["best_fill"][case_name] = best = _best_fill_px(case)
         out["px"][case_name], out["ratio"][case_name], out["example"][case_name] = {}, {}, {}
+        fits, previous = {}, None  # seed → the previous step's result, and that step's overrides
         for step, overrides in steps.items():
             errors = []
+            # a step that only adds the fill's share mixes it into the previous step's fits: the same net fit
+            only_fill = previous is not None and {**previous, "blend_fill": overrides.get("blend_fill")} == overrides
             for seed in seeds:
                 config = FitConfig.for_profile(profile, variant=variant, recipe="paper", seed=seed, progress=False,
                                                **overrides)
                 neighbors = case.neighbors if variant == "rgbd+warp" else ()
-                result = complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant, config=config)
+                if only_fill and not previous.get("blend_fill") and config.blend_fill:
+                    result = mixed_with_fill(fits[seed], np.asarray(case.depth, np.float32),
+                                             np.asarray(case.rgb, np.float32), config.blend_fill)
+                else:
+                    result = complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant,
+                                            config=config)
+                fits[seed] = result
                 errors.append(hole_error_px(case, result.merged(case.depth)))
                 if seed == seeds[0]:
                     out["example"][case_name][step] = result.merged(case.depth)
+            previous = overrides
             out["px"][case_name][step] = errors
             out["ratio"][case_name][step] = [e / best[1] for e in errors]
             log(f"{case_name:<22} {step:<38} " + " ".join(f"{e:.3f}" for e in errors) + " px")
