@@ -68,13 +68,13 @@ def cpu_flags() -> tuple[str, set]:
 def onednn_kernel() -> str:
     """The oneDNN kernel a 3×3 float32 convolution runs with here (e.g. ``jit:avx2``), read from its
     verbose line in a child process with this environment."""
-    code = ("import torch; torch.nn.functional.conv2d(torch.rand(1, 16, 32, 32), torch.rand(16, 16, 3, 3), "
-            "padding=1)")
+    code = ("import torch; torch.nn.functional.conv2d(torch.rand(1, 32, 96, 128), torch.rand(32, 32, 3, 3), "
+            "padding=1)")  # large enough for torch to hand it to oneDNN
     env = dict(os.environ, ONEDNN_VERBOSE="1", OMP_NUM_THREADS="1")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env).stdout
     for line in out.splitlines():
         if ",exec,cpu,convolution," in line:
-            return line.split(",")[5]
+            return line.split(",")[6]
     return "unknown (no oneDNN verbose line)"
 
 
