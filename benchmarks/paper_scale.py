@@ -60,8 +60,8 @@ def iterations_for_budget(seconds_left: float, fits: list[tuple[float, float]], 
     ``(setup seconds, seconds per iteration)``; at least 1, at most ``most``.
 
     Example:
-        >>> iterations_for_budget(100.0, [(5.0, 0.1), (5.0, 0.3)], 16000)   # (100 - 10) / 0.4
-        225
+        >>> iterations_for_budget(100.0, [(5.0, 0.25), (5.0, 0.25)], 16000)   # (100 - 10) / 0.5
+        180
     """
     setup, per_iteration = sum(s for s, _ in fits), sum(p for _, p in fits)
     if per_iteration <= 0:
