@@ -330,7 +330,11 @@ def fill_guided_filter(depth, rgb=None, radius: int = 2, eps: float = 1e-4) -> n
     out[reached] = np.clip(q, lo, hi)[reached]
     deeper = holes & ~reached
     if deeper.any():
-        out[deeper] = _griddata(depth, None, "linear")[deeper] if valid.sum() >= 3 else _nearest(depth, valid)[deeper]
+        try:
+            base = _griddata(depth, None, "linear")
+        except ValueError:  # fewer than 3 valid pixels, or all on one line: no triangle to interpolate in
+            base = _nearest(depth, valid)
+        out[deeper] = base[deeper]
     return out.astype(np.float32)
 
 
