@@ -161,7 +161,13 @@ def test_guided_filter_fill_matches_a_window_by_window_regression():
     holes[::3, 1::4] = True  # isolated holes: every one is reached at the first radius
     depth[holes] = np.nan
     out = fill_guided_filter(depth, rgb, radius=1, eps=1e-2)
-    expected = _brute_force_guided_filter(rgb, np.where(holes, 0.0, depth), (~holes).astype(float), 1, 1e-2)
+    unclamped = _brute_force_guided_filter(rgb, np.where(holes, 0.0, depth), (~holes).astype(float), 1, 1e-2)
+    expected = unclamped.copy()
+    # each pixel within the valid depth its windows saw: the 5×5 square around it, cut at the image's border
+    for y, x in zip(*np.nonzero(holes)):
+        seen = depth[max(0, y - 2):y + 3, max(0, x - 2):x + 3]
+        expected[y, x] = np.clip(expected[y, x], np.nanmin(seen), np.nanmax(seen))
+    assert np.abs(out - unclamped)[holes].max() > 0.05  # the clamp matters here
     np.testing.assert_allclose(out[holes], expected[holes], rtol=0, atol=1e-5)
 
 
