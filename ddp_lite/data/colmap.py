@@ -21,8 +21,8 @@ from scipy.spatial.transform import Rotation
 
 from data_fetch.atomic import write_bytes_atomic
 from data_fetch.files import regular_file
-from ..core.camera import Camera
-from .fileio import (checked_depth_png_bytes, rgb_png_bytes, read_depth_file, read_rgb, npy_bytes, pfm_bytes,
+from ..core.camera import Camera, check_intrinsics
+from .fileio import (checked_depth_png_bytes, float_depth, rgb_png_bytes, read_depth, read_rgb, npy_bytes, pfm_bytes,
                      read_colmap_depth, write_colmap_depth)
 from .resample import finish_scene, undistort_rgbd
 from .textparse import parse_error, parse_floats, quaternion_rotation, text_lines
@@ -76,6 +76,10 @@ def read_colmap_cameras(path) -> dict[int, ColmapCamera]:
         fx, fy = p.get("fx", p.get("f")), p.get("fy", p.get("f"))
         K = np.array([[fx, 0.0, p["cx"] - 0.5], [0.0, fy, p["cy"] - 0.5], [0.0, 0.0, 1.0]])
         dist = np.array([p.get("k1", p.get("k", 0.0)), p.get("k2", 0.0), p.get("p1", 0.0), p.get("p2", 0.0), 0.0])
+        try:  # the camera against its own WIDTH HEIGHT, before any image is read
+            check_intrinsics(K, int(tokens[2]), int(tokens[3]), "K")
+        except ValueError as error:
+            raise parse_error(path, line, f"camera {tokens[0]}: {error}") from None
         camera_id = int(tokens[0])
         if camera_id in cameras:
             raise parse_error(path, line, f"CAMERA_ID {camera_id} appears twice")
@@ -183,7 +187,7 @@ def read_colmap(folder, images_dir=None, depth_dir=None, depth_suffix: str | Non
         if rgb.shape[:2] != (cam.height, cam.width):
             raise parse_error(images_path, line, f"image {image_name} is {rgb.shape[1]}×{rgb.shape[0]} but camera {camera_id} "
                                            f"is {cam.width}×{cam.height}")
-        depth = read_depth_file(_depth_path(depth_dir, image_name, depth_suffix), depth_scale)
+        depth = read_depth(_depth_path(depth_dir, image_name, depth_suffix), depth_scale, "depth_dir")
         if depth.shape != rgb.shape[:2]:  # COLMAP's --max_image_size makes smaller maps: pixel centres, as resize_view
             depth = cv2.resize(depth, (cam.width, cam.height), interpolation=cv2.INTER_NEAREST_EXACT)
         if np.any(cam.dist != 0):
@@ -237,9 +241,9 @@ def write_colmap(scene: Scene, folder, depths=None, depth_format: str = "bin", m
             target = folder / "depth" / f"{Path(name).stem}.png"
             write_bytes_atomic(target, checked_depth_png_bytes(depth, 1.0 / depth_scale, target))
         elif depth_format == "npy":
-            write_bytes_atomic(folder / "depth" / f"{Path(name).stem}.npy", npy_bytes(depth))
+            write_bytes_atomic(folder / "depth" / f"{Path(name).stem}.npy", npy_bytes(float_depth(depth)))
         else:
-            write_bytes_atomic(folder / "depth" / f"{Path(name).stem}.pfm", pfm_bytes(depth))
+            write_bytes_atomic(folder / "depth" / f"{Path(name).stem}.pfm", pfm_bytes(float_depth(depth)))
     write_bytes_atomic(folder / "sparse" / "cameras.txt", ("\n".join(camera_lines) + "\n").encode("utf-8"))
     write_bytes_atomic(folder / "sparse" / "images.txt", ("\n".join(image_lines) + "\n").encode("utf-8"))
     write_bytes_atomic(folder / "sparse" / "points3D.txt", b"# 3D point list (empty: no sparse points written)\n")

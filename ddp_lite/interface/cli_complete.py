@@ -29,7 +29,7 @@ import numpy as np
 
 from data_fetch.atomic import write_bytes_atomic
 from data_fetch.files import regular_file
-from ..data.fileio import depth_png_bytes, npy_bytes, pfm_bytes, read_image_file, read_pfm, read_rgb
+from ..data.fileio import depth_png_bytes, npy_bytes, pfm_bytes, read_depth, read_rgb
 from ..core.outpaths import check_output_file
 
 
@@ -86,34 +86,17 @@ def _check_outputs(args, writers: dict) -> None:
 
 
 def _read_depth(path: str, scale: float | None, flag: str = "--depth") -> np.ndarray:
-    """``path`` as float32 metres, NaN where the file has no value (0, ≤ 0, inf, NaN); a scale that
-    gives an implausible depth range is refused (:func:`check_plausible_depth`)."""
+    """``path`` as float32 metres, NaN where the file has no value (0, ≤ 0, inf, NaN), read by the kit's one
+    depth reader (``fileio.read_depth``: 8-bit pictures refused, sentinels reported); a scale that gives an
+    implausible depth range is refused (:func:`check_plausible_depth`)."""
     _input_file(path, flag)
-    suffix = os.path.splitext(path)[1].lower()
-    if suffix == ".npy":
-        try:
-            raw = np.load(path, allow_pickle=False)
-        except (ValueError, OSError) as error:
-            raise ValueError(f"{flag}: cannot read {path!r} as a .npy array ({error})") from None
-    elif suffix == ".pfm":
-        raw = read_pfm(path)
-    else:
-        raw = read_image_file(path, flag)  # as stored: no EXIF rotation, like the colour below
-    if raw.ndim != 2 or raw.dtype == bool or not (np.issubdtype(raw.dtype, np.integer) or np.issubdtype(raw.dtype, np.floating)):
-        raise ValueError(f"{flag}: {path!r} must hold one channel of numbers (H, W), got {raw.dtype} {raw.shape}")
-    if scale is None:
-        if np.issubdtype(raw.dtype, np.integer):
-            raise ValueError(f"{flag}: {path!r} stores integers ({raw.dtype}); give --depth-scale, the metres per "
-                             f"stored unit (0.001 for millimetres, as in most 16-bit depth PNGs)")
-        scale = 1.0
-    stored = raw.astype(np.float64)
-    depth = stored * scale
-    valid = np.isfinite(depth) & (depth > 0)
-    if (np.isfinite(stored) & (stored > 0)).any() and not valid.any():
-        raise ValueError(f"--depth-scale {scale!r} turns every depth into 0")
-    if valid.any():
-        check_plausible_depth(stored[valid], scale, flag)
-    return np.where(valid, depth, np.nan).astype(np.float32)
+    depth = read_depth(path, scale, flag, scale_name="--depth-scale")
+    valid = np.isfinite(depth)
+    if not valid.any():
+        raise ValueError(f"{flag}: {path!r} holds no depth at all (every pixel is 0, negative, NaN or inf"
+                         + (f" at --depth-scale {scale:g}" if scale is not None else "") + ")")
+    check_plausible_depth(depth[valid], 1.0 if scale is None else scale, flag)
+    return depth
 
 
 DEPTH_RANGE_M = (1e-3, 1e4)  # no depth outside it, whatever the scene
@@ -121,12 +104,13 @@ MEDIAN_RANGE_M = (0.05, 300.0)  # a depth map's median: a cup from 5 cm up to a 
 COMMON_SCALES = (1.0, 1e-3, 1.0 / 5000, 1e-4, 1e-2)  # metres, mm, TUM's 1/5000 m, 0.1 mm, cm
 
 
-def check_plausible_depth(stored, scale: float, flag: str = "--depth") -> None:
-    """Refuse a scale under which the valid ``stored`` values (> 0, finite) are no plausible depth
-    map in metres: any depth outside ``DEPTH_RANGE_M``, or a median outside ``MEDIAN_RANGE_M``.
-    The message names the common scale (``COMMON_SCALES``) that would make it plausible, if any."""
-    stored = np.asarray(stored, dtype=np.float64)
-    low, high, median = (float(v) * scale for v in (stored.min(), stored.max(), np.median(stored)))
+def check_plausible_depth(depth, scale: float, flag: str = "--depth") -> None:
+    """Refuse a scale under which the valid depths (metres, > 0, finite; ``depth`` = stored values ×
+    ``scale``) are no plausible depth map: any depth outside ``DEPTH_RANGE_M``, or a median outside
+    ``MEDIAN_RANGE_M``. The message names the common scale (``COMMON_SCALES``) that would make it
+    plausible, if any."""
+    metres = np.asarray(depth, dtype=np.float64)
+    low, high, median = (float(v) for v in (metres.min(), metres.max(), np.median(metres)))
 
     def plausible(lo, hi, mid):
         return DEPTH_RANGE_M[0] <= lo and hi <= DEPTH_RANGE_M[1] and MEDIAN_RANGE_M[0] <= mid <= MEDIAN_RANGE_M[1]
@@ -226,10 +210,9 @@ def complete_command(args) -> int:
             raise ValueError(f"--gt is {gt.shape[0]}×{gt.shape[1]} but --depth is {depth.shape[0]}×{depth.shape[1]}")
     camera = None
     if args.intrinsics is not None:
-        from ..core.camera import Camera
-        from ..method.fit_inputs import check_principal_point
-        camera = Camera(np.array(args.intrinsics, dtype=np.float64), np.eye(4), depth.shape[1], depth.shape[0])
-        check_principal_point(camera, "--intrinsics")  # K of another image size would bend the point cloud
+        from ..core.camera import Camera, check_intrinsics
+        K = check_intrinsics(args.intrinsics, depth.shape[1], depth.shape[0], "--intrinsics")  # K of another size bends the cloud
+        camera = Camera(K, np.eye(4), depth.shape[1], depth.shape[0])
     holes = ~np.isfinite(depth)
     if not holes.any():
         raise ValueError(f"--depth {args.depth!r} has no holes (0, inf or NaN pixels): nothing to fill")
