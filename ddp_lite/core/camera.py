@@ -65,7 +65,7 @@ def check_intrinsics(K, width: int, height: int, name: str = "K") -> np.ndarray:
                              f"is it in pixels?")
     cx, cy = float(K[0, 2]), float(K[1, 2])
     if not (-0.5 <= cx <= width - 0.5 and -0.5 <= cy <= height - 0.5):
-        raise ValueError(f"{name}: the principal point (cx, cy) = ({cx:.6g}, {cy:.6g}) px lies outside the {width}×{height} "
+        raise ValueError(f"{name}: the principal point ({cx:.6g}, {cy:.6g}) px lies outside the {width}×{height} "
                          f"(W×H) image it is used with (x in [-0.5, {width - 0.5:g}], y in [-0.5, {height - 0.5:g}]); "
                          f"intrinsics belong to one image size, and these look like a ~{2 * cx + 1:.0f}×{2 * cy + 1:.0f} "
                          f"image's. Give the K of this image size (Camera.resized scales one)")

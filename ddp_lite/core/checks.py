@@ -121,7 +121,8 @@ def check_image(image, name: str, shape=None) -> np.ndarray:
     if array.ndim != 3 or array.shape[2] != 3:
         raise ValueError(f"{name} must have shape (H, W, 3), got {array.shape}")
     if shape is not None and array.shape[:2] != shape:
-        raise ValueError(f"{name} must be {shape[0]}×{shape[1]} like depth, got {array.shape[0]}×{array.shape[1]}")
+        raise ValueError(f"{name} must be (H, W, 3) = {(*shape, 3)} like depth, got {array.shape} "
+                         f"({array.shape[0]}×{array.shape[1]} instead of {shape[0]}×{shape[1]})")
     if not np.all(np.isfinite(array)):
         raise ValueError(f"{name} must contain only finite values")
     if array.min() < -1e-6 or array.max() > 1 + 1e-6:

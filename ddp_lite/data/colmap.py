@@ -22,6 +22,7 @@ from scipy.spatial.transform import Rotation
 from data_fetch.atomic import write_bytes_atomic
 from data_fetch.files import regular_file
 from ..core.camera import Camera, check_intrinsics
+from ..core.checks import check_bool, report_skipped
 from .fileio import (checked_depth_png_bytes, float_depth, rgb_png_bytes, read_depth, read_rgb, npy_bytes, pfm_bytes,
                      read_colmap_depth, write_colmap_depth)
 from .resample import finish_scene, undistort_rgbd
@@ -31,6 +32,8 @@ from ..core.views import Scene, View
 __all__ = ["COLMAP_MODELS", "ColmapCamera", "read_colmap_cameras", "read_colmap_images", "read_colmap_depth",
            "write_colmap_depth", "read_colmap", "write_colmap"]
 
+
+IMAGE_SUFFIXES = (".jpg", ".jpeg", ".png", ".tif", ".tiff", ".bmp", ".webp")  # what a folder of photos holds
 
 # model → its parameter names, in cameras.txt order
 COLMAP_MODELS = {
@@ -143,7 +146,8 @@ def _depth_path(depth_dir: Path, image_name: str, suffix: str | None) -> Path:
 
 
 def read_colmap(folder, images_dir=None, depth_dir=None, depth_suffix: str | None = None,
-                depth_scale: float | None = None, undistort: bool = False, size=None, name: str | None = None) -> Scene:
+                depth_scale: float | None = None, undistort: bool = False, size=None, name: str | None = None,
+                strict: bool = False) -> Scene:
     """A COLMAP workspace (a text model + images + per-image depth) → ``Scene``.
 
     Args:
@@ -158,10 +162,13 @@ def read_colmap(folder, images_dir=None, depth_dir=None, depth_suffix: str | Non
         undistort: cameras with distortion (SIMPLE_RADIAL, RADIAL, OPENCV) are refused unless True, then
             their images and depth are undistorted with OpenCV (depth by nearest pixel).
         size: (H, W) to resample to.
+        strict: refuse (``ValueError``) a workspace with images that ``images.txt`` does not list (COLMAP
+            could not register them) instead of leaving them out with a warning naming them.
     Returns:
         ``Scene``, views sorted by image name, named by the image name; COLMAP's world frame and units.
     """
     folder = Path(folder)
+    strict = check_bool(strict, "strict")
     if not folder.is_dir():
         raise FileNotFoundError(f"folder: {folder} is not a folder")
     cameras_path = _find(folder, ["cameras.txt", "sparse/cameras.txt", "sparse/0/cameras.txt"], "cameras.txt")
@@ -174,6 +181,12 @@ def read_colmap(folder, images_dir=None, depth_dir=None, depth_suffix: str | Non
         if depth_dir is None:
             raise FileNotFoundError(f"depth_dir: {folder} has neither stereo/depth_maps/ nor depth/; pass depth_dir")
     depth_dir = Path(depth_dir)
+    if images_dir.is_dir():  # images COLMAP did not register have no pose: say which are left out
+        listed = {str(Path(image_name)) for _, image_name, _, _, _ in images}
+        found = sorted(str(p.relative_to(images_dir)) for p in images_dir.rglob("*")
+                       if p.suffix.lower() in IMAGE_SUFFIXES and p.is_file())
+        report_skipped(images_dir, [f for f in found if f not in listed], "image(s)",
+                       f"are not listed in {images_path} (COLMAP registered no pose for them)", strict, total=len(found))
     views = []
     for image_id, image_name, camera_id, cam_from_world, line in images:
         if camera_id not in cameras:

@@ -24,6 +24,7 @@ import numpy as np
 
 from data_fetch.files import regular_file
 from ..core.camera import Camera, check_intrinsics
+from ..core.checks import check_bool, report_skipped
 # Middlebury, the file formats and resize_scene lived here; their names stay importable from here.
 from .fileio import (existing_path, read_rgb, read_text_file, depth_png_bytes, npy_bytes, pfm_bytes, read_depth, read_depth_image,
                      read_image_file, read_pfm, write_pfm)
@@ -132,14 +133,18 @@ def read_mvsnet_cam(path, width: int, height: int) -> tuple[Camera, dict]:
     return Camera(K, pose, width, height), info
 
 
-def load_tnt(folder, indices=None, size=None, depth_dir=None, name: str | None = None) -> Scene:
+def load_tnt(folder, indices=None, size=None, depth_dir=None, name: str | None = None, strict: bool = False) -> Scene:
     """An MVSNet-style TnT scene (``images/<id>.jpg``, ``cams/<id>_cam.txt``) → multi-view ``Scene``.
     ``indices``: positions in the sorted image list (default all: pass a few, and ``size``, for real
     scenes). Depth from ``depth_dir/<id>.pfm`` if given (≤ 0 or non-finite → NaN), else all NaN
     (TnT's ground truth is a point cloud, not depth maps). ``meta``: d_min/d_max from the depth maps,
-    else from the first cam file's depth range."""
+    else from the first cam file's depth range. Files in ``images/`` that are not .jpg/.png are named in a
+    warning (``strict``: refused)."""
     folder = existing_path(folder, "folder")
-    images = sorted(p for p in (folder / "images").glob("*") if p.suffix.lower() in (".jpg", ".jpeg", ".png"))
+    files = sorted(p for p in (folder / "images").glob("*") if p.is_file() and not p.name.startswith("."))
+    images = [p for p in files if p.suffix.lower() in (".jpg", ".jpeg", ".png")]
+    report_skipped(folder / "images", [p.name for p in files if p not in images], "file(s)", "are not .jpg or .png images",
+                   check_bool(strict, "strict"), total=len(files))
     if not images:
         raise ValueError(f"folder: {folder / 'images'} holds no .jpg/.png images")
     chosen = range(len(images)) if indices is None else list(indices)
