@@ -23,7 +23,7 @@ from data_fetch.atomic import write_bytes_atomic
 from data_fetch.files import regular_file
 from ..core.camera import Camera, check_intrinsics
 from ..core.checks import check_bool, report_skipped
-from .fileio import (checked_depth_png_bytes, float_depth, rgb_png_bytes, read_depth, read_rgb, npy_bytes, pfm_bytes,
+from .fileio import (check_same_size, checked_depth_png_bytes, float_depth, rgb_png_bytes, read_depth, read_rgb, npy_bytes, pfm_bytes,
                      read_colmap_depth, write_colmap_depth)
 from .resample import finish_scene, undistort_rgbd
 from .textparse import parse_error, parse_floats, quaternion_rotation, text_lines
@@ -197,9 +197,11 @@ def read_colmap(folder, images_dir=None, depth_dir=None, depth_suffix: str | Non
                                             f"{cam.dist[:4].tolist()}; the kit needs pinhole images: pass "
                                             f"undistort=True (CLI: --undistort) or run 'colmap image_undistorter'")
         rgb = read_rgb(images_dir / image_name, "images_dir")
-        if rgb.shape[:2] != (cam.height, cam.width):
-            raise parse_error(images_path, line, f"image {image_name} is {rgb.shape[1]}×{rgb.shape[0]} but camera {camera_id} "
-                                           f"is {cam.width}×{cam.height}")
+        try:
+            check_same_size(rgb.shape, (cam.height, cam.width), images_dir / image_name, f"image {image_name}",
+                            f"camera {camera_id}")
+        except ValueError as error:
+            raise parse_error(images_path, line, str(error)) from None
         depth = read_depth(_depth_path(depth_dir, image_name, depth_suffix), depth_scale, "depth_dir")
         if depth.shape != rgb.shape[:2]:  # COLMAP's --max_image_size makes smaller maps: pixel centres, as resize_view
             depth = cv2.resize(depth, (cam.width, cam.height), interpolation=cv2.INTER_NEAREST_EXACT)

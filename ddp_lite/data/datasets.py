@@ -26,7 +26,7 @@ from data_fetch.files import regular_file
 from ..core.camera import Camera, check_intrinsics
 from ..core.checks import check_bool, report_skipped
 # Middlebury, the file formats and resize_scene lived here; their names stay importable from here.
-from .fileio import (existing_path, read_rgb, read_text_file, depth_png_bytes, npy_bytes, pfm_bytes, read_depth, read_depth_image,
+from .fileio import (check_same_size, existing_path, read_rgb, read_text_file, depth_png_bytes, npy_bytes, pfm_bytes, read_depth, read_depth_image,
                      read_image_file, read_pfm, write_pfm)
 from .middlebury import (MiddleburyCalib, require_valid_depth, stereo_scene, load_middlebury, load_middlebury2006,
                          make_middlebury_fixture, parse_middlebury_calib, read_middlebury_calib)
@@ -200,8 +200,8 @@ def load_nyu(path, index: int = 0, depth_path=None, raw: bool = True, depth_scal
         rgb, depth = read_rgb(path), read_depth_image(depth_path, depth_scale)
         name = path.stem
     H, W = depth.shape
-    if rgb.shape[:2] != (H, W):
-        raise ValueError(f"the image is {rgb.shape[1]}×{rgb.shape[0]} but the depth is {W}×{H}")
+    check_same_size(rgb.shape, depth.shape, None if path.suffix.lower() == ".mat" else path, "the image",
+                    "the depth")
     if K is None:
         if (H, W) != (480, 640):
             raise ValueError(f"K must be given for a {W}×{H} image (NYU_K is for 640×480)")

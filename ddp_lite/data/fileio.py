@@ -111,6 +111,30 @@ def read_image_file(path, name: str = "path", flags: int = cv2.IMREAD_UNCHANGED)
     return image
 
 
+def check_same_size(rgb_shape, other_shape, rgb_path, rgb_name: str, other_name: str) -> None:
+    """Refuse colour and depth (or a camera) of different sizes: ``rgb_shape`` / ``other_shape`` are (H, W, ...)
+    shapes, ``rgb_name`` / ``other_name`` what the message calls them (the flag or file). When the colour file
+    carries an EXIF orientation that swaps its axes and its rotated size is the other's, the message says
+    so: the kit reads every image as stored (:func:`read_image_file`), so colour and depth must be stored alike."""
+    H, W = rgb_shape[:2]
+    h, w = other_shape[:2]
+    if (H, W) == (h, w):
+        return
+    hint = ""
+    if rgb_path is not None and (H, W) == (w, h):
+        try:
+            orientation = exif_orientation(Path(rgb_path).read_bytes())
+        except OSError:
+            orientation = None
+        if orientation in (5, 6, 7, 8):
+            hint = (f". {rgb_name} carries EXIF orientation {orientation} ({_ORIENTATIONS[orientation]}): a viewer shows "
+                    f"it {H}×{W} (W×H), ddp-lite reads its pixels as stored ({W}×{H}), as it reads depth. Store colour "
+                    f"and depth the same way up (e.g. PIL.ImageOps.exif_transpose on the colour, if the depth was "
+                    f"saved upright)")
+    raise ValueError(f"{rgb_name} is {W}×{H} (W×H) but {other_name} is {w}×{h}; they must be the same size, pixel "
+                     f"for pixel{hint}")
+
+
 def read_rgb(path, name: str = "path") -> np.ndarray:
     """An 8- or 16-bit image file → (H, W, 3) float32 RGB in [0, 1], pixels as stored (no EXIF rotation;
     see :func:`read_image_file`); grey is repeated to 3 channels, alpha dropped."""

@@ -22,7 +22,7 @@ from scipy.spatial.transform import Rotation, Slerp
 from data_fetch.atomic import write_bytes_atomic
 from ..core.camera import Camera, check_intrinsics
 from ..core.checks import check_bool, report_skipped
-from .fileio import checked_depth_png_bytes, rgb_png_bytes, read_depth, read_rgb
+from .fileio import check_same_size, checked_depth_png_bytes, rgb_png_bytes, read_depth, read_rgb
 from .resample import finish_scene, undistort_rgbd
 from .textparse import parse_error, parse_floats, quaternion_rotation, text_lines
 from ..core.views import Scene, View
@@ -217,9 +217,8 @@ def read_tum(folder, intrinsics=None, every: int = 1, max_frames: int | None = N
         rgb = read_rgb(folder / rgb_path, "folder")
         depth = read_depth(folder / depth_list[j][1], 1.0 / float(depth_factor), "folder", scale_name="depth_factor")
         read += [(folder / rgb_path).parent, (folder / depth_list[j][1]).parent]
-        if rgb.shape[:2] != depth.shape:
-            raise ValueError(f"folder: {rgb_path} is {rgb.shape[1]}×{rgb.shape[0]} but {depth_list[j][1]} is "
-                             f"{depth.shape[1]}×{depth.shape[0]} (W×H); TUM pairs must be registered 1:1")
+        check_same_size(rgb.shape, depth.shape, folder / rgb_path, f"folder: {rgb_path}",  # TUM pairs are registered 1:1
+                        f"{depth_list[j][1]}")
         check_intrinsics(K, rgb.shape[1], rgb.shape[0], intrinsics_name)  # before undistorting with it
         if undistort and np.any(dist != 0):
             rgb, depth = undistort_rgbd(rgb, depth, K, dist)

@@ -29,7 +29,7 @@ import numpy as np
 
 from data_fetch.atomic import write_bytes_atomic
 from data_fetch.files import regular_file
-from ..data.fileio import depth_png_bytes, npy_bytes, pfm_bytes, read_depth, read_rgb
+from ..data.fileio import check_same_size, depth_png_bytes, npy_bytes, pfm_bytes, read_depth, read_rgb
 from ..core.outpaths import check_output_file
 
 
@@ -200,9 +200,7 @@ def complete_command(args) -> int:
     config.validate()  # --device, before the inputs are read
     rgb = _read_rgb(args.rgb)
     depth = _read_depth(args.depth, args.depth_scale)
-    if rgb.shape[:2] != depth.shape:
-        raise ValueError(f"--rgb is {rgb.shape[0]}×{rgb.shape[1]} (H×W) but --depth is "
-                         f"{depth.shape[0]}×{depth.shape[1]}; they must be the same size")
+    check_same_size(rgb.shape, depth.shape, args.rgb, "--rgb", "--depth")  # names an EXIF rotation if that is why
     gt = None
     if args.gt:
         gt = _read_depth(args.gt, args.depth_scale, "--gt")
