@@ -1,8 +1,11 @@
 """Image and depth-map files ↔ arrays: PNG colour, 16-bit depth PNG, ``.npy``, PFM, COLMAP ``.bin``.
 
 Conventions: colour comes back as float32 (H, W, 3) RGB in [0, 1] (8- or 16-bit files; grey is
-repeated to 3 channels); depth as float32 (H, W) with 0, negative and non-finite values turned
-into NaN (a file's "no value" marker becomes NaN here). Writers work on bytes (``*_bytes``) so a
+repeated to 3 channels), pixels as stored (``read_image_file``); depth through one reader,
+``read_depth``, as float32 (H, W) with 0, negative and non-finite values turned into NaN (a file's
+"no value" marker becomes NaN here), 8-bit files refused and sentinels (65535) warned. Depth writers
+store every pixel that is no depth (NaN, inf, ≤ 0) as the format's hole value (``depth_units``,
+``float_depth``), never wrapped. Writers work on bytes (``*_bytes``) so a
 caller writes them atomically (``atomic.write_bytes_atomic``); ``write_*`` do that themselves.
 A missing file raises ``FileNotFoundError`` naming the argument it came from.
 

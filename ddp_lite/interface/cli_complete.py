@@ -1,8 +1,10 @@
 """``ddp-lite complete``: fill the holes of your own RGB-D image, with every check before the fit.
 
-Input: ``--rgb`` any image OpenCV reads; ``--depth`` ``.npy``/``.pfm`` (metres, or × ``--depth-scale``)
-or an integer image (needs ``--depth-scale``, metres per stored unit); 0, ≤ 0, inf and NaN are
-holes (NaN). A depth range no camera produces at that scale (kilometres from a millimetre PNG
+Input: ``--rgb`` any image OpenCV reads, pixels as stored (no EXIF rotation, like the depth);
+``--depth`` ``.npy``/``.pfm`` (metres, or × ``--depth-scale``) or a 16-bit image (needs ``--depth-scale``,
+metres per stored unit), read by the kit's one depth reader (``fileio.read_depth``: 8-bit pictures
+refused); 0, ≤ 0, inf and NaN are holes (NaN). ``--rgb`` and ``--depth`` must be the same size;
+``--intrinsics`` must fit it (``camera.check_intrinsics``). A depth range no camera produces at that scale (kilometres from a millimetre PNG
 read as metres) is refused with the scale that would make it plausible.
 
 The fit runs at a working size (``--max-side``, default the profile's longer side) and its
