@@ -122,6 +122,14 @@ def test_16_bit_depth_sentinel_is_warned_with_the_depth_it_becomes(tmp_path):
         fileio.read_depth(tmp_path / "ok.png", 0.001)
 
 
+def test_tum_depth_read_at_a_wrong_scale_is_refused_with_the_scale_that_fits(tmp_path, scene):
+    """TUM stores 5000 units per metre; read at 1 per metre a 1 m depth becomes 5 km: refused, the right
+    scale named (the same plausibility rule as ``complete --depth-scale``)."""
+    folder = write_tum(scene, tmp_path / "capture")
+    with pytest.raises(ValueError, match=r"--depth-scale\) 1: folder: depth/.*would range.*1/depth_factor \(CLI: --depth-scale\) 0\.0002"):
+        read_tum(folder, depth_factor=1.0)
+
+
 # --------------------------------------------------------------------------- depth writers: no wrapping
 
 def test_write_tum_stores_minus_one_and_inf_as_holes_not_as_wrapped_depth(tmp_path, scene):

@@ -332,6 +332,34 @@ def read_depth_file(path: Path, scale: float | None, name: str = "path") -> np.n
     return read_depth(path, scale, name)
 
 
+DEPTH_RANGE_M = (1e-3, 1e4)  # no depth outside it, whatever the scene
+MEDIAN_RANGE_M = (0.05, 300.0)  # a depth map's median: a cup from 5 cm up to a street scene's far side
+COMMON_SCALES = (1.0, 1e-3, 1.0 / 5000, 1e-4, 1e-2)  # metres, mm, TUM's 1/5000 m, 0.1 mm, cm
+
+
+def check_plausible_depth(depth, scale: float, flag: str = "--depth", scale_name: str = "--depth-scale") -> None:
+    """Refuse a scale under which the valid depths (metres, > 0, finite; ``depth`` = stored values ×
+    ``scale``) are no plausible depth map: any depth outside ``DEPTH_RANGE_M``, or a median outside
+    ``MEDIAN_RANGE_M``. The message names the common scale (``COMMON_SCALES``) that would make it
+    plausible, if any. Depth in metres only: a reconstruction's own units (COLMAP) are not checked.
+    ``flag``/``scale_name``: what the message calls the file and the scale."""
+    metres = np.asarray(depth, dtype=np.float64)
+    low, high, median = (float(v) for v in (metres.min(), metres.max(), np.median(metres)))
+
+    def plausible(lo, hi, mid):
+        return DEPTH_RANGE_M[0] <= lo and hi <= DEPTH_RANGE_M[1] and MEDIAN_RANGE_M[0] <= mid <= MEDIAN_RANGE_M[1]
+    if plausible(low, high, median):
+        return
+    fits = [c for c in COMMON_SCALES if plausible(low / scale * c, high / scale * c, median / scale * c)]
+    better = min(fits, key=lambda c: abs(np.log(median / scale * c / 3.0)), default=None)
+    hint = (f"; {scale_name} {better:g} would give {low / scale * better:.3g}–{high / scale * better:.3g} m "
+            f"(median {median / scale * better:.3g} m)" if better is not None else "")
+    raise ValueError(f"{scale_name} {scale:g}: {flag} would range {low:.3g}–{high:.3g} m (median {median:.3g} m), "
+                     f"not a plausible depth map in metres (depths within {DEPTH_RANGE_M[0]:g}–{DEPTH_RANGE_M[1]:g} m, "
+                     f"median within {MEDIAN_RANGE_M[0]:g}–{MEDIAN_RANGE_M[1]:g} m){hint}. {scale_name} is the "
+                     f"metres per stored unit")
+
+
 # The values a depth file may hold that are no depth although they are valid numbers: a sensor's
 # "no reading" / saturated marker. Integer files: the type's largest value (65535 in a 16-bit PNG);
 # float files: 65535 carried over from such a PNG, and absurd magnitudes (float max, 1e10, ...).
@@ -386,8 +414,9 @@ def read_depth(path, scale: float | None = None, name: str = "path", scale_name:
     if min(raw.shape) == 0:
         raise ValueError(f"{name}: {path} holds an empty {raw.shape[0]}×{raw.shape[1]} map")
     if scale is None:
+        hint = " (CLI: --depth-scale)" if scale_name == "depth_scale" else ""
         if np.issubdtype(raw.dtype, np.integer):
-            raise ValueError(f"{name}: {path} stores integers; give {scale_name}, the metres per stored unit of its "
+            raise ValueError(f"{name}: {path} stores integers; give {scale_name}{hint}, the metres per stored unit of its "
                              f"{raw.dtype} values (0.001 for millimetres, as in most 16-bit depth PNGs; 1/5000 for TUM)")
         scale = 1.0
     count, marker = _sentinels(raw)

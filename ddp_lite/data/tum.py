@@ -22,7 +22,7 @@ from scipy.spatial.transform import Rotation, Slerp
 from data_fetch.atomic import write_bytes_atomic
 from ..core.camera import Camera, check_intrinsics
 from ..core.checks import check_bool, report_skipped
-from .fileio import check_same_size, checked_depth_png_bytes, rgb_png_bytes, read_depth, read_rgb
+from .fileio import check_plausible_depth, check_same_size, checked_depth_png_bytes, rgb_png_bytes, read_depth, read_rgb
 from .resample import finish_scene, undistort_rgbd
 from .textparse import parse_error, parse_floats, quaternion_rotation, text_lines
 from ..core.views import Scene, View
@@ -215,7 +215,10 @@ def read_tum(folder, intrinsics=None, every: int = 1, max_frames: int | None = N
     for i, j, world_from_cam in chosen:
         stamp, rgb_path = rgb_list[i]
         rgb = read_rgb(folder / rgb_path, "folder")
-        depth = read_depth(folder / depth_list[j][1], 1.0 / float(depth_factor), "folder", scale_name="depth_factor")
+        scale, scale_name = 1.0 / float(depth_factor), "1/depth_factor (CLI: --depth-scale)"
+        depth = read_depth(folder / depth_list[j][1], scale, "folder", scale_name=scale_name)
+        if np.isfinite(depth).any():  # TUM depth is metric: a wrong factor shows as an implausible range
+            check_plausible_depth(depth[np.isfinite(depth)], scale, f"folder: {depth_list[j][1]}", scale_name)
         read += [(folder / rgb_path).parent, (folder / depth_list[j][1]).parent]
         check_same_size(rgb.shape, depth.shape, folder / rgb_path, f"folder: {rgb_path}",  # TUM pairs are registered 1:1
                         f"{depth_list[j][1]}")

@@ -31,7 +31,8 @@ import numpy as np
 
 from data_fetch.atomic import write_bytes_atomic
 from data_fetch.files import regular_file
-from ..data.fileio import check_same_size, depth_png_bytes, npy_bytes, pfm_bytes, read_depth, read_rgb
+from ..data.fileio import (DEPTH_RANGE_M, MEDIAN_RANGE_M, COMMON_SCALES, check_plausible_depth,  # noqa: F401 (their old home)
+                           check_same_size, depth_png_bytes, npy_bytes, pfm_bytes, read_depth, read_rgb)
 from ..core.outpaths import check_output_file
 
 
@@ -101,33 +102,6 @@ def _read_depth(path: str, scale: float | None, flag: str = "--depth") -> np.nda
     return depth
 
 
-DEPTH_RANGE_M = (1e-3, 1e4)  # no depth outside it, whatever the scene
-MEDIAN_RANGE_M = (0.05, 300.0)  # a depth map's median: a cup from 5 cm up to a street scene's far side
-COMMON_SCALES = (1.0, 1e-3, 1.0 / 5000, 1e-4, 1e-2)  # metres, mm, TUM's 1/5000 m, 0.1 mm, cm
-
-
-def check_plausible_depth(depth, scale: float, flag: str = "--depth") -> None:
-    """Refuse a scale under which the valid depths (metres, > 0, finite; ``depth`` = stored values ×
-    ``scale``) are no plausible depth map: any depth outside ``DEPTH_RANGE_M``, or a median outside
-    ``MEDIAN_RANGE_M``. The message names the common scale (``COMMON_SCALES``) that would make it
-    plausible, if any."""
-    metres = np.asarray(depth, dtype=np.float64)
-    low, high, median = (float(v) for v in (metres.min(), metres.max(), np.median(metres)))
-
-    def plausible(lo, hi, mid):
-        return DEPTH_RANGE_M[0] <= lo and hi <= DEPTH_RANGE_M[1] and MEDIAN_RANGE_M[0] <= mid <= MEDIAN_RANGE_M[1]
-    if plausible(low, high, median):
-        return
-    fits = [c for c in COMMON_SCALES if plausible(low / scale * c, high / scale * c, median / scale * c)]
-    better = min(fits, key=lambda c: abs(np.log(median / scale * c / 3.0)), default=None)
-    hint = (f"; --depth-scale {better:g} would give {low / scale * better:.3g}–{high / scale * better:.3g} m "
-            f"(median {median / scale * better:.3g} m)" if better is not None else "")
-    raise ValueError(f"--depth-scale {scale:g}: {flag} would range {low:.3g}–{high:.3g} m (median {median:.3g} m), "
-                     f"not a plausible depth map in metres (depths within {DEPTH_RANGE_M[0]:g}–{DEPTH_RANGE_M[1]:g} m, "
-                     f"median within {MEDIAN_RANGE_M[0]:g}–{MEDIAN_RANGE_M[1]:g} m){hint}. --depth-scale is the "
-                     f"metres per stored unit")
-
-
 def _input_file(path: str, flag: str) -> None:
     """Refuse an input that is missing, a folder, or not a regular file (a FIFO would block the read),
     as a usage error (``ValueError``) naming ``flag``."""
@@ -193,6 +167,8 @@ def complete_command(args) -> int:
     from ..method.fit import complete_depth
     from ..method.profiles import get_profile
     from ..core.progress import command_progress
+    from ..core.checks import check_depth
+    from ..method.nets import check_input_size
     from ..sequences.working_size import fill_holes_at_full_size, shrink, working_shape
     profile = get_profile(args.profile)
     config = FitConfig.for_profile(profile, variant=args.variant, recipe=args.recipe, device=args.device,
@@ -222,6 +198,10 @@ def complete_command(args) -> int:
     max_side = args.max_side or max(profile.size)
     shape = working_shape(depth.shape, max_side)
     small_rgb, small_depth = shrink(rgb, depth, shape)
+    # what the fit will check, checked here with the flags' names: enough valid depth, a size the net can take
+    check_depth(small_depth, f"--depth {args.depth!r} (at the working size {shape[0]}×{shape[1]})")
+    check_input_size(config.net, config.channels, shape[0], shape[1],
+                     name=f"--depth {args.depth!r} (at the working size, --max-side {max_side})")
     print(f"{depth.shape[0]}×{depth.shape[1]} (H×W), {holes.mean():.1%} holes; fitting at "
           f"{shape[0]}×{shape[1]} (--max-side {max_side}), profile '{profile.name}'", flush=True)
     with command_progress(config.resolved_iterations(args.variant) * config.fit_count()):  # every fit of the command
