@@ -414,8 +414,9 @@ def _kitti_tree(tmp, disparity=None):
         (base / sub).mkdir(parents=True)
     for sub in ("image_2", "image_3"):
         cv2.imwrite(str(base / sub / "000000_10.png"), np.zeros((H, W, 3), np.uint8))
-    (base / "calib_cam_to_cam" / "000000.txt").write_text(P2.replace("700 0 600", "30 0 15.5") + "\n" +
-                                                           P3.replace("700 0 600", "30 0 15.5"))
+    small = {"700 0 600": "30 0 15.5", "0 700 180": "0 30 11.5"}  # K of a 32×24 image
+    (base / "calib_cam_to_cam" / "000000.txt").write_text("\n".join(
+        text.replace("700 0 600", small["700 0 600"]).replace("0 700 180", small["0 700 180"]) for text in (P2, P3)))
     cv2.imwrite(str(base / "disp_occ_0" / "000000_10.png"),
                 np.zeros((H, W), np.uint16) if disparity is None else disparity)
     return tmp / "kitti"

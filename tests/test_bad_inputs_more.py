@@ -217,10 +217,10 @@ def _neighbour(pose):
 
 _SIDE = look_at((0.2, 0.0, 0.0), (0.0, 0.0, 2.0))
 _K_640x480 = np.array([[525.0, 0.0, 319.5], [0.0, 525.0, 239.5], [0.0, 0.0, 1.0]])  # TUM fr1's K, for 640×480
-case("intrinsics for 640×480 on a 32×24 image", ValueError, "camera: the principal point")(
+case("intrinsics for 640×480 on a 32×24 image", ValueError, "K: the principal point")(  # refused by Camera itself
     lambda tmp: (lambda: complete_depth(rgb(), depth(), Camera(_K_640x480, np.eye(4), W, H), variant="rgbd",
                                         config=tiny())))
-case("a neighbour's intrinsics for 640×480 on a 32×24 image", ValueError, "neighbors[0] camera")(
+case("a neighbour's intrinsics for 640×480 on a 32×24 image", ValueError, "K: the principal point")(
     lambda tmp: (lambda: complete_depth(rgb(), depth(), camera(), [(rgb(), Camera(_K_640x480, _SIDE, W, H))],
                                         config=tiny())))
 case("neighbour at the reference's pose", ValueError, "neighbors[0]")(

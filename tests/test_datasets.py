@@ -210,10 +210,12 @@ intrinsic
 def test_mvsnet_cam_and_tnt_loader(tmp_path):
     (tmp_path / "cams").mkdir()
     (tmp_path / "images").mkdir()
+    small = CAM.replace("1169.62 0.0 646.295\n0.0 1167.11 489.927", "27.4 0.0 15.1\n0.0 24.3 10.2")  # K of 30×20
     for i in range(2):
-        (tmp_path / "cams" / f"{i:08d}_cam.txt").write_text(CAM)
+        (tmp_path / "cams" / f"{i:08d}_cam.txt").write_text(small)
         cv2.imwrite(str(tmp_path / "images" / f"{i:08d}.jpg"), np.full((20, 30, 3), 90, np.uint8))
-    camera, info = read_mvsnet_cam(tmp_path / "cams" / "00000000_cam.txt", 1280, 960)
+    (tmp_path / "big_cam.txt").write_text(CAM)
+    camera, info = read_mvsnet_cam(tmp_path / "big_cam.txt", 1280, 960)
     assert camera.K[0, 0] == pytest.approx(1169.62) and camera.cam_from_world[1, 3] == pytest.approx(0.284341)
     R = camera.cam_from_world[:3, :3]
     np.testing.assert_allclose(R @ R.T, np.eye(3), atol=1e-12)  # printed digits re-orthonormalised
@@ -228,6 +230,8 @@ def test_mvsnet_cam_and_tnt_loader(tmp_path):
     scene = load_tnt(tmp_path, indices=[0], depth_dir=tmp_path / "depth")
     expected = 1 + np.concatenate([[0, 0, 1, 2, 2]] * 6) + np.repeat(np.arange(6) * 3, 5)
     np.testing.assert_array_equal(scene[0].depth[7], expected)
+    with pytest.raises(ValueError, match=r"big_cam\.txt.*principal point \(646.295"):
+        read_mvsnet_cam(tmp_path / "big_cam.txt", 30, 20)  # a 1280×960 camera for 30×20 images
     (tmp_path / "cams" / "00000000_cam.txt").write_text(CAM.replace("intrinsic", "intrinsics_missing"))
     with pytest.raises(ValueError, match="MVSNet"):
         read_mvsnet_cam(tmp_path / "cams" / "00000000_cam.txt", 10, 10)

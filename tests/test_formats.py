@@ -82,9 +82,14 @@ def test_tum_pose_is_interpolated_between_ground_truth_samples(tmp_path, scene):
 
 
 def test_tum_fr1_images_are_undistorted(tmp_path, scene):
+    from ddp_lite.core.views import Scene, View
+    from ddp_lite.data.tum import TUM_INTRINSICS
     folder = tmp_path / "rgbd_dataset_freiburg1_xyz"
-    big = make_scene("desk", size=(48, 64), n_views=2, seed=0)
-    write_tum(big, folder)
+    (fx, fy, cx, cy), _ = TUM_INTRINSICS["fr1"]  # fr1's K belongs to 640×480 images: write those
+    K = np.array([[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]])
+    rgb = cv2.resize(np.random.default_rng(0).random((60, 80, 3)).astype(np.float32), (640, 480))
+    views = [View(rgb, np.full((480, 640), 2.0, np.float32), Camera(K, np.eye(4), 640, 480), str(i)) for i in range(2)]
+    write_tum(Scene("fr1", views), folder)
     (folder / "intrinsics.txt").unlink()  # so the folder name picks fr1 and its distortion
     undistorted = read_tum(folder)
     raw = read_tum(folder, undistort=False)

@@ -40,7 +40,7 @@ from scipy import interpolate, ndimage, sparse
 from scipy.sparse.linalg import spsolve
 from scipy.spatial import QhullError
 
-from ..core.checks import check_depth, check_image
+from ..core.checks import check_depth, check_image, check_int, check_real
 
 __all__ = ["fill_nearest", "fill_linear", "fill_cubic", "fill_telea", "fill_navier_stokes", "fill_biharmonic",
            "fill_colorization", "colorization_affinities", "NEIGHBOUR_OFFSETS", "fill_guided_filter", "fill_bilateral_solver", "joint_bilateral_fill",
@@ -55,14 +55,9 @@ def _check(depth, rgb=None, min_valid: int = 1, need_rgb: bool = False):
         if need_rgb:
             raise ValueError("rgb is required: an (H, W, 3) image in [0, 1] guides this method")
         return array, valid, None
-    image = np.asarray(rgb)
-    if image.shape != array.shape + (3,):
-        raise ValueError(f"rgb must be (H, W, 3) = {array.shape + (3,)} to match depth, got {image.shape}")
-    if not (np.issubdtype(image.dtype, np.floating) or np.issubdtype(image.dtype, np.integer)):
-        raise TypeError(f"rgb must be a numeric image in [0, 1], got dtype {image.dtype}")
-    image = image.astype(np.float64)
-    if not np.all(np.isfinite(image)):
-        raise ValueError("rgb must contain only finite values")
+    # the kit's one colour rule (check_image): (H, W, 3) in [0, 1] or uint8; 0–255 floats are refused, since
+    # every fill's colour weights (sigmas, eps, the colorization's variance) are set for [0, 1]
+    image = check_image(rgb, "rgb", array.shape).astype(np.float64)
     return array, valid, image
 
 
@@ -454,6 +449,18 @@ def joint_bilateral_fill(depth, guide, sigma_s: float, sigma_r: float, radius: i
     """One joint (cross) bilateral pass: (H, W) depth with NaN = unusable, (H, W) grey ``guide`` →
     (H, W) float64, every pixel the weighted mean of the usable depths in its (2·radius + 1)² window,
     weights exp(−|Δxy|² / 2σ_s²) · exp(−(g_q − g_p)² / 2σ_r²); NaN where the window holds none."""
+    depth = np.asarray(depth, dtype=np.float64)
+    if depth.ndim != 2:
+        raise ValueError(f"depth must be (H, W) metres with NaN holes, got shape {depth.shape}")
+    guide = np.asarray(guide)
+    if guide.shape != depth.shape or not np.issubdtype(guide.dtype, np.number) or not np.all(np.isfinite(guide)):
+        raise ValueError(f"guide must be a finite (H, W) grey image like depth {depth.shape}, got {guide.dtype} {guide.shape}")
+    if guide.min() < -1e-6 or guide.max() > 1 + 1e-6:  # sigma_r is in [0, 1] grey levels
+        raise ValueError(f"guide must lie in [0, 1] (grey levels; sigma_r is set for that range), got range "
+                         f"[{guide.min():.3g}, {guide.max():.3g}]")
+    check_real(sigma_s, "sigma_s", low=0.0, low_open=True), check_real(sigma_r, "sigma_r", low=0.0, low_open=True)
+    radius = check_int(radius, "radius", minimum=1)
+    guide = guide.astype(np.float64)
     H, W = depth.shape
     usable = np.isfinite(depth)
     values = np.pad(np.where(usable, depth, 0.0), radius)

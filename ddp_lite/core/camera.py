@@ -16,7 +16,7 @@ import torch
 
 from .checks import check_int, check_real
 
-__all__ = ["Camera", "relative_pose", "pixel_grid", "backproject", "project", "look_at", "view_overlap", "pixel_rays",
+__all__ = ["Camera", "check_intrinsics", "relative_pose", "pixel_grid", "backproject", "project", "look_at", "view_overlap", "pixel_rays",
            "backproject_pixels", "project_points"]
 
 MIN_FOCAL_RATIO, MAX_FOCAL_RATIO = 1e-3, 1e4  # focal length / larger image side
@@ -29,6 +29,47 @@ def _as_matrix(value, shape: tuple[int, int], name: str) -> np.ndarray:
     if not np.all(np.isfinite(array)):
         raise ValueError(f"{name} must contain only finite values")
     return array
+
+
+def _check_size(value, name: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise TypeError(f"{name} must be a positive integer, got {type(value).__name__} {value!r}")
+    if not np.isfinite(value) or int(value) != value or value <= 0:
+        raise ValueError(f"{name} must be a positive integer, got {value!r}")
+    return int(value)
+
+
+def check_intrinsics(K, width: int, height: int, name: str = "K") -> np.ndarray:
+    """Intrinsics checked against the image they are used with → K as a float64 3×3 copy.
+
+    The one rule wherever intrinsics enter (``Camera``, the readers, the command line): ``K`` (3×3,
+    pixels, pixel (0, 0) = the centre of the top-left pixel) must be finite and invertible with
+    positive focal lengths and last row [0, 0, 1]; its focal lengths plausible for a ``width ×
+    height`` image (``MIN_FOCAL_RATIO``–``MAX_FOCAL_RATIO`` × the larger side: a field of view
+    strictly between 0° and 180°); and its principal point inside the image. A K for another image
+    size (a 640×480 camera's (319.5, 239.5) on a 48×32 image) fails the last; ``Camera.resized``
+    scales K with the image. ``ValueError`` naming ``name`` (the argument or file K came from)."""
+    width, height = _check_size(width, "width"), _check_size(height, "height")
+    K = _as_matrix(K, (3, 3), name)
+    if abs(np.linalg.det(K)) < 1e-12 or K[0, 0] <= 0 or K[1, 1] <= 0:
+        raise ValueError(f"{name} must be invertible with positive focal lengths (pixels), got\n{K}")
+    if not np.allclose(K[2], [0.0, 0.0, 1.0]):
+        raise ValueError(f"{name}'s last row must be [0, 0, 1], got {K[2].tolist()}")
+    # a pinhole's field of view lies strictly between 0° and 180°; far outside these bounds
+    # (≈ 0.006° … 179.9°) a focal length is a unit mistake (mm for px, a scale applied twice)
+    for axis, focal in (("fx", K[0, 0]), ("fy", K[1, 1])):
+        ratio = focal / max(width, height)
+        if not MIN_FOCAL_RATIO <= ratio <= MAX_FOCAL_RATIO:
+            raise ValueError(f"{name}: focal length {axis}={focal:.6g} px is implausible for a {width}×{height} "
+                             f"image (expected {MIN_FOCAL_RATIO:g}–{MAX_FOCAL_RATIO:g} × the larger side); "
+                             f"is it in pixels?")
+    cx, cy = float(K[0, 2]), float(K[1, 2])
+    if not (-0.5 <= cx <= width - 0.5 and -0.5 <= cy <= height - 0.5):
+        raise ValueError(f"{name}: the principal point ({cx:.6g}, {cy:.6g}) px lies outside the {width}×{height} "
+                         f"(W×H) image it is used with (x in [-0.5, {width - 0.5:g}], y in [-0.5, {height - 0.5:g}]); "
+                         f"intrinsics belong to one image size, and these look like a ~{2 * cx + 1:.0f}×{2 * cy + 1:.0f} "
+                         f"image's. Give the K of this image size (Camera.resized scales one)")
+    return K
 
 
 @dataclass(frozen=True, eq=False)
@@ -47,31 +88,15 @@ class Camera:
     height: int
 
     def __post_init__(self):
-        K = _as_matrix(self.K, (3, 3), "K")
+        for name in ("width", "height"):
+            _check_size(getattr(self, name), name)
+        K = check_intrinsics(self.K, self.width, self.height, "K")
         pose = _as_matrix(self.cam_from_world, (4, 4), "cam_from_world")
-        if abs(np.linalg.det(K)) < 1e-12 or K[0, 0] <= 0 or K[1, 1] <= 0:
-            raise ValueError(f"K must be invertible with positive focal lengths, got\n{K}")
-        if not np.allclose(K[2], [0.0, 0.0, 1.0]):
-            raise ValueError(f"K's last row must be [0, 0, 1], got {K[2].tolist()}")
         if not np.allclose(pose[3], [0.0, 0.0, 0.0, 1.0]):
             raise ValueError(f"cam_from_world's last row must be [0, 0, 0, 1], got {pose[3].tolist()}")
         rotation = pose[:3, :3]
         if not np.allclose(rotation @ rotation.T, np.eye(3), atol=1e-6) or np.linalg.det(rotation) < 0:
             raise ValueError("cam_from_world's upper-left 3×3 block must be a rotation matrix")
-        for name in ("width", "height"):
-            size = getattr(self, name)
-            if isinstance(size, bool) or not isinstance(size, numbers.Real):
-                raise TypeError(f"{name} must be a positive integer, got {type(size).__name__} {size!r}")
-            if not np.isfinite(size) or int(size) != size or size <= 0:
-                raise ValueError(f"{name} must be a positive integer, got {size!r}")
-        # a pinhole's field of view lies strictly between 0° and 180°; far outside these bounds
-        # (≈ 0.006° … 179.9°) a focal length is a unit mistake (mm for px, a scale applied twice)
-        for axis, focal in (("fx", K[0, 0]), ("fy", K[1, 1])):
-            ratio = focal / max(self.width, self.height)
-            if not MIN_FOCAL_RATIO <= ratio <= MAX_FOCAL_RATIO:
-                raise ValueError(f"K: focal length {axis}={focal:.6g} px is implausible for a {self.width}×{self.height} "
-                                 f"image (expected {MIN_FOCAL_RATIO:g}–{MAX_FOCAL_RATIO:g} × the larger side); "
-                                 f"is it in pixels?")
         K.setflags(write=False)
         pose.setflags(write=False)
         object.__setattr__(self, "K", K)

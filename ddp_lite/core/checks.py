@@ -17,11 +17,12 @@ from __future__ import annotations
 
 import math
 import numbers
+import warnings
 
 import numpy as np
 import torch
 
-__all__ = ["env_choice", "named_choice", "check_callback", "check_int", "check_real", "check_bool", "check_choice", "check_int_tuple", "check_image", "check_depth",
+__all__ = ["SkippedWarning", "report_skipped", "env_choice", "named_choice", "check_callback", "check_int", "check_real", "check_bool", "check_choice", "check_int_tuple", "check_image", "check_depth",
            "check_size", "unmask", "MIN_VALID_PIXELS"]
 
 MIN_VALID_PIXELS = 16  # a fit, or a mask, with fewer known pixels is refused
@@ -120,7 +121,8 @@ def check_image(image, name: str, shape=None) -> np.ndarray:
     if array.ndim != 3 or array.shape[2] != 3:
         raise ValueError(f"{name} must have shape (H, W, 3), got {array.shape}")
     if shape is not None and array.shape[:2] != shape:
-        raise ValueError(f"{name} must be {shape[0]}×{shape[1]} like depth, got {array.shape[0]}×{array.shape[1]}")
+        raise ValueError(f"{name} must be (H, W, 3) = {(*shape, 3)} like depth, got {array.shape} "
+                         f"({array.shape[0]}×{array.shape[1]} instead of {shape[0]}×{shape[1]})")
     if not np.all(np.isfinite(array)):
         raise ValueError(f"{name} must contain only finite values")
     if array.min() < -1e-6 or array.max() > 1 + 1e-6:
@@ -201,3 +203,33 @@ def named_choice(name, table: dict, what: str, current):
     if name not in table:
         raise ValueError(f"{what} must be one of {sorted(table)}, got {name!r}")
     return table[name]
+
+
+# --------------------------------------------------------------------------- nothing dropped without a word
+
+class SkippedWarning(UserWarning):
+    """A reader or command left out frames, views or files: how many, which, and why."""
+
+
+SKIPPED_NAMES_SHOWN = 8  # a long list is cut after this many names, with the count of the rest
+
+
+def report_skipped(where, names, what: str, reason: str, strict: bool = False, total: int | None = None) -> None:
+    """The one rule for everything a reader or command leaves out: say it, or refuse it.
+
+    ``names`` (the files, frames or views left out, each as the user would recognise it) are counted
+    and named in a :class:`SkippedWarning` (``where``: the folder or argument they came from; ``what``:
+    their kind, plural, e.g. "colour frame(s)"; ``reason``: why; ``total``: out of how many). With
+    ``strict`` (CLI: ``--strict``) the same message is a ``ValueError`` instead, raised before any work.
+    Nothing happens for an empty ``names``."""
+    names = [str(n) for n in names]
+    if not names:
+        return
+    shown = ", ".join(names[:SKIPPED_NAMES_SHOWN]) + (f", … ({len(names) - SKIPPED_NAMES_SHOWN} more)"
+                                                     if len(names) > SKIPPED_NAMES_SHOWN else "")
+    count = f"{len(names)} of {total}" if total is not None else f"{len(names)}"
+    message = f"{where}: {count} {what} {reason} and were left out: {shown}"
+    if strict:
+        raise ValueError(message + " (strict: nothing may be left out; fix the input, or run without strict "
+                                   "(CLI: without --strict) to go on without them)")
+    warnings.warn(message + " (strict=True, CLI --strict, makes this an error)", SkippedWarning, stacklevel=3)

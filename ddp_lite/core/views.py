@@ -20,7 +20,7 @@ import numpy as np
 
 from data_fetch.atomic import atomic_path
 from .camera import Camera
-from .checks import check_image
+from .checks import check_depth, check_image
 
 __all__ = ["View", "Scene", "image_and_camera", "LABELS", "LABEL_SKY", "LABEL_TEXTURELESS", "LABEL_PLANKS", "LABEL_TEXTURED"]
 
@@ -40,13 +40,15 @@ class View:
     name: str = ""
 
     def __post_init__(self):
-        self.rgb = np.asarray(self.rgb, dtype=np.float32)
-        self.depth = np.asarray(self.depth, dtype=np.float32)
-        H, W = self.depth.shape[:2] if self.depth.ndim == 2 else (None, None)
-        if self.depth.ndim != 2:
-            raise ValueError(f"depth must be (H, W), got shape {self.depth.shape}")
-        if self.rgb.shape != (H, W, 3):
-            raise ValueError(f"rgb must be (H, W, 3) = {(H, W, 3)}, got {self.rgb.shape}")
+        # the kit's contract, checked once here for every loader and renderer: colour (H, W, 3) in [0, 1]
+        # (uint8 scaled by 1/255; 0–255 floats refused), depth (H, W) float metres, NaN = unknown (none needed)
+        if not isinstance(self.camera, Camera):
+            raise TypeError(f"camera must be a ddp_lite Camera, got {type(self.camera).__name__}")
+        self.depth = check_depth(self.depth, "depth", min_valid=0)
+        H, W = self.depth.shape
+        if np.shape(self.rgb)[:2] != (H, W) or np.ndim(self.rgb) != 3 or np.shape(self.rgb)[2] != 3:
+            raise ValueError(f"rgb must be (H, W, 3) = {(H, W, 3)} like depth, got {np.shape(self.rgb)}")
+        self.rgb = check_image(self.rgb, "rgb", (H, W))
         if (self.camera.height, self.camera.width) != (H, W):
             raise ValueError(f"camera is {self.camera.width}×{self.camera.height} but the images are {W}×{H}")
 

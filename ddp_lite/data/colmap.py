@@ -21,8 +21,9 @@ from scipy.spatial.transform import Rotation
 
 from data_fetch.atomic import write_bytes_atomic
 from data_fetch.files import regular_file
-from ..core.camera import Camera
-from .fileio import (checked_depth_png_bytes, rgb_png_bytes, read_depth_file, read_rgb, npy_bytes, pfm_bytes,
+from ..core.camera import Camera, check_intrinsics
+from ..core.checks import check_bool, report_skipped
+from .fileio import (check_same_size, checked_depth_png_bytes, float_depth, rgb_png_bytes, read_depth, read_rgb, npy_bytes, pfm_bytes,
                      read_colmap_depth, write_colmap_depth)
 from .resample import finish_scene, undistort_rgbd
 from .textparse import parse_error, parse_floats, quaternion_rotation, text_lines
@@ -31,6 +32,8 @@ from ..core.views import Scene, View
 __all__ = ["COLMAP_MODELS", "ColmapCamera", "read_colmap_cameras", "read_colmap_images", "read_colmap_depth",
            "write_colmap_depth", "read_colmap", "write_colmap"]
 
+
+IMAGE_SUFFIXES = (".jpg", ".jpeg", ".png", ".tif", ".tiff", ".bmp", ".webp")  # what a folder of photos holds
 
 # model → its parameter names, in cameras.txt order
 COLMAP_MODELS = {
@@ -76,6 +79,10 @@ def read_colmap_cameras(path) -> dict[int, ColmapCamera]:
         fx, fy = p.get("fx", p.get("f")), p.get("fy", p.get("f"))
         K = np.array([[fx, 0.0, p["cx"] - 0.5], [0.0, fy, p["cy"] - 0.5], [0.0, 0.0, 1.0]])
         dist = np.array([p.get("k1", p.get("k", 0.0)), p.get("k2", 0.0), p.get("p1", 0.0), p.get("p2", 0.0), 0.0])
+        try:  # the camera against its own WIDTH HEIGHT, before any image is read
+            check_intrinsics(K, int(tokens[2]), int(tokens[3]), "K")
+        except ValueError as error:
+            raise parse_error(path, line, f"camera {tokens[0]}: {error}") from None
         camera_id = int(tokens[0])
         if camera_id in cameras:
             raise parse_error(path, line, f"CAMERA_ID {camera_id} appears twice")
@@ -139,7 +146,8 @@ def _depth_path(depth_dir: Path, image_name: str, suffix: str | None) -> Path:
 
 
 def read_colmap(folder, images_dir=None, depth_dir=None, depth_suffix: str | None = None,
-                depth_scale: float | None = None, undistort: bool = False, size=None, name: str | None = None) -> Scene:
+                depth_scale: float | None = None, undistort: bool = False, size=None, name: str | None = None,
+                strict: bool = False) -> Scene:
     """A COLMAP workspace (a text model + images + per-image depth) → ``Scene``.
 
     Args:
@@ -154,10 +162,13 @@ def read_colmap(folder, images_dir=None, depth_dir=None, depth_suffix: str | Non
         undistort: cameras with distortion (SIMPLE_RADIAL, RADIAL, OPENCV) are refused unless True, then
             their images and depth are undistorted with OpenCV (depth by nearest pixel).
         size: (H, W) to resample to.
+        strict: refuse (``ValueError``) a workspace with images that ``images.txt`` does not list (COLMAP
+            could not register them) instead of leaving them out with a warning naming them.
     Returns:
         ``Scene``, views sorted by image name, named by the image name; COLMAP's world frame and units.
     """
     folder = Path(folder)
+    strict = check_bool(strict, "strict")
     if not folder.is_dir():
         raise FileNotFoundError(f"folder: {folder} is not a folder")
     cameras_path = _find(folder, ["cameras.txt", "sparse/cameras.txt", "sparse/0/cameras.txt"], "cameras.txt")
@@ -170,6 +181,12 @@ def read_colmap(folder, images_dir=None, depth_dir=None, depth_suffix: str | Non
         if depth_dir is None:
             raise FileNotFoundError(f"depth_dir: {folder} has neither stereo/depth_maps/ nor depth/; pass depth_dir")
     depth_dir = Path(depth_dir)
+    if images_dir.is_dir():  # images COLMAP did not register have no pose: say which are left out
+        listed = {str(Path(image_name)) for _, image_name, _, _, _ in images}
+        found = sorted(str(p.relative_to(images_dir)) for p in images_dir.rglob("*")
+                       if p.suffix.lower() in IMAGE_SUFFIXES and p.is_file())
+        report_skipped(images_dir, [f for f in found if f not in listed], "image(s)",
+                       f"are not listed in {images_path} (COLMAP registered no pose for them)", strict, total=len(found))
     views = []
     for image_id, image_name, camera_id, cam_from_world, line in images:
         if camera_id not in cameras:
@@ -180,10 +197,12 @@ def read_colmap(folder, images_dir=None, depth_dir=None, depth_suffix: str | Non
                                             f"{cam.dist[:4].tolist()}; the kit needs pinhole images: pass "
                                             f"undistort=True (CLI: --undistort) or run 'colmap image_undistorter'")
         rgb = read_rgb(images_dir / image_name, "images_dir")
-        if rgb.shape[:2] != (cam.height, cam.width):
-            raise parse_error(images_path, line, f"image {image_name} is {rgb.shape[1]}×{rgb.shape[0]} but camera {camera_id} "
-                                           f"is {cam.width}×{cam.height}")
-        depth = read_depth_file(_depth_path(depth_dir, image_name, depth_suffix), depth_scale)
+        try:
+            check_same_size(rgb.shape, (cam.height, cam.width), images_dir / image_name, f"image {image_name}",
+                            f"camera {camera_id}")
+        except ValueError as error:
+            raise parse_error(images_path, line, str(error)) from None
+        depth = read_depth(_depth_path(depth_dir, image_name, depth_suffix), depth_scale, "depth_dir")
         if depth.shape != rgb.shape[:2]:  # COLMAP's --max_image_size makes smaller maps: pixel centres, as resize_view
             depth = cv2.resize(depth, (cam.width, cam.height), interpolation=cv2.INTER_NEAREST_EXACT)
         if np.any(cam.dist != 0):
@@ -237,9 +256,9 @@ def write_colmap(scene: Scene, folder, depths=None, depth_format: str = "bin", m
             target = folder / "depth" / f"{Path(name).stem}.png"
             write_bytes_atomic(target, checked_depth_png_bytes(depth, 1.0 / depth_scale, target))
         elif depth_format == "npy":
-            write_bytes_atomic(folder / "depth" / f"{Path(name).stem}.npy", npy_bytes(depth))
+            write_bytes_atomic(folder / "depth" / f"{Path(name).stem}.npy", npy_bytes(float_depth(depth)))
         else:
-            write_bytes_atomic(folder / "depth" / f"{Path(name).stem}.pfm", pfm_bytes(depth))
+            write_bytes_atomic(folder / "depth" / f"{Path(name).stem}.pfm", pfm_bytes(float_depth(depth)))
     write_bytes_atomic(folder / "sparse" / "cameras.txt", ("\n".join(camera_lines) + "\n").encode("utf-8"))
     write_bytes_atomic(folder / "sparse" / "images.txt", ("\n".join(image_lines) + "\n").encode("utf-8"))
     write_bytes_atomic(folder / "sparse" / "points3D.txt", b"# 3D point list (empty: no sparse points written)\n")

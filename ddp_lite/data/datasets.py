@@ -23,9 +23,10 @@ import cv2
 import numpy as np
 
 from data_fetch.files import regular_file
-from ..core.camera import Camera
+from ..core.camera import Camera, check_intrinsics
+from ..core.checks import check_bool, report_skipped
 # Middlebury, the file formats and resize_scene lived here; their names stay importable from here.
-from .fileio import (existing_path, read_rgb, read_text_file, depth_png_bytes, npy_bytes, pfm_bytes, read_depth_image,
+from .fileio import (check_same_size, existing_path, read_rgb, read_text_file, depth_png_bytes, npy_bytes, pfm_bytes, read_depth, read_depth_image,
                      read_image_file, read_pfm, write_pfm)
 from .middlebury import (MiddleburyCalib, require_valid_depth, stereo_scene, load_middlebury, load_middlebury2006,
                          make_middlebury_fixture, parse_middlebury_calib, read_middlebury_calib)
@@ -93,6 +94,7 @@ def load_kitti(root, index: int = 0, split: str = "training", disparity: str = "
     rgb1 = read_rgb(base / "image_3" / f"{stem}_10.png", "root")
     K, baseline = read_kitti_calib(base / "calib_cam_to_cam" / f"{stem}.txt")
     H, W = rgb0.shape[:2]
+    check_intrinsics(K, W, H, f"root: {base / 'calib_cam_to_cam' / f'{stem}.txt'}: P_rect_02")
     gt = base / disparity / f"{stem}_10.png"
     disp = require_valid_depth(read_kitti_disparity(gt), "root", gt) if split == "training" \
         else np.full((H, W), np.nan, np.float32)
@@ -126,18 +128,23 @@ def read_mvsnet_cam(path, width: int, height: int) -> tuple[Camera, dict]:
     except (IndexError, ValueError):
         raise ValueError(f"path: {path} is not an MVSNet cam file ('extrinsic' 4×4, 'intrinsic' 3×3, depths)") from None
     pose[:3, :3] = _nearest_rotation(pose[:3, :3], path)
+    check_intrinsics(K, width, height, f"path: {path}: intrinsic")
     info = dict(zip(("depth_min", "depth_interval", "depth_num", "depth_max"), depth))
     return Camera(K, pose, width, height), info
 
 
-def load_tnt(folder, indices=None, size=None, depth_dir=None, name: str | None = None) -> Scene:
+def load_tnt(folder, indices=None, size=None, depth_dir=None, name: str | None = None, strict: bool = False) -> Scene:
     """An MVSNet-style TnT scene (``images/<id>.jpg``, ``cams/<id>_cam.txt``) → multi-view ``Scene``.
     ``indices``: positions in the sorted image list (default all: pass a few, and ``size``, for real
     scenes). Depth from ``depth_dir/<id>.pfm`` if given (≤ 0 or non-finite → NaN), else all NaN
     (TnT's ground truth is a point cloud, not depth maps). ``meta``: d_min/d_max from the depth maps,
-    else from the first cam file's depth range."""
+    else from the first cam file's depth range. Files in ``images/`` that are not .jpg/.png are named in a
+    warning (``strict``: refused)."""
     folder = existing_path(folder, "folder")
-    images = sorted(p for p in (folder / "images").glob("*") if p.suffix.lower() in (".jpg", ".jpeg", ".png"))
+    files = sorted(p for p in (folder / "images").glob("*") if p.is_file() and not p.name.startswith("."))
+    images = [p for p in files if p.suffix.lower() in (".jpg", ".jpeg", ".png")]
+    report_skipped(folder / "images", [p.name for p in files if p not in images], "file(s)", "are not .jpg or .png images",
+                   check_bool(strict, "strict"), total=len(files))
     if not images:
         raise ValueError(f"folder: {folder / 'images'} holds no .jpg/.png images")
     chosen = range(len(images)) if indices is None else list(indices)
@@ -154,10 +161,7 @@ def load_tnt(folder, indices=None, size=None, depth_dir=None, name: str | None =
         info0 = info0 or info
         depth = np.full((H, W), np.nan, np.float32)
         if depth_dir is not None:
-            depth = read_pfm(regular_file(Path(depth_dir) / f"{stem}.pfm", "depth_dir"))
-            if depth.ndim != 2:
-                raise ValueError(f"depth_dir: {stem}.pfm must be 1-channel")
-            depth = np.where(np.isfinite(depth) & (depth > 0), depth, np.nan).astype(np.float32)
+            depth = read_depth(Path(depth_dir) / f"{stem}.pfm", 1.0, "depth_dir")
             if depth.shape != (H, W):
                 # MVSNet depth maps are often smaller than the images: pixel centres, as in resize_view
                 depth = cv2.resize(depth, (W, H), interpolation=cv2.INTER_NEAREST_EXACT)
@@ -196,8 +200,8 @@ def load_nyu(path, index: int = 0, depth_path=None, raw: bool = True, depth_scal
         rgb, depth = read_rgb(path), read_depth_image(depth_path, depth_scale)
         name = path.stem
     H, W = depth.shape
-    if rgb.shape[:2] != (H, W):
-        raise ValueError(f"the image is {rgb.shape[1]}×{rgb.shape[0]} but the depth is {W}×{H}")
+    check_same_size(rgb.shape, depth.shape, None if path.suffix.lower() == ".mat" else path, "the image",
+                    "the depth")
     if K is None:
         if (H, W) != (480, 640):
             raise ValueError(f"K must be given for a {W}×{H} image (NYU_K is for 640×480)")

@@ -1,8 +1,11 @@
 """Image and depth-map files ↔ arrays: PNG colour, 16-bit depth PNG, ``.npy``, PFM, COLMAP ``.bin``.
 
 Conventions: colour comes back as float32 (H, W, 3) RGB in [0, 1] (8- or 16-bit files; grey is
-repeated to 3 channels); depth as float32 (H, W) with 0, negative and non-finite values turned
-into NaN (a file's "no value" marker becomes NaN here). Writers work on bytes (``*_bytes``) so a
+repeated to 3 channels), pixels as stored (``read_image_file``); depth through one reader,
+``read_depth``, as float32 (H, W) with 0, negative and non-finite values turned into NaN (a file's
+"no value" marker becomes NaN here), 8-bit files refused and sentinels (65535) warned. Depth writers
+store every pixel that is no depth (NaN, inf, ≤ 0) as the format's hole value (``depth_units``,
+``float_depth``), never wrapped. Writers work on bytes (``*_bytes``) so a
 caller writes them atomically (``atomic.write_bytes_atomic``); ``write_*`` do that themselves.
 A missing file raises ``FileNotFoundError`` naming the argument it came from.
 
@@ -111,6 +114,30 @@ def read_image_file(path, name: str = "path", flags: int = cv2.IMREAD_UNCHANGED)
     return image
 
 
+def check_same_size(rgb_shape, other_shape, rgb_path, rgb_name: str, other_name: str) -> None:
+    """Refuse colour and depth (or a camera) of different sizes: ``rgb_shape`` / ``other_shape`` are (H, W, ...)
+    shapes, ``rgb_name`` / ``other_name`` what the message calls them (the flag or file). When the colour file
+    carries an EXIF orientation that swaps its axes and its rotated size is the other's, the message says
+    so: the kit reads every image as stored (:func:`read_image_file`), so colour and depth must be stored alike."""
+    H, W = rgb_shape[:2]
+    h, w = other_shape[:2]
+    if (H, W) == (h, w):
+        return
+    hint = ""
+    if rgb_path is not None and (H, W) == (w, h):
+        try:
+            orientation = exif_orientation(Path(rgb_path).read_bytes())
+        except OSError:
+            orientation = None
+        if orientation in (5, 6, 7, 8):
+            hint = (f". {rgb_name} carries EXIF orientation {orientation} ({_ORIENTATIONS[orientation]}): a viewer shows "
+                    f"it {H}×{W} (W×H), ddp-lite reads its pixels as stored ({W}×{H}), as it reads depth. Store colour "
+                    f"and depth the same way up (e.g. PIL.ImageOps.exif_transpose on the colour, if the depth was "
+                    f"saved upright)")
+    raise ValueError(f"{rgb_name} is {W}×{H} (W×H) but {other_name} is {w}×{h}; they must be the same size, pixel "
+                     f"for pixel{hint}")
+
+
 def read_rgb(path, name: str = "path") -> np.ndarray:
     """An 8- or 16-bit image file → (H, W, 3) float32 RGB in [0, 1], pixels as stored (no EXIF rotation;
     see :func:`read_image_file`); grey is repeated to 3 channels, alpha dropped."""
@@ -146,36 +173,37 @@ def rgb_png_bytes(rgb: np.ndarray) -> bytes:
     return buffer.tobytes()
 
 
-def _pfm_header(data: bytes, path) -> tuple[int, int, int, float, int]:
+def _pfm_header(data: bytes, path, name: str = "path") -> tuple[int, int, int, float, int]:
     """(channels, width, height, scale, data offset) of a PFM: three header lines (``\n`` or
     ``\r\n`` line ends; ``#`` comment lines skipped), or the same tokens on fewer lines."""
     tokens, offset = [], 0
     while len(tokens) < 4:
         end = data.find(b"\n", offset, offset + 256)
         if end < 0:
-            raise ValueError(f"path: {path} is not a PFM file (expected 'PF' or 'Pf', width, height, scale)")
+            raise ValueError(f"{name}: {path} is not a PFM file (expected 'PF' or 'Pf', width, height, scale)")
         line, offset = data[offset:end].strip(), end + 1
         if not line.startswith(b"#"):
             tokens += line.split()
     kind, width, height, scale = tokens[:4] if len(tokens) == 4 else (None,) * 4
     if kind not in (b"PF", b"Pf") or not (width.isdigit() and height.isdigit()):
-        raise ValueError(f"path: {path} is not a PFM file (expected 'PF' or 'Pf', width, height, scale)")
+        raise ValueError(f"{name}: {path} is not a PFM file (expected 'PF' or 'Pf', width, height, scale)")
     try:
         scale = float(scale)
     except ValueError:
-        raise ValueError(f"path: {path} has a PFM scale that is not a number: {scale!r}") from None
+        raise ValueError(f"{name}: {path} has a PFM scale that is not a number: {scale!r}") from None
     if int(width) == 0 or int(height) == 0 or scale == 0.0 or not np.isfinite(scale):
-        raise ValueError(f"path: {path} has an empty size or a zero or non-finite scale in its PFM header")
+        raise ValueError(f"{name}: {path} has an empty size or a zero or non-finite scale in its PFM header")
     return 3 if kind == b"PF" else 1, int(width), int(height), scale, offset
 
 
-def read_pfm(path) -> np.ndarray:
-    """A PFM file → float32 (H, W) or (H, W, 3), top row first, native byte order (either file endianness)."""
-    data = regular_file(path, "path").read_bytes()
-    channels, width, height, scale, offset = _pfm_header(data, path)
+def read_pfm(path, name: str = "path") -> np.ndarray:
+    """A PFM file → float32 (H, W) or (H, W, 3), top row first, native byte order (either file endianness);
+    errors name ``name`` (the argument the path came from)."""
+    data = regular_file(path, name).read_bytes()
+    channels, width, height, scale, offset = _pfm_header(data, path, name)
     count = width * height * channels
     if len(data) - offset < 4 * count:
-        raise ValueError(f"path: {path} is truncated: {len(data) - offset} data bytes, expected {4 * count}")
+        raise ValueError(f"{name}: {path} is truncated: {len(data) - offset} data bytes, expected {4 * count}")
     array = np.frombuffer(data, dtype="<f4" if scale < 0 else ">f4", count=count, offset=offset)
     shape = (height, width, 3) if channels == 3 else (height, width)
     return np.flipud(array.reshape(shape)).astype(np.float32)
@@ -200,15 +228,47 @@ def npy_bytes(values) -> bytes:
     return buffer.getvalue()
 
 
+def depth_units(depth, factor: float, name: str = "depth") -> tuple[np.ndarray, int]:
+    """(H, W) depth metres → (H, W) uint16 stored units (value = depth × ``factor``) and how many valid
+    pixels do not fit.
+
+    The one rule of every integer depth writer: a pixel that is no depth (NaN, ±inf, 0 or negative, e.g.
+    a −1 "unknown" marker) is stored as 0, the format's "no value", never wrapped around the 16 bits (−1
+    would become 65535 − 4999 = 12.107 m at TUM's 5000 per metre). A valid depth that rounds to 0 or to
+    65535 or more does not fit: 0 is the hole value and 65535 the sentinel many cameras write for "no
+    reading"; such pixels are stored as 0 and counted."""
+    values = np.asarray(depth)
+    if values.ndim != 2 or not (np.issubdtype(values.dtype, np.floating) or np.issubdtype(values.dtype, np.integer)):
+        raise ValueError(f"{name} must be an (H, W) map of numbers (metres), got {values.dtype} {values.shape}")
+    values = values.astype(np.float64)
+    valid = np.isfinite(values) & (values > 0)
+    scaled = np.round(np.where(valid, values, 0.0) * float(factor))
+    lost = valid & ((scaled < 1) | (scaled >= 65535))
+    return np.where(valid & ~lost, scaled, 0).astype(np.uint16), int(lost.sum())
+
+
 def depth_png_bytes(depth, factor: float = 1000.0) -> tuple[bytes, int]:
-    """(H, W) depth × ``factor`` (1000: millimetres) → (16-bit PNG bytes, how many pixels did not fit).
-    NaN becomes 0 (the usual depth-PNG "no value"); values beyond 65535 are written as 0 too."""
-    scaled = np.round(np.nan_to_num(np.asarray(depth, np.float64), nan=0.0) * factor)
-    overflow = scaled > 65535
-    ok, buffer = cv2.imencode(".png", np.where(overflow, 0, scaled).astype(np.uint16))
+    """(H, W) depth × ``factor`` (1000: millimetres) → (16-bit PNG bytes, how many valid pixels did not fit).
+    No depth (NaN, inf, ≤ 0) becomes 0, the usual depth-PNG "no value"; so do valid depths that do not
+    fit the 16 bits (:func:`depth_units`)."""
+    units, lost = depth_units(depth, factor)
+    ok, buffer = cv2.imencode(".png", units)
     if not ok:
         raise RuntimeError("OpenCV could not encode a 16-bit PNG")
-    return buffer.tobytes(), int(overflow.sum())
+    return buffer.tobytes(), lost
+
+
+def float_depth(depth, hole: float = np.nan, name: str = "depth") -> np.ndarray:
+    """(H, W) depth → float32 with every pixel that is no depth (NaN, ±inf, 0 or negative, e.g. a −1
+    marker) set to ``hole``: what every float depth writer stores (NaN for ``.npy``/``.pfm``, 0 for
+    COLMAP's ``.bin``). A copy; the caller's array is untouched."""
+    values = np.asarray(depth)
+    if values.ndim != 2 or not (np.issubdtype(values.dtype, np.floating) or np.issubdtype(values.dtype, np.integer)):
+        raise ValueError(f"{name} must be an (H, W) map of numbers (metres), got {values.dtype} {values.shape}")
+    values = values.astype(np.float64)
+    with np.errstate(over="ignore"):
+        out = np.where(np.isfinite(values) & (values > 0), values, hole).astype(np.float32)
+    return out
 
 
 def pfm_bytes(values) -> bytes:
@@ -219,21 +279,8 @@ def pfm_bytes(values) -> bytes:
 
 
 def read_depth_image(path, scale: float = 0.001) -> np.ndarray:
-    """A 16-bit depth PNG or a ``.npy`` (millimetres by default) → (H, W) float32 metres = value·scale;
-    0 and non-finite → NaN."""
-    if not np.isfinite(scale) or scale <= 0:
-        raise ValueError(f"scale must be a positive number (metres per unit), got {scale!r}")
-    path = regular_file(path, "path")
-    if path.suffix.lower() == ".npy":
-        raw = load_npy(path, "path")
-    else:
-        raw = read_image_file(path, "path")
-        if raw.dtype != np.uint16:
-            raise ValueError(f"path: {path} must be a 16-bit depth PNG or a .npy")
-    if raw.ndim != 2:
-        raise ValueError(f"path: {path} must hold an (H, W) depth map, got shape {raw.shape}")
-    depth = raw.astype(np.float64) * float(scale)
-    return np.where(np.isfinite(depth) & (depth > 0), depth, np.nan).astype(np.float32)
+    """A depth file (16-bit PNG in millimetres by default, ``.npy``, ...) → (H, W) float32 metres; see :func:`read_depth`."""
+    return read_depth(path, scale, "path", scale_name="scale")
 
 
 def read_colmap_depth(path) -> np.ndarray:
@@ -256,8 +303,9 @@ def read_colmap_depth(path) -> np.ndarray:
 
 
 def colmap_depth_bytes(depth) -> bytes:
-    """(H, W) depth → the bytes of a COLMAP dense ``.bin`` map (NaN stored as 0, COLMAP's 'no depth')."""
-    values = np.nan_to_num(np.asarray(depth, np.float32), nan=0.0)
+    """(H, W) depth → the bytes of a COLMAP dense ``.bin`` map (no depth, i.e. NaN, inf or ≤ 0, stored as 0,
+    COLMAP's 'no depth')."""
+    values = float_depth(depth, hole=0.0)
     H, W = values.shape
     return f"{W}&{H}&1&".encode("ascii") + np.ascontiguousarray(values.T).astype("<f4").tobytes()
 
@@ -268,39 +316,116 @@ def write_colmap_depth(path, depth) -> None:
 
 
 def checked_depth_png_bytes(depth: np.ndarray, factor: float, path_for_errors) -> bytes:
-    """(H, W) depth × ``factor`` → 16-bit PNG bytes, NaN → 0; refuse values the format cannot hold."""
-    png, overflow = depth_png_bytes(depth, factor)
-    if overflow:
-        raise ValueError(f"{path_for_errors}: depth up to {np.nanmax(depth):.3f} does not fit a 16-bit PNG at "
-                         f"{factor:g} units per metre (max {65535 / factor:.3f}); use .npy, .pfm or .bin")
+    """(H, W) depth × ``factor`` → 16-bit PNG bytes, no depth → 0; refuse valid values the format cannot hold."""
+    png, lost = depth_png_bytes(depth, factor)
+    if lost:
+        values = np.asarray(depth, np.float64)
+        valid = values[np.isfinite(values) & (values > 0)]
+        raise ValueError(f"{path_for_errors}: depth in {valid.min():.4g}–{valid.max():.4g} m does not fit a 16-bit PNG at "
+                         f"{factor:g} units per metre: {lost} value(s) outside the {1 / factor:.4g}–{65534 / factor:.4g} m "
+                         f"it holds (0 and 65535 mean 'no reading'); use .npy, .pfm or .bin")
     return png
 
 
-def read_depth_file(path: Path, scale: float | None) -> np.ndarray:
-    """A depth map file → (H, W) float32 × ``scale``; 0, negative and non-finite → NaN.
+def read_depth_file(path: Path, scale: float | None, name: str = "path") -> np.ndarray:
+    """A depth map file → (H, W) float32 × ``scale``; see :func:`read_depth` (its older name)."""
+    return read_depth(path, scale, name)
 
-    ``.bin`` (COLMAP dense), ``.npy``, ``.pfm`` store floats (scale defaults to 1); 16-bit ``.png``
-    stores integers and needs ``scale`` (metres per unit: 0.001 for millimetres, 1/5000 for TUM)."""
-    path = regular_file(path, "path")
+
+DEPTH_RANGE_M = (1e-3, 1e4)  # no depth outside it, whatever the scene
+MEDIAN_RANGE_M = (0.05, 300.0)  # a depth map's median: a cup from 5 cm up to a street scene's far side
+COMMON_SCALES = (1.0, 1e-3, 1.0 / 5000, 1e-4, 1e-2)  # metres, mm, TUM's 1/5000 m, 0.1 mm, cm
+
+
+def check_plausible_depth(depth, scale: float, flag: str = "--depth", scale_name: str = "--depth-scale") -> None:
+    """Refuse a scale under which the valid depths (metres, > 0, finite; ``depth`` = stored values ×
+    ``scale``) are no plausible depth map: any depth outside ``DEPTH_RANGE_M``, or a median outside
+    ``MEDIAN_RANGE_M``. The message names the common scale (``COMMON_SCALES``) that would make it
+    plausible, if any. Depth in metres only: a reconstruction's own units (COLMAP) are not checked.
+    ``flag``/``scale_name``: what the message calls the file and the scale."""
+    metres = np.asarray(depth, dtype=np.float64)
+    low, high, median = (float(v) for v in (metres.min(), metres.max(), np.median(metres)))
+
+    def plausible(lo, hi, mid):
+        return DEPTH_RANGE_M[0] <= lo and hi <= DEPTH_RANGE_M[1] and MEDIAN_RANGE_M[0] <= mid <= MEDIAN_RANGE_M[1]
+    if plausible(low, high, median):
+        return
+    fits = [c for c in COMMON_SCALES if plausible(low / scale * c, high / scale * c, median / scale * c)]
+    better = min(fits, key=lambda c: abs(np.log(median / scale * c / 3.0)), default=None)
+    hint = (f"; {scale_name} {better:g} would give {low / scale * better:.3g}–{high / scale * better:.3g} m "
+            f"(median {median / scale * better:.3g} m)" if better is not None else "")
+    raise ValueError(f"{scale_name} {scale:g}: {flag} would range {low:.3g}–{high:.3g} m (median {median:.3g} m), "
+                     f"not a plausible depth map in metres (depths within {DEPTH_RANGE_M[0]:g}–{DEPTH_RANGE_M[1]:g} m, "
+                     f"median within {MEDIAN_RANGE_M[0]:g}–{MEDIAN_RANGE_M[1]:g} m){hint}. {scale_name} is the "
+                     f"metres per stored unit")
+
+
+# The values a depth file may hold that are no depth although they are valid numbers: a sensor's
+# "no reading" / saturated marker. Integer files: the type's largest value (65535 in a 16-bit PNG);
+# float files: 65535 carried over from such a PNG, and absurd magnitudes (float max, 1e10, ...).
+FLOAT_SENTINEL_MIN = 1e9
+
+
+def _sentinels(raw: np.ndarray) -> tuple[int, str]:
+    """How many pixels of ``raw`` hold a common "no reading" marker, and which value it is."""
+    if np.issubdtype(raw.dtype, np.integer):
+        top = np.iinfo(raw.dtype).max
+        return int((raw == top).sum()), f"{top}, the largest {raw.dtype} value"
+    with np.errstate(invalid="ignore"):
+        count = int(((raw == 65535) | (np.abs(raw) >= FLOAT_SENTINEL_MIN)).sum())
+    return count, f"65535 or ≥ {FLOAT_SENTINEL_MIN:g}"
+
+
+def read_depth(path, scale: float | None = None, name: str = "path", scale_name: str = "depth_scale") -> np.ndarray:
+    """Every depth map the kit reads, of every command and format → (H, W) float32 metres = stored × ``scale``,
+    NaN where the file has no depth (0, negative, NaN, inf).
+
+    Files: ``.npy``, ``.pfm``, COLMAP ``.bin`` (floats: ``scale`` defaults to 1) and any one-channel image
+    OpenCV reads, as stored (16-bit PNG/TIFF: integers, ``scale`` required, e.g. 0.001 for millimetres;
+    float TIFF/EXR). One rule for all of them, so every command agrees:
+
+    * an 8-bit file (a picture, e.g. a depth visualisation: 256 levels are no depth) is refused;
+    * integers need ``scale`` (``scale_name``: the argument the caller calls it);
+    * a pixel that holds a common "no reading" marker (65535 in a 16-bit file) is reported with a warning
+      naming the file and the depth it becomes.
+
+    Errors name ``name`` (the argument the path came from) and the file."""
+    if scale is not None and (isinstance(scale, bool) or not isinstance(scale, (int, float, np.floating, np.integer))
+                              or not np.isfinite(scale) or scale <= 0):
+        raise ValueError(f"{scale_name} must be a positive number (metres per stored unit), got {scale!r}")
+    path = regular_file(path, name)
     suffix = path.suffix.lower()
     if suffix == ".bin":
         raw = read_colmap_depth(path)
     elif suffix == ".npy":
-        raw = load_npy(path, "path")
+        raw = load_npy(path, name)
     elif suffix == ".pfm":
-        raw = read_pfm(path)
-    elif suffix == ".png":
-        raw = read_image_file(path, "path")
-        if raw.dtype != np.uint16 or raw.ndim != 2:
-            raise ValueError(f"{path}: a depth PNG must be 1-channel 16-bit, got {raw.dtype} {raw.shape}"
-                             + (" (an 8-bit picture, e.g. a visualisation, is not depth)" if raw.dtype == np.uint8
-                                else ""))
-        if scale is None:
-            raise ValueError(f"{path} stores integers; give depth_scale (CLI: --depth-scale), the metres per stored "
-                             f"unit (0.001 for millimetres)")
+        raw = read_pfm(path, name)
     else:
-        raise ValueError(f"{path}: depth maps must be .bin (COLMAP), .png (16-bit), .npy or .pfm")
-    if raw.ndim != 2 or not np.issubdtype(raw.dtype, np.number):
-        raise ValueError(f"{path} must hold one (H, W) map of numbers, got {raw.dtype} {raw.shape}")
-    depth = raw.astype(np.float64) * (1.0 if scale is None else float(scale))
+        raw = read_image_file(path, name)  # as stored: no EXIF rotation, like every colour image
+    if raw.dtype in (np.uint8, np.int8):
+        raise ValueError(f"{name}: {path} is an 8-bit {'array' if suffix == '.npy' else 'image'}, a picture (e.g. a "
+                         f"depth visualisation), not a depth map: 256 levels hold no depth. Give the 16-bit PNG, "
+                         f".npy, .pfm or .bin the depth was saved as")
+    if raw.ndim != 2 or raw.dtype == bool or not np.issubdtype(raw.dtype, np.number) \
+            or np.issubdtype(raw.dtype, np.complexfloating):
+        raise ValueError(f"{name}: {path} must hold one (H, W) map of real numbers (one channel), got {raw.dtype} "
+                         f"{raw.shape}")
+    if min(raw.shape) == 0:
+        raise ValueError(f"{name}: {path} holds an empty {raw.shape[0]}×{raw.shape[1]} map")
+    if scale is None:
+        hint = " (CLI: --depth-scale)" if scale_name == "depth_scale" else ""
+        if np.issubdtype(raw.dtype, np.integer):
+            raise ValueError(f"{name}: {path} stores integers; give {scale_name}{hint}, the metres per stored unit of its "
+                             f"{raw.dtype} values (0.001 for millimetres, as in most 16-bit depth PNGs; 1/5000 for TUM)")
+        scale = 1.0
+    count, marker = _sentinels(raw)
+    if count:
+        example = float(raw[(raw == np.iinfo(raw.dtype).max) if np.issubdtype(raw.dtype, np.integer)
+                            else ((raw == 65535) | (np.abs(raw) >= FLOAT_SENTINEL_MIN))][0])
+        warnings.warn(f"{name}: {path}: {count} pixel(s) hold {marker}, which depth cameras write for 'no reading' "
+                      f"or 'out of range'; they are read as depth ({example * float(scale):.4g} m at {scale_name} "
+                      f"{float(scale):g}). If they mean 'no value', store 0 there", stacklevel=3)
+    with np.errstate(over="ignore", invalid="ignore"):
+        depth = raw.astype(np.float64) * float(scale)
     return np.where(np.isfinite(depth) & (depth > 0), depth, np.nan).astype(np.float32)

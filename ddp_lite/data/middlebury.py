@@ -20,7 +20,7 @@ import cv2
 import numpy as np
 
 from data_fetch.atomic import write_bytes_atomic
-from ..core.camera import Camera
+from ..core.camera import Camera, check_intrinsics
 from .fileio import existing_path, read_image_file, rgb_png_bytes, read_rgb, read_text_file, read_pfm, write_pfm
 from .resample import check_optional_size, scene_depth_range, resize_scene
 from ..world.scenes import make_scene  # the renderer, for make_middlebury_fixture only
@@ -104,6 +104,8 @@ def parse_middlebury_calib(text: str) -> MiddleburyCalib:
         if numbers[key] != int(numbers[key]) or numbers[key] <= 0:
             raise ValueError(f"text: {key} must be a positive integer, got {entries[key]!r}")
     K0, K1 = _matrix(entries["cam0"], "cam0"), _matrix(entries["cam1"], "cam1")
+    for key, K in (("cam0", K0), ("cam1", K1)):
+        check_intrinsics(K, int(numbers["width"]), int(numbers["height"]), f"text: {key}")
     extra = {k: v for k, v in numbers.items() if k not in ("doffs", "baseline", "width", "height", "ndisp")}
     return MiddleburyCalib(K0, K1, numbers["doffs"], numbers["baseline"] / 1000.0, int(numbers["width"]),
                            int(numbers["height"]), int(numbers["ndisp"]), extra)

@@ -14,15 +14,15 @@ Conventions as in ``formats``: depth float32 metres, NaN = no reading; OpenCV ca
 from __future__ import annotations
 
 import re
-import warnings
 from pathlib import Path
 
 import numpy as np
 from scipy.spatial.transform import Rotation, Slerp
 
 from data_fetch.atomic import write_bytes_atomic
-from ..core.camera import Camera
-from .fileio import checked_depth_png_bytes, rgb_png_bytes, read_depth_file, read_rgb
+from ..core.camera import Camera, check_intrinsics
+from ..core.checks import check_bool, report_skipped
+from .fileio import check_plausible_depth, check_same_size, checked_depth_png_bytes, rgb_png_bytes, read_depth, read_rgb
 from .resample import finish_scene, undistort_rgbd
 from .textparse import parse_error, parse_floats, quaternion_rotation, text_lines
 from ..core.views import Scene, View
@@ -127,7 +127,7 @@ def _interpolate_pose(stamps: np.ndarray, poses: np.ndarray, t: float, max_diffe
 
 
 def _tum_intrinsics(folder: Path, intrinsics):
-    """(K 3×3, distortion (5,)) from a name ('fr1', 'fr2', 'fr3', 'ros'), a 3×3 K, or None: the folder's
+    """(K 3×3, distortion (5,), what to call it in a message) from a name ('fr1', 'fr2', 'fr3', 'ros'), a 3×3 K, or None: the folder's
     ``intrinsics.txt`` (the kit's addition for your own captures: one line ``fx fy cx cy``, pixels,
     pixel (0, 0) = centre of the top-left pixel), else the TUM camera its name says (``freiburg1`` …)."""
     if intrinsics is None and (folder / "intrinsics.txt").is_file():
@@ -135,7 +135,8 @@ def _tum_intrinsics(folder: Path, intrinsics):
         if len(lines) != 1 or len(lines[0][1].split()) != 4:
             raise parse_error(folder / "intrinsics.txt", lines[0][0] if lines else None, "expected one line 'fx fy cx cy'")
         fx, fy, cx, cy = parse_floats(lines[0][1].split(), folder / "intrinsics.txt", lines[0][0], "fx fy cx cy")
-        intrinsics = np.array([[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]])
+        return np.array([[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]]), np.zeros(5), f"{folder / 'intrinsics.txt'}"
+    named = intrinsics is None
     if intrinsics is None:
         found = re.search(r"freiburg([123])", folder.name)
         if not found:
@@ -147,15 +148,18 @@ def _tum_intrinsics(folder: Path, intrinsics):
         if intrinsics not in TUM_INTRINSICS:
             raise ValueError(f"intrinsics must be one of {sorted(TUM_INTRINSICS)} or a 3×3 K, got {intrinsics!r}")
         (fx, fy, cx, cy), dist = TUM_INTRINSICS[intrinsics]
-        return np.array([[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]]), np.array(dist)
+        label = (f"intrinsics ({intrinsics!r}, the TUM camera {folder.name!r} names)" if named
+                 else f"intrinsics ({intrinsics!r}, a 640×480 TUM camera)")
+        return np.array([[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]]), np.array(dist), label
     K = np.asarray(intrinsics, dtype=np.float64)
     if K.shape != (3, 3) or not np.all(np.isfinite(K)):
         raise ValueError(f"intrinsics must be a name or a finite 3×3 K in pixels, got shape {K.shape}")
-    return K, np.zeros(5)
+    return K, np.zeros(5), "intrinsics"
 
 
 def read_tum(folder, intrinsics=None, every: int = 1, max_frames: int | None = None, max_difference: float = 0.02,
-             undistort: bool = True, depth_factor: float = TUM_DEPTH_FACTOR, size=None, name: str | None = None) -> Scene:
+             undistort: bool = True, depth_factor: float = TUM_DEPTH_FACTOR, size=None, name: str | None = None,
+             strict: bool = False) -> Scene:
     """A TUM RGB-D sequence folder (``rgb.txt``, ``depth.txt``, ``groundtruth.txt`` + images) → ``Scene``.
 
     Args:
@@ -168,6 +172,8 @@ def read_tum(folder, intrinsics=None, every: int = 1, max_frames: int | None = N
         undistort: remove fr1/fr2's lens distortion with OpenCV (colour bilinear, depth nearest).
         depth_factor: stored units per metre (TUM: 5000); 0 = no reading → NaN.
         size: (H, W) to resample to (colour by area, depth by nearest, K accordingly).
+        strict: refuse (``ValueError``) a folder whose frames cannot all be used (no partner frame, no
+            pose) instead of leaving them out with a warning naming them.
     Returns:
         ``Scene`` with one view per kept frame, named by its colour timestamp; world frame = the
         motion-capture frame, metres; ``meta`` d_min/d_max from the depths.
@@ -179,39 +185,48 @@ def read_tum(folder, intrinsics=None, every: int = 1, max_frames: int | None = N
         raise ValueError(f"every must be a positive integer, got {every!r}")
     if max_frames is not None and (isinstance(max_frames, bool) or int(max_frames) != max_frames or max_frames < 1):
         raise ValueError(f"max_frames must be a positive integer or None, got {max_frames!r}")
-    K, dist = _tum_intrinsics(folder, intrinsics)
+    strict = check_bool(strict, "strict")
+    K, dist, intrinsics_name = _tum_intrinsics(folder, intrinsics)
     rgb_list, depth_list = read_tum_list(folder / "rgb.txt"), read_tum_list(folder / "depth.txt")
     stamps, poses = read_tum_trajectory(folder / "groundtruth.txt")
     pairs = associate([t for t, _ in rgb_list], [t for t, _ in depth_list], max_difference)
     if not pairs:
         raise ValueError(f"folder: no colour frame of {folder / 'rgb.txt'} has a depth frame within "
                          f"{max_difference} s in {folder / 'depth.txt'}")
-    unpaired = len(rgb_list) - len(pairs)
-    if unpaired:  # uneven lists, or streams out of step: say so, never drop frames in silence
-        warnings.warn(f"{folder}: {unpaired} of {len(rgb_list)} colour frame(s) have no depth frame within "
-                      f"{max_difference} s ({len(depth_list)} depth frames listed) and were left out; "
-                      f"max_difference sets the tolerance")
-    views, dropped, read = [], 0, [folder]
+    paired_rgb, paired_depth = {i for i, _ in pairs}, {j for _, j in pairs}
+    # uneven lists, or streams out of step: say which frames, never drop them in silence
+    report_skipped(folder, [rgb_list[i][1] for i in range(len(rgb_list)) if i not in paired_rgb],
+                   "colour frame(s)", f"have no depth frame within {max_difference} s ({len(depth_list)} depth frames "
+                   f"listed; max_difference sets the tolerance)", strict, total=len(rgb_list))
+    report_skipped(folder, [depth_list[j][1] for j in range(len(depth_list)) if j not in paired_depth],
+                   "depth frame(s)", f"have no colour frame within {max_difference} s", strict, total=len(depth_list))
+    chosen, unposed = [], []  # every-th pair, until max_frames of them have a pose
     for i, j in pairs[::int(every)]:
-        if max_frames is not None and len(views) >= max_frames:
+        if max_frames is not None and len(chosen) >= max_frames:
             break
-        stamp, rgb_path = rgb_list[i]
-        world_from_cam = _interpolate_pose(stamps, poses, stamp, max_difference)
+        world_from_cam = _interpolate_pose(stamps, poses, rgb_list[i][0], max_difference)
         if world_from_cam is None:
-            dropped += 1
-            continue
+            unposed.append(rgb_list[i][1])
+        else:
+            chosen.append((i, j, world_from_cam))
+    report_skipped(folder, unposed, "frame(s)", f"have no ground-truth pose within {max_difference} s in "
+                   f"{folder / 'groundtruth.txt'}", strict, total=len(unposed) + len(chosen))
+    views, read = [], [folder]
+    for i, j, world_from_cam in chosen:
+        stamp, rgb_path = rgb_list[i]
         rgb = read_rgb(folder / rgb_path, "folder")
-        depth = read_depth_file(folder / depth_list[j][1], 1.0 / float(depth_factor))
+        scale, scale_name = 1.0 / float(depth_factor), "1/depth_factor (CLI: --depth-scale)"
+        depth = read_depth(folder / depth_list[j][1], scale, "folder", scale_name=scale_name)
+        if np.isfinite(depth).any():  # TUM depth is metric: a wrong factor shows as an implausible range
+            check_plausible_depth(depth[np.isfinite(depth)], scale, f"folder: {depth_list[j][1]}", scale_name)
         read += [(folder / rgb_path).parent, (folder / depth_list[j][1]).parent]
-        if rgb.shape[:2] != depth.shape:
-            raise ValueError(f"folder: {rgb_path} is {rgb.shape[1]}×{rgb.shape[0]} but {depth_list[j][1]} is "
-                             f"{depth.shape[1]}×{depth.shape[0]}; TUM pairs must be registered 1:1")
+        check_same_size(rgb.shape, depth.shape, folder / rgb_path, f"folder: {rgb_path}",  # TUM pairs are registered 1:1
+                        f"{depth_list[j][1]}")
+        check_intrinsics(K, rgb.shape[1], rgb.shape[0], intrinsics_name)  # before undistorting with it
         if undistort and np.any(dist != 0):
             rgb, depth = undistort_rgbd(rgb, depth, K, dist)
         camera = Camera(K, np.linalg.inv(world_from_cam), rgb.shape[1], rgb.shape[0])
         views.append(View(rgb, depth, camera, f"{stamp:.6f}"))
-    if dropped:
-        warnings.warn(f"{folder}: {dropped} frame(s) had no ground-truth pose within {max_difference} s and were left out")
     if not views:
         raise ValueError(f"folder: no frame of {folder} has a ground-truth pose within {max_difference} s")
     return finish_scene(name or folder.name, views, size, read)

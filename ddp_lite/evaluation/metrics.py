@@ -145,6 +145,9 @@ def d1_error(disp_pred, disp_gt, fg_mask=None, abs_threshold: float = 3.0, rel_t
     return {"d1_all": fraction(valid), "d1_bg": fraction(valid & ~fg), "d1_fg": fraction(valid & fg)}
 
 
+DATA_RANGE_SLACK = 2.0  # psnr: values may overshoot data_range a little (a fit's output), not by this factor
+
+
 def psnr(pred, target, data_range: float = 1.0, mask=None) -> float:
     """Peak signal-to-noise ratio 10·log10(data_range² / MSE) in dB; ``inf`` for identical inputs.
 
@@ -157,11 +160,19 @@ def psnr(pred, target, data_range: float = 1.0, mask=None) -> float:
         20.0
     """
     pred, target = _pair(pred, target, ("pred", "target"))
-    if not (np.isscalar(data_range) and np.isfinite(data_range) and data_range > 0):
+    if isinstance(data_range, bool) or not (np.isscalar(data_range) and np.isfinite(data_range) and data_range > 0):
         raise ValueError(f"data_range must be a positive number, got {data_range!r}")
     if mask is not None and target.ndim == 3 and np.shape(mask) == target.shape[:2]:
         mask = np.broadcast_to(np.asarray(mask)[..., None], target.shape)  # one mask for all channels
     errors = _masked_errors(pred, target, mask)
+    counted = _mask(mask, np.isfinite(target), target.shape)
+    for array, name in ((target, "target"), (pred, "pred")):  # 0–255 images scored with data_range 1, say
+        values = array[counted]
+        spread = float(values.max() - values.min())
+        if spread > DATA_RANGE_SLACK * float(data_range):
+            raise ValueError(f"{name} spans {values.min():.4g}–{values.max():.4g}, more than {DATA_RANGE_SLACK:g}× "
+                             f"data_range={data_range:g}: PSNR would be meaningless. Images in 0–255 need "
+                             f"data_range=255 (or divide them by 255); depth needs data_range = d_max − d_min")
     mse = float(np.mean(errors ** 2))
     if mse == 0.0:
         return float("inf")
@@ -240,9 +251,12 @@ def edge_band(depth, width: int = 3, relative_jump: float = 0.05) -> np.ndarray:
 
 
 def disparity_rmse(depth, gt, mask, transform: DisparityTransform) -> float:
-    """RMSE ×100 of normalised disparity between two depth maps (H, W metres) on ``mask``."""
-    depth, gt = np.asarray(_plain(depth), np.float64), np.asarray(_plain(gt), np.float64)
-    mask = np.asarray(mask, bool) & np.isfinite(depth) & np.isfinite(gt)
+    """RMSE ×100 of normalised disparity between two depth maps (H, W metres) on ``mask`` ((H, W) bool);
+    NaN when no pixel of ``mask`` has both depths finite (an empty edge band, say)."""
+    depth, gt = _pair(depth, gt, ("depth", "gt"))
+    if mask is None:
+        raise ValueError("mask must be an (H, W) bool array, True where the error is counted")
+    mask = _mask(mask, None, gt.shape) & np.isfinite(depth) & np.isfinite(gt)
     if not mask.any():
         return float("nan")
     error = transform.to_disparity(depth) - transform.to_disparity(gt)
@@ -261,12 +275,14 @@ def texture_leakage_map(depth, gt, transform: DisparityTransform, band: int = 3,
     to the planks: ``case.labels == views.LABEL_PLANKS``).
     """
     kernel = np.array([[0.0, 1.0, 0.0], [1.0, -4.0, 1.0], [0.0, 1.0, 0.0]])
-    depth, gt = np.asarray(_plain(depth), np.float64), np.asarray(_plain(gt), np.float64)
+    depth, gt = _pair(depth, gt, ("depth", "gt"))
+    if depth.ndim != 2:
+        raise ValueError(f"depth and gt must be (H, W) metres, got shape {depth.shape}")
     out = ndimage.convolve(transform.to_disparity(depth), kernel, mode="nearest")
     truth = ndimage.convolve(transform.to_disparity(gt), kernel, mode="nearest")
     planar = (np.abs(truth) < 1e-4) & ~edge_band(gt, band)
     if region is not None:
-        planar &= np.asarray(region, bool)
+        planar &= _mask(region, None, gt.shape, "region")
     planar = ndimage.binary_erosion(planar, iterations=1)
     return np.where(planar, 100.0 * np.abs(out), np.nan)
 

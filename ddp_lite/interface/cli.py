@@ -11,7 +11,9 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
+import warnings
 
 from .. import __version__
 
@@ -204,6 +206,9 @@ def build_parser() -> argparse.ArgumentParser:
                      help="metres per stored depth unit (0.001 for millimetre PNGs); default: TUM's 1/5000, "
                           "COLMAP's float files 1")
     seq.add_argument("--undistort", action="store_true", help="COLMAP: undistort OPENCV/RADIAL cameras with OpenCV")
+    seq.add_argument("--strict", action="store_true",
+                     help="refuse a sequence with frames or images that cannot be used (no depth partner, no pose, "
+                          "not registered) instead of leaving them out with a warning naming them")
     seq.add_argument("--gpu-tflops", type=_number(float, 0.0, "--gpu-tflops"), default=5.0,
                      help="--dry-run: the sustained GPU rate to assume (default 5 TFLOP/s)")
 
@@ -246,10 +251,20 @@ def _handler(target: str):
     return getattr(importlib.import_module(module), name)
 
 
+def _warning_printer(command: str):
+    """``warnings.showwarning`` for the command line: one line per warning, ``ddp-lite COMMAND: warning: ...``
+    on stderr (what was left out, what was read as it is), without Python's file and source line."""
+    def show(message, category, filename, lineno, file=None, line=None):
+        print(f"ddp-lite {command}: warning: {message}", file=sys.stderr if file is None else file, flush=True)
+    return show
+
+
 def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
     try:
-        return _handler(args.run)(args)
+        with warnings.catch_warnings():  # restores the caller's warning handling on the way out
+            warnings.showwarning = _warning_printer(args.command)
+            return _handler(args.run)(args)
     except KeyboardInterrupt:
         print(f"\nddp-lite {args.command}: interrupted; {INTERRUPTED[args.command]}.", file=sys.stderr)
         return 130
@@ -258,6 +273,13 @@ def main(argv=None) -> int:
         return 2
     except (OSError, FloatingPointError, RuntimeError, MemoryError) as error:  # at run time
         print(f"ddp-lite {args.command}: {type(error).__name__}: {error}", file=sys.stderr)
+        return 1
+    except Exception as error:  # noqa: BLE001: anything else (an OpenCV or Dask error) still gets one line, no traceback
+        print(f"ddp-lite {args.command}: failed: {type(error).__name__}: {error} (an unexpected error: please report "
+              f"it with the command line; DDP_TRACEBACK=1 shows where it arose)", file=sys.stderr)
+        if os.environ.get("DDP_TRACEBACK", "").strip() not in ("", "0"):
+            import traceback
+            traceback.print_exc()
         return 1
 
 

@@ -1,8 +1,10 @@
 """``ddp-lite complete``: fill the holes of your own RGB-D image, with every check before the fit.
 
-Input: ``--rgb`` any image OpenCV reads; ``--depth`` ``.npy``/``.pfm`` (metres, or × ``--depth-scale``)
-or an integer image (needs ``--depth-scale``, metres per stored unit); 0, ≤ 0, inf and NaN are
-holes (NaN). A depth range no camera produces at that scale (kilometres from a millimetre PNG
+Input: ``--rgb`` any image OpenCV reads, pixels as stored (no EXIF rotation, like the depth);
+``--depth`` ``.npy``/``.pfm`` (metres, or × ``--depth-scale``) or a 16-bit image (needs ``--depth-scale``,
+metres per stored unit), read by the kit's one depth reader (``fileio.read_depth``: 8-bit pictures
+refused); 0, ≤ 0, inf and NaN are holes (NaN). ``--rgb`` and ``--depth`` must be the same size;
+``--intrinsics`` must fit it (``camera.check_intrinsics``). A depth range no camera produces at that scale (kilometres from a millimetre PNG
 read as metres) is refused with the scale that would make it plausible.
 
 The fit runs at a working size (``--max-side``, default the profile's longer side) and its
@@ -29,7 +31,8 @@ import numpy as np
 
 from data_fetch.atomic import write_bytes_atomic
 from data_fetch.files import regular_file
-from ..data.fileio import depth_png_bytes, npy_bytes, pfm_bytes, read_image_file, read_pfm, read_rgb
+from ..data.fileio import (DEPTH_RANGE_M, MEDIAN_RANGE_M, COMMON_SCALES, check_plausible_depth,  # noqa: F401 (their old home)
+                           check_same_size, depth_png_bytes, npy_bytes, pfm_bytes, read_depth, read_rgb)
 from ..core.outpaths import check_output_file
 
 
@@ -86,60 +89,17 @@ def _check_outputs(args, writers: dict) -> None:
 
 
 def _read_depth(path: str, scale: float | None, flag: str = "--depth") -> np.ndarray:
-    """``path`` as float32 metres, NaN where the file has no value (0, ≤ 0, inf, NaN); a scale that
-    gives an implausible depth range is refused (:func:`check_plausible_depth`)."""
+    """``path`` as float32 metres, NaN where the file has no value (0, ≤ 0, inf, NaN), read by the kit's one
+    depth reader (``fileio.read_depth``: 8-bit pictures refused, sentinels reported); a scale that gives an
+    implausible depth range is refused (:func:`check_plausible_depth`)."""
     _input_file(path, flag)
-    suffix = os.path.splitext(path)[1].lower()
-    if suffix == ".npy":
-        try:
-            raw = np.load(path, allow_pickle=False)
-        except (ValueError, OSError) as error:
-            raise ValueError(f"{flag}: cannot read {path!r} as a .npy array ({error})") from None
-    elif suffix == ".pfm":
-        raw = read_pfm(path)
-    else:
-        raw = read_image_file(path, flag)  # as stored: no EXIF rotation, like the colour below
-    if raw.ndim != 2 or raw.dtype == bool or not (np.issubdtype(raw.dtype, np.integer) or np.issubdtype(raw.dtype, np.floating)):
-        raise ValueError(f"{flag}: {path!r} must hold one channel of numbers (H, W), got {raw.dtype} {raw.shape}")
-    if scale is None:
-        if np.issubdtype(raw.dtype, np.integer):
-            raise ValueError(f"{flag}: {path!r} stores integers ({raw.dtype}); give --depth-scale, the metres per "
-                             f"stored unit (0.001 for millimetres, as in most 16-bit depth PNGs)")
-        scale = 1.0
-    stored = raw.astype(np.float64)
-    depth = stored * scale
-    valid = np.isfinite(depth) & (depth > 0)
-    if (np.isfinite(stored) & (stored > 0)).any() and not valid.any():
-        raise ValueError(f"--depth-scale {scale!r} turns every depth into 0")
-    if valid.any():
-        check_plausible_depth(stored[valid], scale, flag)
-    return np.where(valid, depth, np.nan).astype(np.float32)
-
-
-DEPTH_RANGE_M = (1e-3, 1e4)  # no depth outside it, whatever the scene
-MEDIAN_RANGE_M = (0.05, 300.0)  # a depth map's median: a cup from 5 cm up to a street scene's far side
-COMMON_SCALES = (1.0, 1e-3, 1.0 / 5000, 1e-4, 1e-2)  # metres, mm, TUM's 1/5000 m, 0.1 mm, cm
-
-
-def check_plausible_depth(stored, scale: float, flag: str = "--depth") -> None:
-    """Refuse a scale under which the valid ``stored`` values (> 0, finite) are no plausible depth
-    map in metres: any depth outside ``DEPTH_RANGE_M``, or a median outside ``MEDIAN_RANGE_M``.
-    The message names the common scale (``COMMON_SCALES``) that would make it plausible, if any."""
-    stored = np.asarray(stored, dtype=np.float64)
-    low, high, median = (float(v) * scale for v in (stored.min(), stored.max(), np.median(stored)))
-
-    def plausible(lo, hi, mid):
-        return DEPTH_RANGE_M[0] <= lo and hi <= DEPTH_RANGE_M[1] and MEDIAN_RANGE_M[0] <= mid <= MEDIAN_RANGE_M[1]
-    if plausible(low, high, median):
-        return
-    fits = [c for c in COMMON_SCALES if plausible(low / scale * c, high / scale * c, median / scale * c)]
-    better = min(fits, key=lambda c: abs(np.log(median / scale * c / 3.0)), default=None)
-    hint = (f"; --depth-scale {better:g} would give {low / scale * better:.3g}–{high / scale * better:.3g} m "
-            f"(median {median / scale * better:.3g} m)" if better is not None else "")
-    raise ValueError(f"--depth-scale {scale:g}: {flag} would range {low:.3g}–{high:.3g} m (median {median:.3g} m), "
-                     f"not a plausible depth map in metres (depths within {DEPTH_RANGE_M[0]:g}–{DEPTH_RANGE_M[1]:g} m, "
-                     f"median within {MEDIAN_RANGE_M[0]:g}–{MEDIAN_RANGE_M[1]:g} m){hint}. --depth-scale is the "
-                     f"metres per stored unit")
+    depth = read_depth(path, scale, flag, scale_name="--depth-scale")
+    valid = np.isfinite(depth)
+    if not valid.any():
+        raise ValueError(f"{flag}: {path!r} holds no depth at all (every pixel is 0, negative, NaN or inf"
+                         + (f" at --depth-scale {scale:g}" if scale is not None else "") + ")")
+    check_plausible_depth(depth[valid], 1.0 if scale is None else scale, flag)
+    return depth
 
 
 def _input_file(path: str, flag: str) -> None:
@@ -208,6 +168,8 @@ def complete_command(args) -> int:
     from ..method.profiles import get_profile
     from ..core.progress import command_progress
     from ..method.loop import expected_share
+    from ..core.checks import check_depth
+    from ..method.nets import check_input_size
     from ..sequences.working_size import fill_holes_at_full_size, shrink, working_shape
     profile = get_profile(args.profile)
     config = FitConfig.for_profile(profile, variant=args.variant, recipe=args.recipe, device=args.device,
@@ -217,9 +179,7 @@ def complete_command(args) -> int:
     config.validate()  # --device, before the inputs are read
     rgb = _read_rgb(args.rgb)
     depth = _read_depth(args.depth, args.depth_scale)
-    if rgb.shape[:2] != depth.shape:
-        raise ValueError(f"--rgb is {rgb.shape[0]}×{rgb.shape[1]} (H×W) but --depth is "
-                         f"{depth.shape[0]}×{depth.shape[1]}; they must be the same size")
+    check_same_size(rgb.shape, depth.shape, args.rgb, "--rgb", "--depth")  # names an EXIF rotation if that is why
     gt = None
     if args.gt:
         gt = _read_depth(args.gt, args.depth_scale, "--gt")
@@ -227,10 +187,9 @@ def complete_command(args) -> int:
             raise ValueError(f"--gt is {gt.shape[0]}×{gt.shape[1]} but --depth is {depth.shape[0]}×{depth.shape[1]}")
     camera = None
     if args.intrinsics is not None:
-        from ..core.camera import Camera
-        from ..method.fit_inputs import check_principal_point
-        camera = Camera(np.array(args.intrinsics, dtype=np.float64), np.eye(4), depth.shape[1], depth.shape[0])
-        check_principal_point(camera, "--intrinsics")  # K of another image size would bend the point cloud
+        from ..core.camera import Camera, check_intrinsics
+        K = check_intrinsics(args.intrinsics, depth.shape[1], depth.shape[0], "--intrinsics")  # K of another size bends the cloud
+        camera = Camera(K, np.eye(4), depth.shape[1], depth.shape[0])
     holes = ~np.isfinite(depth)
     if not holes.any():
         raise ValueError(f"--depth {args.depth!r} has no holes (0, inf or NaN pixels): nothing to fill")
@@ -240,6 +199,10 @@ def complete_command(args) -> int:
     max_side = args.max_side or max(profile.size)
     shape = working_shape(depth.shape, max_side)
     small_rgb, small_depth = shrink(rgb, depth, shape)
+    # what the fit will check, checked here with the flags' names: enough valid depth, a size the net can take
+    check_depth(small_depth, f"--depth {args.depth!r} (at the working size {shape[0]}×{shape[1]})")
+    check_input_size(config.net, config.channels, shape[0], shape[1],
+                     name=f"--depth {args.depth!r} (at the working size, --max-side {max_side})")
     print(f"{depth.shape[0]}×{depth.shape[1]} (H×W), {holes.mean():.1%} holes; fitting at "
           f"{shape[0]}×{shape[1]} (--max-side {max_side}), profile '{profile.name}'", flush=True)
     planned = config.resolved_iterations(args.variant) * config.fit_count()  # every fit of the command

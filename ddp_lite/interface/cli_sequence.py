@@ -46,6 +46,8 @@ def _sequence_options(args) -> dict:
         if value is not None and name not in allowed[args.format]:
             raise ValueError(f"--{name.replace('_', '-')} does not apply to --format {args.format}")
     options = {k: v for k, v in given.items() if v is not None}
+    if getattr(args, "strict", False) and args.format in ("tum", "colmap"):  # the readers that can leave frames out
+        options["strict"] = True
     if args.format == "tum" and "depth_scale" in options:
         options["depth_factor"] = 1.0 / options.pop("depth_scale")
     if args.size:
@@ -54,7 +56,8 @@ def _sequence_options(args) -> dict:
 
 
 def _view_indices(scene, tokens):
-    """--views: indices or view names → indices."""
+    """--views: indices (0 … N−1) or view names → indices; anything else (a negative index, an index past
+    the end, a name no view has, a view twice) → ``ValueError`` naming ``--views``."""
     if not tokens:
         return None
     names = {view.name: i for i, view in enumerate(scene.views)}
@@ -65,10 +68,9 @@ def _view_indices(scene, tokens):
             index = names[token]
         elif token.lstrip("-").isdigit():
             index = int(token)
-            if not -n <= index < n:
-                raise ValueError(f"--views: {index} is out of range: the sequence has {n} views (0–{n - 1}, or "
-                                 f"-{n}–-1 from the end)")
-            index %= n  # -1 is the last view, as in Python
+            if not 0 <= index < n:
+                raise ValueError(f"--views: {token} is out of range: the sequence has {n} views, indices 0–{n - 1} "
+                                 f"(not counted from the end; or view names; leave --views out for all of them)")
         else:
             raise ValueError(f"--views: {token!r} is neither a view index nor a view name (first names: "
                              f"{', '.join(list(names)[:5])})")

@@ -106,7 +106,9 @@ def run_sequence(scene: Scene, out, config: FitConfig | None = None, views=None,
                          png_overflow_pixels=overflow, finished=time.strftime("%Y-%m-%dT%H:%M:%S"))
             entry.pop("error", None)
             computed.append(job.name)
-            log(f"  view {job.name}: {outcome['iterations']} iterations, {outcome['seconds']:.1f} s{whole}")
+            log(f"  view {job.name}: {outcome['iterations']} iterations, {outcome['seconds']:.1f} s{whole}"
+                + (f"; {overflow} pixel(s) beyond 65.535 m written as 0 in its 16-bit PNG (the .npy has them)"
+                   if overflow else ""))
         write_manifest(out, manifest)
     fused, points = None, 0
     if fuse:
@@ -115,5 +117,7 @@ def run_sequence(scene: Scene, out, config: FitConfig | None = None, views=None,
         write_manifest(out, manifest)
         if fused:
             log(f"fused {len(used)} views → {fused} ({points} points)")
+        else:
+            log(f"no fused.ply: {len(used)} view(s) finished ({', '.join(used) or 'none'}); fusing needs at least 2")
     return {"computed": computed, "skipped": skipped, "failed": failed, "fused": fused, "points": points,
             "manifest": out / MANIFEST}
