@@ -111,9 +111,9 @@ def complete_full_size(isa: str, threads: int) -> dict:
                 errors=[(share, round(error, 2)) for share, error in errors], summary=out.strip().splitlines()[-1])
 
 
-def notebook_seconds(isa: str, threads: int, path: Path) -> float:
-    """Wall time of one notebook executed at `class` in a fresh kernel (nbconvert, kernel start included)."""
-    env = dict(os.environ, OMP_NUM_THREADS=str(threads), DDP_PROFILE="class", MPLBACKEND="Agg", **ISA_ENV[isa])
+def notebook_seconds(isa: str, threads: int, path: Path, profile: str = "class") -> float:
+    """Wall time of one notebook executed at ``profile`` in a fresh kernel (nbconvert, kernel start included)."""
+    env = dict(os.environ, OMP_NUM_THREADS=str(threads), DDP_PROFILE=profile, MPLBACKEND="Agg", **ISA_ENV[isa])
     env.pop("DDP_CACHE", None)
     with tempfile.TemporaryDirectory() as folder:
         start = time.perf_counter()
@@ -130,7 +130,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--isa", nargs="+", default=["native", "avx2"], choices=sorted(ISA_ENV))
     parser.add_argument("--threads", type=int, default=2, help="torch threads (a laptop: 2)")
-    parser.add_argument("--notebooks", action="store_true", help="also time every notebook at class")
+    parser.add_argument("--notebooks", action="store_true", help="also time every notebook (at --profile)")
+    parser.add_argument("--profile", default="class", help="the notebooks' profile (class; ci as in make test)")
     parser.add_argument("--only", nargs="+", metavar="NAME", help="notebooks whose name contains NAME")
     parser.add_argument("--skip", nargs="+", default=[], choices=["loop", "fit", "complete"], help="parts to skip")
     args = parser.parse_args()
@@ -154,8 +155,8 @@ def main() -> None:
             for path in sorted(NOTEBOOKS.glob("[0-9][0-9]_*.ipynb")):
                 if args.only and not any(name in path.name for name in args.only):
                     continue
-                print(f"notebook {path.stem} at class: {notebook_seconds(isa, args.threads, path) / 60:.1f} min",
-                      flush=True)
+                seconds = notebook_seconds(isa, args.threads, path, args.profile)
+                print(f"notebook {path.stem} at {args.profile}: {seconds:.0f} s ({seconds / 60:.1f} min)", flush=True)
 
 
 if __name__ == "__main__":
