@@ -9,10 +9,12 @@ against the seeds' spread, on the real photograph and the rendered scenes apart.
 from __future__ import annotations
 
 import numpy as np
+import torch
 
 from ..classical.baselines import BASELINES
 from ..classical.stereo import pixel_disparity
 from ..method.config import FitConfig
+from ..method.ensemble import run_members
 from ..method.fit import complete_depth, mixed_with_fill
 from ..method.profiles import get_profile
 from ..method.recipes import get_recipe
@@ -82,37 +84,42 @@ def _best_fill_px(case: Case) -> tuple[str, float]:
 
 
 def run_additions(cases: dict[str, Case], profile=None, seeds=(0, 1, 2), variant: str = "rgbd", log=print) -> dict:
-    """Fit every step of :func:`addition_steps` on every case and seed.
+    """Fit every step of :func:`addition_steps` on every case and seed: the fits of a case side by side,
+    one torch thread each, as many at once as torch has threads (``ensemble.run_members``).
 
     Returns ``{"steps": [names], "best_fill": {case: (name, px)}, "px": {case: {step: [px per seed]}},
     "ratio": {case: {step: [DDP px / best fill px, per seed]}}, "example": {case: {step: depth}}}``
     (the example: seed ``seeds[0]``'s completed depth, for figures).
     """
     steps = addition_steps(profile)
-    out = {"steps": list(steps), "best_fill": {}, "px": {}, "ratio": {}, "example": {}}
+    names = list(steps)
+    # a step that only adds the fill's share mixes it into the previous step's fits: the same net fit
+    mixes_fill = {name: i > 0 and not steps[names[i - 1]].get("blend_fill")
+                  and steps[name] == {**steps[names[i - 1]], "blend_fill": steps[name].get("blend_fill")}
+                  for i, name in enumerate(names)}
+    jobs = [(step, seed) for step in names if not mixes_fill[step] for seed in seeds]
+    workers = max(1, min(len(jobs), torch.get_num_threads()))  # independent fits side by side, a thread each
+    out = {"steps": names, "best_fill": {}, "px": {}, "ratio": {}, "example": {}}
     for case_name, case in cases.items():
         out["best_fill"][case_name] = best = _best_fill_px(case)
         out["px"][case_name], out["ratio"][case_name], out["example"][case_name] = {}, {}, {}
-        fits, previous = {}, None  # seed → the previous step's result, and that step's overrides
-        for step, overrides in steps.items():
-            errors = []
-            # a step that only adds the fill's share mixes it into the previous step's fits: the same net fit
-            only_fill = previous is not None and {**previous, "blend_fill": overrides.get("blend_fill")} == overrides
-            for seed in seeds:
-                config = FitConfig.for_profile(profile, variant=variant, recipe="paper", seed=seed, progress=False,
-                                               **overrides)
-                neighbors = case.neighbors if variant == "rgbd+warp" else ()
-                if only_fill and not previous.get("blend_fill") and config.blend_fill:
-                    result = mixed_with_fill(fits[seed], np.asarray(case.depth, np.float32),
-                                             np.asarray(case.rgb, np.float32), config.blend_fill)
-                else:
-                    result = complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant,
-                                            config=config)
-                fits[seed] = result
-                errors.append(hole_error_px(case, result.merged(case.depth)))
-                if seed == seeds[0]:
-                    out["example"][case_name][step] = result.merged(case.depth)
-            previous = overrides
+        neighbors = case.neighbors if variant == "rgbd+warp" else ()
+
+        def fit(k: int, case=case, neighbors=neighbors):
+            step, seed = jobs[k]
+            config = FitConfig.for_profile(profile, variant=variant, recipe="paper", seed=seed, progress=False,
+                                           **steps[step])
+            return complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant, config=config)
+        fits = dict(zip(jobs, run_members(fit, len(jobs), workers)))
+        for i, step in enumerate(names):
+            if mixes_fill[step]:
+                share = FitConfig.for_profile(profile, variant=variant, recipe="paper", **steps[step]).blend_fill
+                for seed in seeds:
+                    fits[step, seed] = mixed_with_fill(fits[names[i - 1], seed], np.asarray(case.depth, np.float32),
+                                                       np.asarray(case.rgb, np.float32), share)
+            merged = [fits[step, seed].merged(case.depth) for seed in seeds]
+            errors = [hole_error_px(case, depth) for depth in merged]
+            out["example"][case_name][step] = merged[0]
             out["px"][case_name][step] = errors
             out["ratio"][case_name][step] = [e / best[1] for e in errors]
             log(f"{case_name:<22} {step:<38} " + " ".join(f"{e:.3f}" for e in errors) + " px")
