@@ -177,7 +177,7 @@ STUDY = {
     "ci-no-image": dict(**GREY, **CI7),  # ci before the colour-image study
     "ci-image-sharp": dict(image_input=1.0, image_blur=0.0, **CI7),  # ci with the colour image unblurred, ...
     "ci-image-blur1": dict(image_input=1.0, image_blur=1.0, **CI7),  # ... blurred by 1 px (ci keeps 0.5)
-    "ci-seventh": CI7,  # ci after the colour-image study (the colour image, σ 0.5 px); then, the `ci` catch-up:
+    "ci-e10": CI7,  # ci after the colour-image study (the colour image, σ 0.5 px); then, the `ci` catch-up:
     "ci-e3": dict(smoothness_edge=3.0, flatness=0.0),  # its colour-edge strength, without the flatness term
     "ci-e30": dict(smoothness_edge=30.0, flatness=0.0),
     "ci-e100": dict(smoothness_edge=100.0, flatness=0.0),
