@@ -48,17 +48,18 @@ from ddp_lite.evaluation.experiments import Case, make_case, sgm_depth_at_scale 
 from ddp_lite.classical.holes import random_holes  # noqa: E402
 from ddp_lite.data.middlebury import load_middlebury, make_middlebury_fixture  # noqa: E402
 from ddp_lite.evaluation.real_cases import REAL_HOLES, factor_for_profile, make_real_case  # noqa: E402
-from ddp_lite.method.recipes import RECIPES as KIT_RECIPES, STUDY  # noqa: E402
+from ddp_lite.method.recipes import RECIPES as KIT_RECIPES  # noqa: E402
 from ddp_lite.data.resample import resize_scene  # noqa: E402
 from ddp_lite.world.scenes import SCENES  # noqa: E402
 from _common import add_profile_args, profile_from_args  # noqa: E402
+from study_recipes import STUDY  # noqa: E402
 
 NAMED = ("house", "desk", "room", "street")
 HOLES = ("sgm-dense", "sgm-sparse", "blobs")
 QUICK = ("desk/sgm-dense", "house/blobs", "fixture/sgm-dense")
 
 # name → FitConfig overrides on top of the profile's config: the default (the kit), the paper's
-# method, the photo recipe (the mean of a kit fit, a paper fit and a colorization fill), and the study's other recipes (ddp_lite.method.recipes.STUDY, each with its one-line why)
+# method, the photo recipe (the mean of a kit fit, a paper fit and a colorization fill), and the study's other recipes (study_recipes.STUDY, each with its one-line why)
 RECIPES = {"default": {}, "paper": KIT_RECIPES["paper"].overrides, "photo": KIT_RECIPES["photo"].overrides, **STUDY}
 
 

@@ -45,9 +45,11 @@ _PACKAGES = {  # sub-package → its modules, each one concern (the sub-package'
     "world": ('scenes', 'render', 'textures', 'photo_texture', 'solids', 'terrain', 'organic', 'neighbors'),
     "classical": ('baselines', 'stereo', 'holes', 'kinect'),
     "method": ('config', 'variants', 'disparity', 'losses', 'paper_method', 'hole_terms', 'nets', 'warp', 'loop',
-               'device', 'fit', 'fit_inputs', 'ensemble', 'coarse_to_fine', 'dip', 'profiles', 'recipes', 'cache'),
+               'device', 'fit', 'fit_inputs', 'ensemble', 'blend', 'visibility', 'equation', 'coarse_to_fine', 'dip',
+               'profiles', 'recipes', 'cache'),
     "data": ('datasets', 'fileio', 'formats', 'colmap', 'tum', 'middlebury', 'textparse', 'resample'),
-    "evaluation": ('metrics', 'fusion', 'experiments', 'mvs_kinect_experiments', 'real_cases', 'viz', 'plane_sweep'),
+    "evaluation": ('metrics', 'fusion', 'experiments', 'additions', 'mvs_kinect_experiments', 'real_cases', 'viz',
+                   'plane_sweep'),
     "sequences": ('sequence', 'sequence_cost', 'sequence_files', 'sequence_jobs', 'runner', 'working_size'),
     "interface": ('cli', 'cli_classroom', 'cli_complete', 'cli_demo', 'cli_sequence', 'classroom', 'exercises'),
 }

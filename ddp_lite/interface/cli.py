@@ -269,11 +269,5 @@ def main(argv=None) -> int:
         return 1
 
 
-def __getattr__(name: str):
-    if name in ("DEPTH_RANGE_M", "PNG_MAX_METRES", "_read_depth"):  # their old home; they live in cli_complete
-        return getattr(importlib.import_module(".cli_complete", __package__), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
 if __name__ == "__main__":
     sys.exit(main())
