@@ -41,7 +41,8 @@ from ddp_lite.method.disparity import DisparityTransform  # noqa: E402
 from ddp_lite.method.coarse_to_fine import complete_depth_coarse_to_fine  # noqa: E402
 from ddp_lite.method.config import FitConfig  # noqa: E402
 from ddp_lite.method.dip import fit_image  # noqa: E402
-from ddp_lite.method.fit import complete_depth, merge  # noqa: E402
+from ddp_lite.method.combine import complete_depth  # noqa: E402
+from ddp_lite.method.fit import merge  # noqa: E402
 from ddp_lite.core.views import View  # noqa: E402
 
 H, W = 24, 32

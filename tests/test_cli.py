@@ -234,7 +234,7 @@ def test_complete_keeps_valid_pixels_exactly_fills_the_holes_and_writes_a_previe
 
 
 def test_complete_raw_writes_the_nets_output_with_no_fill_mixed_in(tmp_path, monkeypatch):
-    import ddp_lite.method.fit as fit
+    import ddp_lite.method.combine as fit
     _pair(tmp_path)
     shares, real_complete_depth = [], fit.complete_depth
 

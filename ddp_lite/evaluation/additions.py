@@ -13,7 +13,7 @@ import numpy as np
 from ..classical.baselines import BASELINES
 from ..classical.stereo import pixel_disparity
 from ..method.config import FitConfig
-from ..method.fit import complete_depth
+from ..method.combine import complete_depth
 from ..method.profiles import get_profile
 from ..method.recipes import get_recipe
 from .experiments import Case, make_case

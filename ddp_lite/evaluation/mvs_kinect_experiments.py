@@ -18,7 +18,7 @@ import numpy as np
 
 from ..classical.baselines import fill
 from ..method.config import FitConfig
-from ..method.fit import complete_depth
+from ..method.combine import complete_depth
 from .fusion import fuse_depths, points_from_depth
 from .metrics import cloud_scores, psnr
 from ..world.neighbors import select_neighbors
