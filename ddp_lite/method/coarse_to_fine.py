@@ -60,7 +60,8 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
                                   config: FitConfig | None = None, gt_depth=None,
                                   transform: DisparityTransform | None = None, coarse_fraction: float = 0.5,
                                   scale: int = 2) -> DepthResult:
-    """:func:`complete_depth` in two stages: first at 1/``scale`` size, then at full size from the coarse weights.
+    """:func:`~ddp_lite.method.combine.complete_depth` in two stages: first at 1/``scale`` size, then at full
+    size from the coarse weights.
 
     The coarse stage runs ``round(coarse_fraction · iterations)`` iterations (no auto-stop) on the
     inputs shrunk by ``scale``: images by area averaging, depth (and ``gt_depth``) by min-pooling

@@ -34,7 +34,7 @@ __all__ = ["DepthResult", "FitInputs", "merge", "check_inputs", "run_fit", "fit_
 
 @dataclass
 class DepthResult:
-    """What :func:`complete_depth` returns. Arrays are NumPy, (H, W) or (H, W, 3).
+    """What :func:`~ddp_lite.method.combine.complete_depth` returns. Arrays are NumPy, (H, W) or (H, W, 3).
 
     For the mean of several fits (``config.ensemble > 1``, ``fits`` of them) ``iterations`` and
     ``seconds`` are totals over the fits; ``history``, ``best_iteration`` and ``state`` are the

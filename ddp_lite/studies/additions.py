@@ -16,7 +16,7 @@ from ..method.config import FitConfig
 from ..method.combine import complete_depth
 from ..method.profiles import get_profile
 from ..method.recipes import get_recipe
-from .experiments import Case, make_case
+from ..evaluation.experiments import Case, make_case
 from .real_cases import RealCase, factor_for_profile, make_real_case
 
 __all__ = ["ADDITIONS", "addition_steps", "additions_cases", "run_additions", "hole_error_px", "paired_change",
