@@ -51,7 +51,7 @@ def loop_ratio(isa: str, threads: int, channels: str, variant: str = "rgbd+warp"
 CLASS_FIT = """
 import json, time, torch
 from ddp_lite import FitConfig, complete_depth
-from ddp_lite.evaluation.real_cases import make_real_case, factor_for_profile
+from ddp_lite.studies.real_cases import make_real_case, factor_for_profile
 torch.set_num_threads({threads})
 case = make_real_case("sgbm", factor_for_profile("class"))
 config = FitConfig.for_profile("class", variant="rgbd", recipe="kit", progress=False)

@@ -48,7 +48,7 @@ def load_package(path: str, name: str):
 def prepare(package, size, channels, variant: str, options: dict, compile_mode=None):
     """Build one fit's pieces with ``package.complete_depth`` and return a function that runs n iterations."""
     package.complete_depth  # imports the fit; its module is .fit (flat packages) or .method.fit
-    fit = sys.modules.get(package.__name__ + ".method.fit") or sys.modules[package.__name__ + ".fit"]
+    fit = sys.modules.get(package.__name__ + ".method.fit") or sys.modules.get(package.__name__ + ".fit")
     rgb, depth, ref, nbrs = case(*size)
     as_own = lambda cam: package.Camera(cam.K, cam.cam_from_world, cam.width, cam.height)  # noqa: E731
     ref, nbrs = as_own(ref), [(image, as_own(cam)) for image, cam in nbrs]
@@ -65,7 +65,7 @@ def prepare(package, size, channels, variant: str, options: dict, compile_mode=N
 
     setattr(owner, name, capture)
     try:
-        fit.complete_depth(rgb, depth, variant=variant, config=config, **kwargs)
+        package.complete_depth(rgb, depth, variant=variant, config=config, **kwargs)
     finally:
         setattr(owner, name, run)
     net = pieces["net"]

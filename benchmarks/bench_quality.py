@@ -11,7 +11,7 @@ The suite is fixed (cases are never dropped because DDP loses on them):
 - the curved, photo-textured scenes of ``ddp_lite.world.organic`` (when present), with the same holes;
 - notebook 09's Middlebury-format fixture: SGM holes on the left view, the right view as the
   warp loss's neighbour;
-- the real Middlebury Motorcycle pair (``ddp_lite.evaluation.real_cases``) pooled to 125×185 (``motorcycle-4``)
+- the real Middlebury Motorcycle pair (``ddp_lite.studies.real_cases``) pooled to 125×185 (``motorcycle-4``)
   and 250×370 (``motorcycle-2``): three blob patterns, real SGBM holes, left-right-check (occlusion)
   holes; the right view as the warp loss's neighbour. These keep their own size whatever the profile.
 - with ``--middlebury FOLDER ...``, the same five hole kinds on other Middlebury 2014 pairs (``data_fetch``
@@ -47,18 +47,19 @@ from ddp_lite import baselines  # noqa: E402
 from ddp_lite.evaluation.experiments import Case, make_case, sgm_depth_at_scale  # noqa: E402
 from ddp_lite.classical.holes import random_holes  # noqa: E402
 from ddp_lite.data.middlebury import load_middlebury, make_middlebury_fixture  # noqa: E402
-from ddp_lite.evaluation.real_cases import REAL_HOLES, factor_for_profile, make_real_case  # noqa: E402
-from ddp_lite.method.recipes import RECIPES as KIT_RECIPES, STUDY  # noqa: E402
+from ddp_lite.studies.real_cases import REAL_HOLES, factor_for_profile, make_real_case  # noqa: E402
+from ddp_lite.method.recipes import RECIPES as KIT_RECIPES  # noqa: E402
 from ddp_lite.data.resample import resize_scene  # noqa: E402
 from ddp_lite.world.scenes import SCENES  # noqa: E402
 from _common import add_profile_args, profile_from_args  # noqa: E402
+from study_recipes import STUDY  # noqa: E402
 
 NAMED = ("house", "desk", "room", "street")
 HOLES = ("sgm-dense", "sgm-sparse", "blobs")
 QUICK = ("desk/sgm-dense", "house/blobs", "fixture/sgm-dense")
 
 # name → FitConfig overrides on top of the profile's config: the default (the kit), the paper's
-# method, the photo recipe (the mean of a kit fit, a paper fit and a colorization fill), and the study's other recipes (ddp_lite.method.recipes.STUDY, each with its one-line why)
+# method, the photo recipe (the mean of a kit fit, a paper fit and a colorization fill), and the study's other recipes (study_recipes.STUDY, each with its one-line why)
 RECIPES = {"default": {}, "paper": KIT_RECIPES["paper"].overrides, "photo": KIT_RECIPES["photo"].overrides, **STUDY}
 
 

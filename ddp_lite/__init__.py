@@ -20,13 +20,14 @@ __version__ = "0.1.0"
 # seconds to import, and `ddp-lite --help` (whose module lives in this package) must not wait for them.
 # Building blocks stay importable from here as before; new code imports them from their modules
 # (ddp_lite.method.losses, ddp_lite.method.nets, ...), where their documentation lives. The modules sit
-# in sub-packages by concern: core, world, classical, method, data, evaluation, sequences, interface.
+# in sub-packages by concern: core, world, classical, method, data, evaluation, studies, sequences, interface.
 _HOMES = {
     "core.camera": ("Camera", "look_at", "backproject", "pixel_grid", "project", "relative_pose"),
     "method.config": ("FitConfig",),
     "method.dip": ("ImageResult", "fit_image"),
     "method.disparity": ("DisparityTransform",),
-    "method.fit": ("DepthResult", "complete_depth", "merge"),
+    "method.fit": ("DepthResult", "merge"),
+    "method.combine": ("complete_depth",),
     "classical.holes": ("random_holes", "edge_band_holes", "kinect_noise"),
     "method.profiles": ("PROFILES", "Profile", "get_profile"),
     "world.scenes": ("list_scenes", "make_scene", "register_scene"),
@@ -45,9 +46,11 @@ _PACKAGES = {  # sub-package → its modules, each one concern (the sub-package'
     "world": ('scenes', 'render', 'textures', 'photo_texture', 'solids', 'terrain', 'organic', 'neighbors'),
     "classical": ('baselines', 'stereo', 'holes', 'kinect'),
     "method": ('config', 'variants', 'disparity', 'losses', 'paper_method', 'hole_terms', 'nets', 'warp', 'loop',
-               'device', 'fit', 'fit_inputs', 'ensemble', 'coarse_to_fine', 'dip', 'profiles', 'recipes', 'cache'),
+               'device', 'fit', 'fit_inputs', 'combine', 'ensemble', 'blend', 'visibility', 'equation', 'coarse_to_fine', 'dip',
+               'profiles', 'recipes', 'cache'),
     "data": ('datasets', 'fileio', 'formats', 'colmap', 'tum', 'middlebury', 'textparse', 'resample'),
-    "evaluation": ('metrics', 'fusion', 'experiments', 'mvs_kinect_experiments', 'real_cases', 'viz', 'plane_sweep'),
+    "evaluation": ('metrics', 'fusion', 'experiments', 'viz', 'plane_sweep'),
+    "studies": ('real_cases', 'additions', 'mvs_kinect_experiments'),
     "sequences": ('sequence', 'sequence_cost', 'sequence_files', 'sequence_jobs', 'runner', 'working_size'),
     "interface": ('cli', 'cli_classroom', 'cli_complete', 'cli_demo', 'cli_sequence', 'classroom', 'exercises'),
 }

@@ -34,6 +34,7 @@ import torch  # noqa: E402
 from data_fetch import Dataset, FetchError, RemoteFile, fetch, safe_extract  # noqa: E402
 from data_fetch.__main__ import main as fetch_main  # noqa: E402
 from ddp_lite import datasets as ds  # noqa: E402
+from ddp_lite.classical.stereo import disparity_to_depth  # noqa: E402
 from data_fetch.atomic import write_bytes_atomic  # noqa: E402
 from ddp_lite.core.camera import Camera, look_at  # noqa: E402
 from ddp_lite.interface.cli import main as cli_main  # noqa: E402
@@ -41,7 +42,8 @@ from ddp_lite.method.disparity import DisparityTransform  # noqa: E402
 from ddp_lite.method.coarse_to_fine import complete_depth_coarse_to_fine  # noqa: E402
 from ddp_lite.method.config import FitConfig  # noqa: E402
 from ddp_lite.method.dip import fit_image  # noqa: E402
-from ddp_lite.method.fit import complete_depth, merge  # noqa: E402
+from ddp_lite.method.combine import complete_depth  # noqa: E402
+from ddp_lite.method.fit import merge  # noqa: E402
 from ddp_lite.core.views import View  # noqa: E402
 
 H, W = 24, 32
@@ -430,9 +432,9 @@ for _id, _kw, _name in (("focal 0", dict(focal=0.0, baseline=0.1), "focal"),
                         ("baseline nan", dict(focal=30.0, baseline=float("nan")), "baseline"),
                         ("doffs inf", dict(focal=30.0, baseline=0.1, doffs=float("inf")), "doffs")):
     case(f"disparity_to_depth {_id}", ValueError, _name)(
-        lambda tmp, kw=_kw: (lambda: ds.disparity_to_depth(np.ones((4, 4)), **kw)))
+        lambda tmp, kw=_kw: (lambda: disparity_to_depth(np.ones((4, 4)), **kw)))
 case("disparity_to_depth 3-D", ValueError, "disparity")(
-    lambda tmp: (lambda: ds.disparity_to_depth(np.ones((4, 4, 1)), 30.0, 0.1)))
+    lambda tmp: (lambda: disparity_to_depth(np.ones((4, 4, 1)), 30.0, 0.1)))
 case("read_depth_image scale 0", ValueError, "scale")(lambda tmp: (lambda: ds.read_depth_image(tmp / "x.png", 0.0)))
 
 

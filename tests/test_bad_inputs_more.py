@@ -33,7 +33,8 @@ from ddp_lite.core.checks import check_depth  # noqa: E402
 from ddp_lite.method.disparity import DisparityTransform  # noqa: E402
 from ddp_lite.method.config import FitConfig  # noqa: E402
 from ddp_lite.method.dip import fit_image  # noqa: E402
-from ddp_lite.method.fit import complete_depth, merge  # noqa: E402
+from ddp_lite.method.combine import complete_depth  # noqa: E402
+from ddp_lite.method.fit import merge  # noqa: E402
 from ddp_lite.data.formats import read_colmap, read_scene, read_tum, write_colmap, write_tum  # noqa: E402
 from ddp_lite.world.scenes import make_scene  # noqa: E402
 from ddp_lite.sequences.sequence import run_sequence  # noqa: E402

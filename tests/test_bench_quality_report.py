@@ -27,7 +27,7 @@ def test_other_middlebury_pairs_join_the_suite_as_real_cases(tmp_path):
     import numpy as np
 
     from ddp_lite.data.middlebury import make_middlebury_fixture
-    from ddp_lite.evaluation.real_cases import REAL_HOLES, make_real_case
+    from ddp_lite.studies.real_cases import REAL_HOLES, make_real_case
     from ddp_lite.method.profiles import get_profile
 
     folder = make_middlebury_fixture(tmp_path / "Desk", size=(96, 128), seed=2)

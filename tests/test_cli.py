@@ -234,15 +234,15 @@ def test_complete_keeps_valid_pixels_exactly_fills_the_holes_and_writes_a_previe
 
 
 def test_complete_raw_writes_the_nets_output_with_no_fill_mixed_in(tmp_path, monkeypatch):
-    import ddp_lite.method.fit as fit
+    import ddp_lite.method.combine as combine
     _pair(tmp_path)
-    shares, real_complete_depth = [], fit.complete_depth
+    shares, real_complete_depth = [], combine.complete_depth
 
     def recording(*args, **kwargs):  # the real fit, the fill share of the command's config noted
         shares.append(kwargs["config"].blend_fill if "config" in kwargs else args[5].blend_fill)
         return real_complete_depth(*args, **kwargs)
 
-    monkeypatch.setattr(fit, "complete_depth", recording)
+    monkeypatch.setattr(combine, "complete_depth", recording)
     argv = ["complete", "--rgb", str(tmp_path / "rgb.png"), "--depth", str(tmp_path / "depth.npy"),
             "--profile", "class", "--recipe", "kit", "--variant", "rgbd", "--iterations", "3", "--max-side", "48"]
     assert main(argv + ["--out", str(tmp_path / "kit.npy")]) == 0

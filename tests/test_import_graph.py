@@ -213,3 +213,18 @@ def test_every_import_of_the_package_names_a_module_that_exists():
                     if target not in known:
                         missing.append(f"{path.relative_to(root)} cell {i}:{line}: {target}")
     assert not missing, "imports of modules that do not exist:\n" + "\n".join(missing)
+
+
+def test_the_packages_module_list_names_every_module():
+    import ddp_lite
+    on_disk = {name.split(".", 1)[1] for name in modules() if name.count(".") == 2}  # "method.fit"
+    listed = {f"{package}.{module}" for package, names in ddp_lite._PACKAGES.items() for module in names}
+    assert listed == on_disk
+
+
+def test_the_fit_does_not_import_its_combiner():
+    # one fit is a straight path: the combiner (blend, fill, ensemble) calls it, never the reverse
+    edges = graph()
+    assert "ddp_lite.method.fit" in edges["ddp_lite.method.combine"]
+    assert "ddp_lite.method.combine" not in edges["ddp_lite.method.fit"]
+    assert not {"ddp_lite.method.blend", "ddp_lite.method.ensemble"} & set(edges["ddp_lite.method.fit"])

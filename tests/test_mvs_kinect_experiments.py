@@ -1,4 +1,4 @@
-"""Notebook 12's plumbing (ddp_lite.evaluation.mvs_kinect_experiments) against hand computations: the paper's
+"""Notebook 12's plumbing (ddp_lite.studies.mvs_kinect_experiments) against hand computations: the paper's
 reprojection PSNR (Sec. 4.4) on a fronto-parallel plane whose warp is an integer shift, the fill
 table's two PSNRs, and the NYU v2 branch on a labelled-.mat fixture."""
 import numpy as np
@@ -6,7 +6,7 @@ import pytest
 
 from ddp_lite.core.camera import Camera
 from ddp_lite.method.config import FitConfig
-from ddp_lite.evaluation.mvs_kinect_experiments import fill_table, nyu_fill_table, reprojection_psnr
+from ddp_lite.studies.mvs_kinect_experiments import fill_table, nyu_fill_table, reprojection_psnr
 from ddp_lite.core.views import View
 
 H, W, F = 32, 48, 40.0

@@ -7,7 +7,7 @@ from skimage import data
 
 from ddp_lite.core.camera import Camera
 from ddp_lite.data.middlebury import load_motorcycle
-from ddp_lite.evaluation.real_cases import REAL_HOLES, make_real_case, pool_scene
+from ddp_lite.studies.real_cases import REAL_HOLES, make_real_case, pool_scene
 from ddp_lite.core.views import Scene, View
 from ddp_lite.method.warp import warp_to_reference
 
@@ -147,7 +147,7 @@ def test_compare_fills_builds_photo_from_the_kit_and_paper_fits_and_matches_phot
 
     import torch
 
-    from ddp_lite.evaluation import real_cases
+    from ddp_lite.studies import real_cases
     from ddp_lite.method.config import FitConfig
     from ddp_lite.method.profiles import get_profile
 

@@ -80,7 +80,7 @@ def test_a_colour_guided_fill_never_enters_a_depth_only_result():
 
 @pytest.mark.parametrize("profile", ["ci", "class", "paper"])
 def test_the_additions_path_runs_from_the_paper_recipe_to_the_kit(profile):
-    from ddp_lite.evaluation.additions import addition_steps
+    from ddp_lite.studies.additions import addition_steps
     from ddp_lite.method.config import FitConfig
     steps = addition_steps(profile)
     configs = [FitConfig.for_profile(profile, variant="rgbd", recipe="paper", **o) for o in steps.values()]

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from ddp_lite import datasets, holes, neighbors, render as render_module, scenes, stereo, textures, views
+from ddp_lite import neighbors, render as render_module, scenes, textures, views
 from ddp_lite.core.camera import Camera, look_at
 from ddp_lite.world.neighbors import select_neighbors
 from ddp_lite.world.render import Box, Plane, Sphere, render
@@ -236,9 +236,6 @@ def test_old_import_paths_keep_working():  # notebooks and user code written bef
     for name in ("Plane", "Box", "Sphere", "Cylinder", "render"):
         assert getattr(scenes, name) is getattr(render_module, name)
     assert scenes.Texture is textures.Texture and scenes.select_neighbors is neighbors.select_neighbors
-    for name in ("SGM_PARAMS", "sgm_disparity", "sgm_depth", "gt_disparity"):
-        assert getattr(holes, name) is getattr(stereo, name)
-    assert datasets.disparity_to_depth is stereo.disparity_to_depth
 
 
 def test_a_view_as_a_warp_neighbour():

@@ -84,7 +84,7 @@ def test_on_the_real_pair_it_agrees_with_the_ordering_test_of_rectified_stereo()
     # Rectified stereo, left reference: the right camera cannot see left pixel x when some pixel
     # x' > x of its row lands at or left of it in the right image (the order of the row flips).
     from ddp_lite.data.middlebury import load_motorcycle
-    from ddp_lite.evaluation.real_cases import pool_scene
+    from ddp_lite.studies.real_cases import pool_scene
 
     scene = pool_scene(load_motorcycle(), 4)
     left, right = scene[0], scene.right[0]

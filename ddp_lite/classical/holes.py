@@ -4,8 +4,7 @@ Every model here takes a depth map (H, W) in metres and returns ``(depth_with_na
 a float32 copy with NaN where the sensor gives no answer, and the bool mask (True = valid).
 The input is never modified. Randomness comes only from ``seed``.
 
-Stereo (SGM) holes come from a real matcher and live in ``stereo.py`` (``sgm_depth``; re-exported
-here under their old names).
+Stereo (SGM) holes come from a real matcher and live in ``stereo.py`` (``sgm_depth``).
 
 **Synthetic holes.** ``random_holes`` removes smooth random blobs (a thresholded, blurred
 noise field), ``edge_band_holes`` removes a band across a depth discontinuity (where
@@ -19,10 +18,8 @@ import numpy as np
 from scipy import ndimage
 
 from ..core.checks import check_depth, check_int
-from .stereo import SGM_PARAMS, gt_disparity, sgm_depth, sgm_disparity  # re-exported: their old home
 
-__all__ = ["random_holes", "edge_band_holes", "kinect_noise", "SGM_PARAMS", "sgm_disparity", "sgm_depth",
-           "gt_disparity"]
+__all__ = ["random_holes", "edge_band_holes", "kinect_noise"]
 
 
 def _check_depth(depth) -> np.ndarray:

@@ -31,11 +31,10 @@ from .fileio import (check_same_size, existing_path, read_rgb, read_text_file, d
 from .middlebury import (MiddleburyCalib, require_valid_depth, stereo_scene, load_middlebury, load_middlebury2006,
                          make_middlebury_fixture, parse_middlebury_calib, read_middlebury_calib)
 from .resample import check_optional_size, scene_depth_range, resize_view, resize_scene
-from ..classical.stereo import disparity_to_depth  # re-exported: its old home
 from ..core.views import Scene, View
 
 __all__ = ["read_pfm", "write_pfm", "MiddleburyCalib", "parse_middlebury_calib", "read_middlebury_calib",
-           "disparity_to_depth", "load_middlebury", "load_middlebury2006", "make_middlebury_fixture", "resize_scene",
+           "load_middlebury", "load_middlebury2006", "make_middlebury_fixture", "resize_scene",
            "read_kitti_disparity", "read_kitti_calib", "load_kitti", "read_mvsnet_cam", "load_tnt",
            "read_depth_image", "load_nyu", "NYU_K"]
 

@@ -15,7 +15,8 @@ import numpy as np
 from ..core.camera import Camera
 from ..method.disparity import DisparityTransform
 from ..method.config import FitConfig
-from ..method.fit import DepthResult, complete_depth
+from ..method.combine import complete_depth
+from ..method.fit import DepthResult
 from .fusion import points_from_depth
 from ..classical.holes import edge_band_holes, random_holes
 from .metrics import cloud_scores, disparity_rmse, edge_band, texture_leakage  # re-exported: notebooks import them here

@@ -18,8 +18,14 @@ import warnings
 from .. import __version__
 
 PROFILES = ("ci", "class", "paper")
-PROFILE_HELP = "ci, class or paper (default: $DDP_PROFILE, else class)"
+PROFILE_SIZES = "size and budget: ci (seconds), class (minutes on a laptop CPU), paper (the paper's sizes, a GPU)"
 RECIPE_NAMES = ("kit", "paper", "photo")  # ddp_lite.method.recipes.RECIPES, without importing the method here
+RECIPE_HELP = ("the method: kit = the paper's losses plus the kit's hole terms and net inputs, and (variants with "
+               "colour) a share of a colour-guided fill; paper = the paper's method alone; photo = for real "
+               "photographs, the mean of a kit fit, a paper fit and a colour-guided fill (two fits) "
+               "(default: $DDP_RECIPE, else kit)")
+# ddp_lite.method.device.resolve_device's order for no --device
+DEVICE_HELP = "cpu, cuda[:N] or mps (default: cuda when present, else mps when present, else cpu)"
 EXIT_CODES = ("exit codes: 0 done, 1 failed at run time (nothing half-written), 2 usage error "
               "(the message names the option), 130 interrupted (Ctrl-C)")
 
@@ -100,16 +106,15 @@ def _subparser(sub, name: str, help: str, run: str) -> argparse.ArgumentParser:
     return parser
 
 
-def _add_profile(parser, default=None, what: str = "") -> None:
+def _add_profile(parser, default=None, what: str = PROFILE_SIZES) -> None:
     parser.add_argument("--profile", choices=PROFILES, default=default,
-                        help=(f"{what}: " if what else "") + (PROFILE_HELP if default is None else
-                                                             f"ci, class or paper (default: {default})"))
+                        help=what + (" (default: $DDP_PROFILE, else class)" if default is None else
+                                     f" (default: {default})"))
 
 
 def _add_recipe(parser) -> None:
     parser.add_argument("--recipe", choices=RECIPE_NAMES, default=None,
-                        help="kit: the paper's losses plus the kit's hole terms and inputs; paper: the paper's "
-                             "method alone (default: $DDP_RECIPE, else kit)")
+                        help=RECIPE_HELP)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -134,7 +139,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_recipe(demo)
     demo.add_argument("--seed", type=_number(int, 0, "--seed"), default=0,
                       help="seed of the scene's holes and of the fit (default 0; same seed, same numbers on CPU)")
-    demo.add_argument("--device", default=None, help="cpu, cuda or mps (default: cpu)")
+    demo.add_argument("--device", default=None, help=DEVICE_HELP)
     demo.add_argument("--max-memory-gb", type=_number(float, 0.0, "--max-memory-gb"), default=None,
                       help="refuse fits estimated to need more (default: 75%% of RAM); raise it to override")
 
@@ -159,8 +164,9 @@ def build_parser() -> argparse.ArgumentParser:
                           help="fit at this longer side (px) and bring the fill back to full size in the holes "
                                "(default: the profile's image size; class 128)")
     complete.add_argument("--raw", action="store_true",
-                          help="write the net's own output everywhere, with no classical fill mixed in "
-                               "(default: keep the valid input pixels exactly)")
+                          help="write the net's own output everywhere, with no colour-guided fill mixed in "
+                               "(default: the valid input pixels kept exactly, the recipe's share of the fill "
+                               "mixed into the holes)")
     complete.add_argument("--preview", default=None,
                           help="preview figure: input, filled, holes (default: OUT's name with .preview.png)")
     complete.add_argument("--gt", default=None,
@@ -175,7 +181,7 @@ def build_parser() -> argparse.ArgumentParser:
     complete.add_argument("--max-memory-gb", type=_number(float, 0.0, "--max-memory-gb"), default=None,
                           help="refuse fits estimated to need more (default: 75%% of RAM); raise it to override")
     complete.add_argument("--seed", type=_number(int, 0, "--seed"), default=0, help="seed of the fit (default 0)")
-    complete.add_argument("--device", default=None, help="cpu, cuda or mps (default: cpu)")
+    complete.add_argument("--device", default=None, help=DEVICE_HELP)
 
     seq = _subparser(sub, "sequence", "complete every view of a sequence (TUM, COLMAP, saved scene) and fuse them",
                      "ddp_lite.interface.cli_sequence:sequence_command")
@@ -187,7 +193,8 @@ def build_parser() -> argparse.ArgumentParser:
                      help="start a Dask LocalCluster of N one-thread worker processes, at most the CPU count "
                           "(default 0: in this process)")
     seq.add_argument("--scheduler", default=None, help="join a running Dask cluster, e.g. tcp://host:8786")
-    _add_profile(seq, what="the fit's schedule; images keep their size unless --size")
+    _add_profile(seq, what="the net and budget of each fit: ci (seconds), class (minutes on a laptop CPU), "
+                           "paper (the paper's net and schedule, a GPU); the images keep their size unless --size")
     _add_recipe(seq)
     seq.add_argument("--dry-run", action="store_true", help="print jobs, compute and memory estimates; fit nothing")
     seq.add_argument("--size", type=_number(int, 1, "--size"), nargs=2, metavar=("H", "W"), default=None,
@@ -196,8 +203,8 @@ def build_parser() -> argparse.ArgumentParser:
                      help="iteration cap of each fit (default: the profile's)")
     seq.add_argument("--seed", type=_number(int, 0, "--seed"), default=0, help="seed of every fit (default 0)")
     seq.add_argument("--threads", type=_number(int, 1, "--threads"), default=1, help="torch threads per fit (default 1)")
-    seq.add_argument("--retries", type=_number(int, 0, "--retries"), default=2, help="Dask retries of a failed fit")
-    seq.add_argument("--device", default=None, help="cpu, cuda or mps (default: cpu)")
+    seq.add_argument("--retries", type=_number(int, 0, "--retries"), default=2, help="Dask retries of a failed fit (default 2)")
+    seq.add_argument("--device", default=None, help=DEVICE_HELP)
     seq.add_argument("--intrinsics", type=_intrinsics, default=None,
                      help="TUM: fr1, fr2, fr3, ros, or fx,fy,cx,cy (default: from the folder name)")
     seq.add_argument("--every", type=_number(int, 1, "--every"), default=None, help="TUM: keep every N-th frame")
@@ -225,7 +232,8 @@ def build_parser() -> argparse.ArgumentParser:
     _add_profile(solutions, default="class")
     _add_recipe(solutions)
     solutions.add_argument("--only", nargs="+", default=None, metavar="NN", help="only these notebooks (01 05 ...)")
-    solutions.add_argument("--timeout", type=_number(int, 1, "--timeout"), default=3600, help="seconds per cell")
+    solutions.add_argument("--timeout", type=_number(int, 1, "--timeout"), default=3600,
+                           help="seconds one cell may run (default 3600)")
     grade = _subparser(sub, "grade", "run submitted notebooks and score their exercise checks",
                        "ddp_lite.interface.cli_classroom:grade_command")
     grade.add_argument("submissions", help="a folder with one sub-folder per student holding their .ipynb files")
@@ -281,12 +289,6 @@ def main(argv=None) -> int:
             import traceback
             traceback.print_exc()
         return 1
-
-
-def __getattr__(name: str):
-    if name in ("DEPTH_RANGE_M", "PNG_MAX_METRES", "_read_depth"):  # their old home; they live in cli_complete
-        return getattr(importlib.import_module(".cli_complete", __package__), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 if __name__ == "__main__":

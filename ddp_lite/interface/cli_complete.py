@@ -164,7 +164,7 @@ def complete_command(args) -> int:
     writers = _writers()
     _check_outputs(args, writers)
     from ..method.config import FitConfig
-    from ..method.fit import complete_depth
+    from ..method.combine import complete_depth
     from ..method.profiles import get_profile
     from ..core.progress import command_progress
     from ..method.loop import expected_share

@@ -20,7 +20,7 @@ from ..classical.baselines import fill_colorization, fill_linear
 from ..method.device import resolve_device
 from ..evaluation.experiments import error_table, format_table, make_case
 from ..method.config import FitConfig
-from ..method.fit import complete_depth
+from ..method.combine import complete_depth
 from ..method.loop import check_memory, expected_share
 from ..method.nets import check_input_size
 from ..evaluation.metrics import hole_rmse

@@ -42,7 +42,6 @@ from .sequence_cost import estimate_sequence, format_estimate, measure_fit_cost
 from .sequence_files import (MANIFEST, view_files, view_finished, fuse_views, write_manifest, write_view, check_out_folder,
                              read_manifest)
 from .sequence_jobs import VARIANT, ViewJob, fit_view, plan_jobs
-from .sequence_jobs import N_NEIGHBORS  # re-exported: its old home
 from ..core.views import Scene
 
 __all__ = ["ViewJob", "plan_jobs", "fit_view", "run_sequence", "read_manifest", "measure_fit_cost",

@@ -21,7 +21,7 @@ import torch
 from ..core.camera import Camera
 from ..method.disparity import DisparityTransform
 from ..method.config import FitConfig
-from ..method.fit import complete_depth
+from ..method.combine import complete_depth
 from ..method.fit_inputs import check_fit_inputs
 from ..world.neighbors import select_neighbors
 from ..core.views import Scene

@@ -29,9 +29,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 from ..classical.baselines import BASELINES
-from .experiments import Case
+from ..evaluation.experiments import Case
 from ..method.config import FitConfig
-from ..method.fit import blend_members, blended_result, complete_depth, mixed_with_fill
+from ..method.combine import blend_members, blended_result, complete_depth, mixed_with_fill
 from ..classical.holes import random_holes
 from ..data.middlebury import load_middlebury, load_motorcycle
 from ..method.profiles import get_profile

@@ -18,11 +18,11 @@ import numpy as np
 
 from ..classical.baselines import fill
 from ..method.config import FitConfig
-from ..method.fit import complete_depth
-from .fusion import fuse_depths, points_from_depth
-from .metrics import cloud_scores, psnr
+from ..method.combine import complete_depth
+from ..evaluation.fusion import fuse_depths, points_from_depth
+from ..evaluation.metrics import cloud_scores, psnr
 from ..world.neighbors import select_neighbors
-from .plane_sweep import plane_sweep
+from ..evaluation.plane_sweep import plane_sweep
 from ..core.views import Scene
 from ..method.warp import warp_to_reference
 

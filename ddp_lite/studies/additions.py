@@ -14,11 +14,11 @@ import torch
 from ..classical.baselines import BASELINES
 from ..classical.stereo import pixel_disparity
 from ..method.config import FitConfig
+from ..method.combine import complete_depth, mixed_with_fill
 from ..method.ensemble import run_members
-from ..method.fit import complete_depth, mixed_with_fill
 from ..method.profiles import get_profile
 from ..method.recipes import get_recipe
-from .experiments import Case, make_case
+from ..evaluation.experiments import Case, make_case
 from .real_cases import RealCase, factor_for_profile, make_real_case
 
 __all__ = ["ADDITIONS", "addition_steps", "additions_cases", "run_additions", "hole_error_px", "paired_change",

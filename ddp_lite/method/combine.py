@@ -1,0 +1,172 @@
+"""The kit's combinations of DDP fits, and :func:`complete_depth`, the entry point that applies them.
+
+A config asks for at most three, applied from the outside in: a share of the input's colour-guided
+fill mixed into the result (``blend_fill``, :func:`with_fill`); the blend of this config's fit with
+the paper recipe's (``blend_paper``, :func:`fit_blended`); the mean of several fits from other seeds
+(``ensemble``, :func:`fit_ensemble`). The recipe ``photo`` is the first two together. Each member is
+one fit of :func:`ddp_lite.method.fit.run_fit` on the inputs checked once; the weights and shares
+come from :mod:`ddp_lite.method.blend`, the members' scheduling from :mod:`ddp_lite.method.ensemble`.
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from .blend import best_fill_share, best_weight, fill_disparity, fill_holdout, validation_ring
+from .cache import cached
+from ..core.camera import Camera
+from ..core.checks import MIN_VALID_PIXELS, check_callback
+from .config import FitConfig
+from .disparity import DisparityTransform
+from .ensemble import mean_outputs, parallel_members, run_members
+from .fit import DepthResult, FitInputs, check_inputs, run_fit
+from .recipes import get_recipe
+from .variants import get_variant
+
+__all__ = ["complete_depth", "fit_ensemble", "fit_blended", "blend_members", "blended_result", "combined_result",
+           "with_fill", "mixed_with_fill"]
+
+
+@cached
+def complete_depth(rgb, depth, camera: Camera | None = None, neighbors=(), variant: str = "rgbd+warp",
+                   config: FitConfig | None = None, gt_depth=None, transform: DisparityTransform | None = None,
+                   callback=None, init: DepthResult | None = None) -> DepthResult:
+    """Fill the holes (NaN) of ``depth`` (H, W, metres) with a Deep Depth Prior.
+
+    Args:
+        rgb: (H, W, 3) float in [0, 1], the reference image (unused by ``variant="d"``).
+        depth: (H, W) float metres, NaN = hole.
+        camera: the reference ``Camera`` (needed for the warp loss).
+        neighbors: ``(rgb, Camera)`` pairs or ``View`` objects of calibrated neighbouring views.
+        variant: ``"d"``, ``"rgbd"`` or ``"rgbd+warp"``.
+        config: a :class:`FitConfig`; None → ``FitConfig.for_profile(variant=variant)``.
+        gt_depth: (H, W) metres; when given, the hole error is tracked in ``history``.
+        transform: depth ↔ disparity map; None → derived from the valid input depth.
+        callback: ``callback(iteration, DepthResult-like dict)`` every ``config.callback_every``.
+        init: a previous result (same variant and net) whose weights start this fit: a warm start
+            for the next view of a sequence.
+    Returns:
+        :class:`DepthResult` with ``.depth`` (H, W) metres, ``.disparity``, ``.rgb``, ``.history``.
+
+    Example:
+        >>> depth = np.full((32, 32), 2.0, np.float32); depth[10:20, 10:20] = np.nan
+        >>> cfg = FitConfig(channels=(8, 16), lr=1e-2, iterations=5, progress=False)
+        >>> complete_depth(np.zeros((32, 32, 3), np.float32), depth, variant="d", config=cfg).depth.shape
+        (32, 32)
+    """
+    spec = get_variant(variant)  # a bad name fails here, before any config is built
+    config = FitConfig.for_profile(variant=variant) if config is None else config
+    check_callback(callback, config.callback_every if isinstance(config, FitConfig) else None)
+    inputs, config = check_inputs(rgb, depth, camera, neighbors, spec, config, gt_depth, transform, init)
+    if config.blend_fill != 0:
+        return with_fill(lambda held_out: _fits(replace(inputs, depth=held_out), config.replace(blend_fill=0.0),
+                                                callback, init), inputs.depth, inputs.rgb, config)
+    return _fits(inputs, config, callback, init)
+
+
+def _fits(inputs: FitInputs, config: FitConfig, callback, init) -> DepthResult:
+    """One fit, a blend or an ensemble, as ``config`` asks (its ``blend_fill`` is the caller's)."""
+    if config.blend_paper:
+        return fit_blended(inputs, config, callback, init)
+    if config.ensemble == 1:
+        return run_fit(inputs, config, callback=callback, init=init)
+    return fit_ensemble(inputs, config, callback, init)
+
+
+def fit_ensemble(inputs: FitInputs, config: FitConfig, callback, init) -> DepthResult:
+    """``config.ensemble`` independent fits from other seeds (other weights, noise and held-out pixels),
+    averaged in disparity: one fit's hole error moves ±10 % and more with the seed, the mean keeps what
+    the fits agree on. ``history`` is the first fit's."""
+    def fit_member(k: int) -> DepthResult:
+        return run_fit(inputs, config.replace(seed=config.seed + k, ensemble=1), callback=callback, init=init)
+
+    workers = parallel_members(config, inputs.spec, inputs.depth.shape, len(inputs.neighbors), callback)
+    members = run_members(fit_member, int(config.ensemble), workers)
+    return combined_result(members, inputs.transform, members[0].history)
+
+
+def combined_result(members: list, transform, history: dict, weights=None) -> DepthResult:
+    """One result from several fits: their (weighted) mean outputs; totals of iterations and seconds;
+    the first fit's best iteration and weights."""
+    disparity, rgb = mean_outputs(members, weights)
+    return DepthResult(depth=transform.to_depth(disparity).astype(np.float32), disparity=disparity, rgb=rgb,
+                       history=history, transform=transform, iterations=sum(m.iterations for m in members),
+                       best_iteration=members[0].best_iteration, seconds=sum(m.seconds for m in members),
+                       state=members[0].state, fits=len(members))
+
+
+def fit_blended(inputs: FitInputs, config: FitConfig, callback, init) -> DepthResult:
+    """``config.blend_paper``: this config's fit and the paper recipe's, blended with weight
+    ``config.blend_weight``, or (None) with the weight that best predicts a ring of valid input held out
+    of both fits (:mod:`ddp_lite.method.blend`). ``history`` is the first fit's plus ``blend_weight`` and,
+    with the ring, ``blend_ring_errors``."""
+    depth, transform = inputs.depth, inputs.transform
+    weight, members = config.blend_weight, blend_members(config)
+    valid = np.isfinite(depth)
+    ring = validation_ring(valid, members[0].seed) if weight is None else np.zeros_like(valid)
+    if weight is None and ((valid & ~ring).sum() < MIN_VALID_PIXELS or ring.sum() < MIN_VALID_PIXELS):
+        return run_fit(inputs, members[0], callback=callback, init=init)  # too little to judge by (or fit without)
+    held_out = replace(inputs, depth=np.where(ring, np.nan, depth).astype(np.float32)) if ring.any() else inputs
+
+    def fit_member(k: int) -> DepthResult:  # a warm start fits the first fit's net only
+        return run_fit(held_out, members[k], callback=callback, init=init if k == 0 else None)
+
+    workers = parallel_members(members[0].replace(ensemble=2), inputs.spec, depth.shape, len(inputs.neighbors),
+                               callback)
+    fits = run_members(fit_member, 2, workers)
+    extra = {}
+    if weight is None:
+        weight, extra["blend_ring_errors"] = best_weight(fits[0].disparity, fits[1].disparity,
+                                                         transform.to_disparity(depth), ring)
+    return blended_result(fits, transform, weight, extra)
+
+
+def blended_result(fits: list, transform, weight: float, history: dict | None = None) -> DepthResult:
+    """The two fits of :func:`blend_members` as one result, weight·Z_own + (1 − weight)·Z_paper; ``history``
+    is the first fit's, plus ``history`` and ``blend_weight``."""
+    return combined_result(fits, transform, {**fits[0].history, **(history or {}), "blend_weight": weight},
+                           weights=(weight, 1.0 - weight))
+
+
+def blend_members(config: FitConfig) -> tuple[FitConfig, FitConfig]:
+    """The two fits ``config.blend_paper`` blends: this config's own fit and the paper recipe's, at the
+    same size, budget and seed. ``config.blend_fill`` is left to the caller (it mixes into the blend)."""
+    own = config.replace(blend_paper=False)
+    return own, own.replace(**get_recipe("paper").overrides)
+
+
+def with_fill(fit, depth: np.ndarray, rgb: np.ndarray, config: FitConfig) -> DepthResult:
+    """``fit(depth) -> DepthResult`` with ``config.blend_fill`` f of the colour-guided fill of ``depth`` (H, W)
+    metres (NaN holes) mixed in (:func:`mixed_with_fill`). f = None: ``fit`` runs on ``depth`` with
+    blobs of its valid pixels held out (:func:`~ddp_lite.method.blend.fill_holdout`), and f is the share
+    that best predicts them against a fill of the same held-out input
+    (:func:`~ddp_lite.method.blend.best_fill_share`); ``history`` gets ``blend_fill_errors`` (RMSE per
+    share, normalised disparity). Too little valid depth to hold any out: the fit alone (f = 0)."""
+    share = config.blend_fill
+    if share is not None:
+        return mixed_with_fill(fit(depth), depth, rgb, share)
+    valid = np.isfinite(depth)
+    heldout = fill_holdout(valid, config.seed)
+    if heldout.sum() < MIN_VALID_PIXELS or (valid & ~heldout).sum() < MIN_VALID_PIXELS:
+        return mixed_with_fill(fit(depth), depth, rgb, 0.0)
+    held_out = np.where(heldout, np.nan, depth).astype(np.float32)
+    fitted = fit(held_out)
+    transform = fitted.transform
+    share, errors = best_fill_share(fitted.disparity, fill_disparity(held_out, rgb, transform),
+                                    transform.to_disparity(depth), heldout)
+    result = mixed_with_fill(fitted, depth, rgb, share)
+    result.history["blend_fill_errors"] = errors
+    return result
+
+
+def mixed_with_fill(result: DepthResult, depth: np.ndarray, rgb: np.ndarray, share: float) -> DepthResult:
+    """``result`` with ``share`` of the colour-guided fill of the input ``depth`` (H, W) metres (NaN holes),
+    guided by ``rgb`` (H, W, 3), mixed into its disparity: (1 − share)·Z + share·Z_fill, in the result's
+    transform (:func:`ddp_lite.method.blend.fill_disparity`). ``history`` gets ``blend_fill``."""
+    transform = result.transform
+    disparity = result.disparity
+    if share > 0:  # (share 0 leaves the fit's output as it is, bit for bit)
+        disparity = ((1.0 - share) * disparity + share * fill_disparity(depth, rgb, transform)).astype(np.float32)
+    return replace(result, disparity=disparity, depth=transform.to_depth(disparity).astype(np.float32),
+                   history={**result.history, "blend_fill": share})
