@@ -5,7 +5,7 @@ rgbd+warp) against every classical fill, with seconds per iteration and peak mem
     python benchmarks/paper_scale.py --budget-s 480 --out paper.jsonl # the schedule cut to fit 480 s
     python benchmarks/paper_scale.py --size 32 48 --iterations 3      # a tiny end-to-end run on a CPU
 
-The five hole kinds of ``ddp_lite.evaluation.real_cases`` (three blob patterns, real SGBM holes, occlusion
+The five hole kinds of ``ddp_lite.studies.real_cases`` (three blob patterns, real SGBM holes, occlusion
 holes), the pair pooled to the profile's size (``factor_for_profile``: ``paper`` → full size, 500×740).
 A fit runs on CUDA when the machine has it (``FitConfig.device`` None). ``--budget-s`` times a few
 iterations of each recipe and variant first, then cuts every fit's iterations, and its learning-rate
@@ -31,7 +31,7 @@ import torch  # noqa: E402
 
 import ddp_lite as ddp  # noqa: E402
 from ddp_lite import baselines  # noqa: E402
-from ddp_lite.evaluation.real_cases import REAL_HOLES, factor_for_profile  # noqa: E402
+from ddp_lite.studies.real_cases import REAL_HOLES, factor_for_profile  # noqa: E402
 from ddp_lite.method.device import resolve_device  # noqa: E402
 from _common import add_profile_args, profile_from_args  # noqa: E402
 from bench_quality import build_case, region_errors, report, rmse_px  # noqa: E402

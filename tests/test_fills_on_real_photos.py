@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from ddp_lite.classical.baselines import BASELINES, fill_biharmonic, fill_cubic, fill_guided_filter, fill_nearest
-from ddp_lite.evaluation.real_cases import REAL_HOLES, make_real_case
+from ddp_lite.studies.real_cases import REAL_HOLES, make_real_case
 
 
 @pytest.fixture(scope="module")

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from ddp_lite.classical.baselines import BASELINES
-from ddp_lite.evaluation.real_cases import make_real_case
+from ddp_lite.studies.real_cases import make_real_case
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 import paper_scale  # noqa: E402
