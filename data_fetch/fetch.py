@@ -21,9 +21,8 @@ from pathlib import Path
 import platformdirs
 import pooch
 
-from .atomic import write_bytes_atomic
+from ddp_lite.core.files import regular_file, write_bytes_atomic
 from .download import ChecksumError, FetchError, ResumableDownloader
-from .files import regular_file
 from .registry import Dataset, RemoteFile, get_dataset
 from .unpack import safe_extract
 

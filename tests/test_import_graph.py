@@ -213,3 +213,16 @@ def test_every_import_of_the_package_names_a_module_that_exists():
                     if target not in known:
                         missing.append(f"{path.relative_to(root)} cell {i}:{line}: {target}")
     assert not missing, "imports of modules that do not exist:\n" + "\n".join(missing)
+
+
+def test_the_package_never_imports_the_downloader():
+    """``data_fetch`` may use ``ddp_lite.core`` (its file helpers), never the reverse: the kit reads files
+    the downloader left on disk and needs none of its code (no loader fetches)."""
+    root = PACKAGE.parent
+    found = []
+    for path in sorted(PACKAGE.rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            names = [a.name for a in node.names] if isinstance(node, ast.Import) else \
+                [node.module or ""] if isinstance(node, ast.ImportFrom) and node.level == 0 else []
+            found += [f"{path.relative_to(root)}:{node.lineno}: {n}" for n in names if n.split(".")[0] == "data_fetch"]
+    assert found == []

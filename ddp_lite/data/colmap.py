@@ -19,8 +19,7 @@ import cv2
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from data_fetch.atomic import write_bytes_atomic
-from data_fetch.files import regular_file
+from ..core.files import regular_file, write_bytes_atomic
 from ..core.camera import Camera
 from .fileio import (checked_depth_png_bytes, rgb_png_bytes, read_depth_file, read_rgb, npy_bytes, pfm_bytes,
                      read_colmap_depth, write_colmap_depth)

@@ -22,7 +22,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from data_fetch.files import regular_file
+from ..core.files import regular_file
 from ..core.camera import Camera
 # Middlebury, the file formats and resize_scene lived here; their names stay importable from here.
 from .fileio import (existing_path, read_rgb, read_text_file, depth_png_bytes, npy_bytes, pfm_bytes, read_depth_image,

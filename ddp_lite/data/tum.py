@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation, Slerp
 
-from data_fetch.atomic import write_bytes_atomic
+from ..core.files import write_bytes_atomic
 from ..core.camera import Camera
 from .fileio import checked_depth_png_bytes, rgb_png_bytes, read_depth_file, read_rgb
 from .resample import finish_scene, undistort_rgbd

@@ -33,8 +33,7 @@ from pathlib import Path
 
 import nbformat
 
-from data_fetch.atomic import write_bytes_atomic
-from data_fetch.files import regular_file
+from ..core.files import regular_file, write_bytes_atomic
 
 from ..core.outpaths import check_not_overlapping, check_output_folder
 from ..method.recipes import get_recipe

@@ -27,8 +27,7 @@ import time
 import cv2
 import numpy as np
 
-from data_fetch.atomic import write_bytes_atomic
-from data_fetch.files import regular_file
+from ..core.files import regular_file, write_bytes_atomic
 from ..data.fileio import depth_png_bytes, npy_bytes, pfm_bytes, read_image_file, read_pfm, read_rgb
 from ..core.outpaths import check_output_file
 

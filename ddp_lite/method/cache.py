@@ -34,9 +34,8 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from data_fetch.files import describe_kind, regular_file
+from ..core.files import describe_kind, regular_file, write_bytes_atomic
 
-from data_fetch.atomic import write_bytes_atomic
 from .config import FitConfig
 from .profiles import current_profile_name
 from .recipes import current_recipe_name
