@@ -90,8 +90,15 @@ def atomic_path(path, suffix: str | None = None, overwrite_readonly: bool = Fals
 
 def write_bytes_atomic(path, data: bytes, overwrite_readonly: bool = False) -> None:
     """Write ``data`` to ``path`` atomically."""
-    with atomic_path(path, overwrite_readonly=overwrite_readonly) as tmp, open(tmp, "wb") as handle:
-        handle.write(data)
+    view = memoryview(data).cast("B")
+    with atomic_path(path, overwrite_readonly=overwrite_readonly) as tmp:
+        fd = os.open(tmp, os.O_WRONLY | os.O_TRUNC)
+        try:
+            while view:  # os.write may write less than it was given
+                view = view[os.write(fd, view):]
+        finally:
+            os.close(fd)
+
 
 def describe_kind(mode: int) -> str:
     """What a ``st_mode`` is, in words: 'a file', 'a folder', 'a FIFO (named pipe)', 'a character device', ..."""

@@ -2,7 +2,8 @@
 (``disparity``, ``losses``, ``warp``, ``nets``, ``variants``); the fit (``fit``, ``fit_inputs``,
 ``loop``, ``config``, ``device``); the kit's additions beside it (``hole_terms``, ``ensemble``,
 ``coarse_to_fine``); Deep Image Prior (``dip``); size and method switches (``profiles``,
-``recipes``) and the loss a config optimises, written out (``equation``); the fit cache (``cache``).
+``recipes``) and the loss a config optimises, written out (``equation``); the fit cache (``cache``,
+``cache_entry``).
 
 May import: core, classical.
 """
