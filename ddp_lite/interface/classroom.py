@@ -28,6 +28,7 @@ import csv
 import io
 import os
 import re
+import shutil
 import tempfile
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -303,21 +304,26 @@ def _snapshot(paths) -> dict:
     return kept
 
 
-def _restore(snapshot: dict) -> list[Path]:
-    """Write back every file of ``snapshot`` whose bytes on disk differ (or that is gone); the paths restored."""
-    restored = []
+def _restore(snapshot: dict) -> list[str]:
+    """Write back every file of ``snapshot`` whose bytes on disk differ (or that is gone, or was replaced by
+    a link or a folder); what was done, one line per file."""
+    done = []
     for path, data in snapshot.items():
         try:
-            same = path.is_file() and not path.is_symlink() and path.read_bytes() == data
+            if path.is_file() and not path.is_symlink() and path.read_bytes() == data:
+                continue
         except OSError:
-            same = False
-        if not same:
-            with contextlib.suppress(OSError):
-                if path.is_symlink() or path.is_dir():
-                    os.remove(path) if path.is_symlink() else None
-                write_bytes_atomic(path, data, overwrite_readonly=True)
-            restored.append(path)
-    return restored
+            pass
+        try:
+            if path.is_symlink():
+                path.unlink()
+            elif path.is_dir():
+                shutil.rmtree(path)
+            write_bytes_atomic(path, data, overwrite_readonly=True)
+            done.append(f"changed {path} while they ran; it was written back as read before grading")
+        except OSError as error:
+            done.append(f"changed {path} while they ran and it could not be written back ({error})")
+    return done
 
 
 def grade(submissions_dir, source_dir="notebooks", timeout: int = 600, profile: str = "ci", log=print,
@@ -403,9 +409,8 @@ def grade(submissions_dir, source_dir="notebooks", timeout: int = 600, profile: 
                     log(f"{student.name:<16} {source_path.stem:<26} {sum(s.points for s in auto):g}/"
                         f"{sum(s.max_points for s in auto):g}" + ("  (not handed in)" if path is None else ""))
                 mine.extend(result)
-        for path in _restore(kept):
-            log(f"{student.name}: their notebooks changed {path} while they ran; it was written back as read "
-                f"before grading")
+        for line in _restore(kept):
+            log(f"{student.name}: their notebooks {line}")
         auto = [s for s in mine if s.kind == "auto"]
         log(f"[{number}/{len(students)}] {student.name}: {sum(s.points for s in auto):g}/"
             f"{sum(s.max_points for s in auto):g} autograded points, {len(handed_in)}/{len(sources)} notebooks handed in")
