@@ -108,14 +108,15 @@ def _key(function, arguments: dict) -> str | None:
         return None
 
 
-def cached(function=None, *, like: str | None = None):
+def cached(function=None, *, like: str | None = None, types=()):
     """Decorate a fit: when ``DDP_CACHE`` is set and no ``callback`` is given, return the stored result
     of an identical earlier call, or compute, store and return it.
 
     ``like`` names the argument whose (H, W) every image of a stored result must have
-    (``@cached(like="depth")``); an entry that does not is ignored with a warning and fitted again."""
+    (``@cached(like="depth")``); an entry that does not is ignored with a warning and fitted again.
+    ``types``: the dataclasses a result holds (its own type, a transform...): an entry may name no other."""
     if function is None:
-        return functools.partial(cached, like=like)
+        return functools.partial(cached, like=like, types=types)
     signature = inspect.signature(function)
     name = f"{function.__module__}.{function.__qualname__}"
     result_type = signature.return_annotation if isinstance(signature.return_annotation, str) else None
@@ -137,13 +138,13 @@ def cached(function=None, *, like: str | None = None):
         if os.path.lexists(path):
             try:
                 shape = None if like is None else np.shape(bound.arguments.get(like))[:2]
-                return read_entry(regular_file(path, ENV_VAR), key, name, result_type, shape or None)
+                return read_entry(regular_file(path, ENV_VAR), key, name, result_type, shape or None, types)
             except (BadEntry, OSError, ValueError) as error:  # never trusted, never fatal: fit again
                 warnings.warn(f"{ENV_VAR}: ignoring the cache entry {path}: {error}; fitting again",
                               RuntimeWarning, stacklevel=2)
         result = function(*args, **kwargs)
         try:
-            write_bytes_atomic(path, entry_bytes(result, key, name))
+            write_bytes_atomic(path, entry_bytes(result, key, name, types))
         except (Unstorable, OSError) as error:  # the fit is done: hand it back, say why it is not kept
             warnings.warn(f"{ENV_VAR}: could not store the result in {path} ({error}); it is returned "
                           f"but not cached", RuntimeWarning, stacklevel=2)

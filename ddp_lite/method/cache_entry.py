@@ -4,15 +4,14 @@ A result (a :class:`~ddp_lite.method.fit.DepthResult`, an :class:`~ddp_lite.meth
 the arrays, tensors, histories and transform inside them) is split into its arrays, stored as the
 ``.npz`` members ``a0``, ``a1``, ..., and its structure, stored as JSON in the member ``meta`` next to
 the key of the call that made it. Reading uses ``np.load(allow_pickle=False)``: an object array or a
-pickle is refused by NumPy itself, and the JSON can name only the dataclasses in :data:`STORABLE`,
-which are built from their fields (their own checks run). :func:`read_entry` then refuses an entry
+pickle is refused by NumPy itself, and the JSON can name only the dataclasses the cached function
+declares (``types``), which are built from their fields (their own checks run). :func:`read_entry` then refuses an entry
 whose key, function or result type differs from the call's, or whose images do not have the input's
 height and width or hold non-finite values: :class:`BadEntry` says which.
 """
 from __future__ import annotations
 
 import dataclasses
-import importlib
 import io
 import json
 import zipfile
@@ -20,12 +19,9 @@ import zipfile
 import numpy as np
 import torch
 
-__all__ = ["STORABLE", "BadEntry", "Unstorable", "entry_bytes", "read_entry"]
+__all__ = ["BadEntry", "Unstorable", "entry_bytes", "read_entry"]
 
 FORMAT = 1
-# the only types an entry may name; built by their constructors, so their own checks run on read
-STORABLE = ("ddp_lite.method.fit:DepthResult", "ddp_lite.method.dip:ImageResult",
-            "ddp_lite.method.disparity:DisparityTransform")
 _ARRAY_KINDS = "biufc"  # bool, integers, floats, complex: what NumPy stores without pickling
 
 
@@ -37,11 +33,11 @@ class Unstorable(TypeError):
     """A result holding something an entry cannot hold without pickling it."""
 
 
-def _type_name(value) -> str:
-    return f"{type(value).__module__}:{type(value).__qualname__}"
+def _type_name(cls) -> str:
+    return f"{cls.__module__}:{cls.__qualname__}"
 
 
-def _encode(value, arrays: list):
+def _encode(value, arrays: list, types: dict):
     """``value`` as JSON-able structure, its arrays appended to ``arrays``."""
     if value is None or isinstance(value, (bool, str)):
         return value
@@ -60,32 +56,34 @@ def _encode(value, arrays: list):
         arrays.append(array)
         return {"array" if isinstance(value, np.ndarray) else "scalar": len(arrays) - 1}
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        if _type_name(value) not in STORABLE:
-            raise Unstorable(f"a {_type_name(value)}")
-        return {"dataclass": _type_name(value),
-                "fields": {f.name: _encode(getattr(value, f.name), arrays) for f in dataclasses.fields(value)}}
+        if types.get(_type_name(type(value))) is not type(value):
+            raise Unstorable(f"a {_type_name(type(value))}")
+        return {"dataclass": _type_name(type(value)),
+                "fields": {f.name: _encode(getattr(value, f.name), arrays, types) for f in dataclasses.fields(value)}}
     if isinstance(value, dict):
         if not all(isinstance(k, str) for k in value):
             raise Unstorable("a dict with keys that are not strings")
-        return {"dict": [[k, _encode(v, arrays)] for k, v in value.items()]}
+        return {"dict": [[k, _encode(v, arrays, types)] for k, v in value.items()]}
     if isinstance(value, (list, tuple)):
-        return {type(value).__name__: [_encode(v, arrays) for v in value]}
+        return {type(value).__name__: [_encode(v, arrays, types) for v in value]}
     raise Unstorable(f"a {type(value).__qualname__}")
 
 
-def entry_bytes(result, key: str, function: str) -> bytes:
-    """The ``.npz`` bytes of ``result`` made by ``function`` (its qualified name) for ``key``.
+def entry_bytes(result, key: str, function: str, types=()) -> bytes:
+    """The ``.npz`` bytes of ``result`` made by ``function`` (its qualified name) for ``key``; ``types``:
+    the dataclasses it may hold.
 
     Raises :class:`Unstorable` for a value that only a pickle could hold."""
     arrays: list = []
-    meta = {"format": FORMAT, "key": key, "function": function, "result": _encode(result, arrays)}
+    types = {_type_name(cls): cls for cls in types}
+    meta = {"format": FORMAT, "key": key, "function": function, "result": _encode(result, arrays, types)}
     buffer = io.BytesIO()
     np.savez(buffer, meta=np.frombuffer(json.dumps(meta).encode(), np.uint8),
              **{f"a{i}": array for i, array in enumerate(arrays)})
     return buffer.getvalue()
 
 
-def _decode(node, arrays):
+def _decode(node, arrays, types: dict):
     if node is None or isinstance(node, (bool, str, int)):
         return node
     if not isinstance(node, dict) or len(node) not in (1, 2):
@@ -101,28 +99,29 @@ def _decode(node, arrays):
     if tag == "dict" and isinstance(body, list):
         if not all(isinstance(item, list) and len(item) == 2 and isinstance(item[0], str) for item in body):
             raise BadEntry("a malformed dict in its structure")
-        return {k: _decode(v, arrays) for k, v in body}
+        return {k: _decode(v, arrays, types) for k, v in body}
     if tag in ("list", "tuple") and isinstance(body, list):
-        items = [_decode(v, arrays) for v in body]
+        items = [_decode(v, arrays, types) for v in body]
         return items if tag == "list" else tuple(items)
-    if tag == "dataclass" and body in STORABLE and isinstance(node.get("fields"), dict):
-        module, name = body.split(":")
-        cls = getattr(importlib.import_module(module), name)
+    if tag == "dataclass" and isinstance(body, str) and body in types and isinstance(node.get("fields"), dict):
+        cls = types[body]
+        name = cls.__qualname__
         names = {f.name for f in dataclasses.fields(cls)}
         if set(node["fields"]) != names:
             raise BadEntry(f"its {name} has fields {sorted(node['fields'])}, expected {sorted(names)}")
         try:
-            return cls(**{k: _decode(v, arrays) for k, v in node["fields"].items()})
+            return cls(**{k: _decode(v, arrays, types) for k, v in node["fields"].items()})
         except (TypeError, ValueError) as error:
             raise BadEntry(f"its {name} is invalid ({error})") from None
     raise BadEntry(f"unexpected {tag!r} in its structure")
 
 
-def read_entry(path, key: str, function: str, result_type: str | None, like: tuple | None):
+def read_entry(path, key: str, function: str, result_type: str | None, like: tuple | None, types=()):
     """The result stored at ``path``, if it was made for ``key`` by ``function``; else :class:`BadEntry`.
 
     Args:
         result_type: the result's class name (the function's return annotation), or None: any.
+        types: the dataclasses the entry may hold (any other is refused).
         like: (H, W) of the call's input: every top-level image of the result must be (H, W) or
             (H, W, C), floating point and finite. None: not checked.
     """
@@ -150,7 +149,7 @@ def read_entry(path, key: str, function: str, result_type: str | None, like: tup
             except (KeyError, ValueError, OSError, zipfile.BadZipFile) as error:
                 raise BadEntry(f"its array a{index} is missing or unreadable ({type(error).__name__})") from None
 
-        result = _decode(meta.get("result"), arrays)
+        result = _decode(meta.get("result"), arrays, {_type_name(cls): cls for cls in types})
     if result_type is not None and type(result).__qualname__ != result_type:
         raise BadEntry(f"it holds a {type(result).__qualname__}, expected a {result_type}")
     if like is not None and dataclasses.is_dataclass(result):

@@ -81,7 +81,7 @@ def merge(input_depth, ddp_depth) -> np.ndarray:
 
 # --------------------------------------------------------------------------- the fit
 
-@cached(like="depth")
+@cached(like="depth", types=(DepthResult, DisparityTransform))
 def complete_depth(rgb, depth, camera: Camera | None = None, neighbors=(), variant: str = "rgbd+warp",
                    config: FitConfig | None = None, gt_depth=None, transform: DisparityTransform | None = None,
                    callback=None, init: DepthResult | None = None) -> DepthResult:
