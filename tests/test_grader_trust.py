@@ -63,15 +63,19 @@ def test_no_submission_can_pass_a_check_it_fails_or_touch_other_files(tmp_path):
     broken.metadata["kernelspec"] = {"name": "no-such-kernel", "display_name": "gone", "language": "python"}
     _hand_in(tmp_path, "d_kernelspec", broken)
     _hand_in(tmp_path, "e_not_a_notebook", text='{"cells": 3, "metadata": {}, "nbformat": 4, "nbformat_minor": 5}')
+    (tmp_path / "hand-in" / "f_link").mkdir()
+    (tmp_path / "hand-in" / "f_link" / "01_fs.ipynb").symlink_to(source_path)  # the instructor's solutions
     log = []
     scores = classroom.grade(tmp_path / "hand-in", source_path.parent, timeout=60, log=log.append)
     table = {s.student: (s.points, s.status) for s in scores}
     assert table == {"a_vandal": (2, "pass"), "b_cheat": (0, "fail"), "c_honest": (2, "pass"),
-                     "d_kernelspec": (2, "pass"), "e_not_a_notebook": (0, "unreadable")}, log
+                     "d_kernelspec": (2, "pass"), "e_not_a_notebook": (0, "unreadable"),
+                     "f_link": (0, "unreadable")}, log
     assert source_path.read_bytes() == source_bytes  # written back, and the vandal named
     assert json.loads(honest.read_text())["cells"]
     assert any(line.startswith("a_vandal:") and str(source_path) in line for line in log), log
     assert any(line.startswith("e_not_a_notebook/01_fs.ipynb: unreadable") for line in log), log
+    assert any(line.startswith("f_link/01_fs.ipynb: unreadable") and "symbolic link" in line for line in log), log
     assert not (tmp_path / "hand-in" / "a_vandal" / "beside.txt").exists()  # ran in a folder of its own
 
 

@@ -295,10 +295,19 @@ def match_submissions(files, names) -> tuple[dict, list[str], list]:
     return matched, notes, [f for f in files if f not in used]
 
 
+def _inside(path: Path, folder: Path) -> bool:
+    """``path`` resolves to a place inside ``folder`` (no link out of it on the way)."""
+    real, home = os.path.realpath(path), os.path.realpath(folder)
+    return os.path.commonpath([real, home]) == home
+
+
 def _snapshot(paths) -> dict:
-    """``{path: bytes}`` of the regular files among ``paths`` (what a later run must not have changed)."""
+    """``{path: bytes}`` of the regular files among ``paths`` (what a later run must not have changed); a
+    symbolic link is left out (it is no hand-in, and writing back would put a file in its place)."""
     kept = {}
     for path in paths:
+        if os.path.islink(path):
+            continue
         with contextlib.suppress(OSError, ValueError):
             kept[Path(path)] = regular_file(path, "notebook").read_bytes()
     return kept
@@ -381,6 +390,9 @@ def grade(submissions_dir, source_dir="notebooks", timeout: int = 600, profile: 
                 result = None
                 if path is not None:
                     try:
+                        if os.path.islink(path) or not _inside(path, student):  # the source's solutions, say
+                            raise ValueError(f"{path.name} is a symbolic link to {os.path.realpath(path)}; a hand-in "
+                                             f"must be the student's own file")
                         if path not in kept:  # a FIFO, a folder, a vanished file: scored, not read
                             regular_file(path, "notebook")
                             raise OSError(f"{path} could not be read")
