@@ -123,3 +123,20 @@ def test_complete_that_fails_on_its_preview_keeps_the_old_depth_and_preview(tmp_
     assert (tmp_path / "filled.npy").read_bytes() == b"old depth"  # not the new depth beside the old preview
     assert (tmp_path / "filled.preview.png").read_bytes() == b"old preview"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["depth.npy", "filled.npy", "filled.preview.png", "rgb.png"]
+
+
+def test_grade_is_refused_while_another_grading_writes_the_same_csv(tmp_path, capsys):
+    (tmp_path / "hand-in" / "ada").mkdir(parents=True)
+    (tmp_path / "source").mkdir()
+    (tmp_path / "source" / "01_x.ipynb").write_text("{}")
+    other = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    try:
+        with open(lock_path(tmp_path / "grades.csv"), "w") as handle:
+            handle.write('{"pid": %d, "host": "%s", "started": "now"}' % (other.pid, os.uname().nodename))
+        assert main(["grade", str(tmp_path / "hand-in"), "--source", str(tmp_path / "source"),
+                     "--csv", str(tmp_path / "grades.csv")]) == 2
+    finally:
+        other.kill()
+        other.wait()
+    assert f"another ddp-lite command (process {other.pid}" in capsys.readouterr().err
+    assert not (tmp_path / "grades.csv").exists()
