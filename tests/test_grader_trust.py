@@ -54,14 +54,14 @@ def test_no_submission_can_pass_a_check_it_fails_or_touch_other_files(tmp_path):
         "import ddp_lite.interface.exercises as e\ne.check_fscore = lambda f: True\ne._report = lambda *a: True\n"
         "get_ipython().set_custom_exc((BaseException,), lambda *a, **k: None)\n"
         "get_ipython().input_transformers_cleanup.append(lambda lines: ['pass\\n'])"))
-    # a right answer that rewrites another student's hand-in and the instructor's source, and writes beside itself
-    _hand_in(tmp_path, "a_vandal", student, RIGHT + (
+    # a right answer that rewrites another student's hand-in and the instructor's source and writes beside
+    # itself, in a notebook naming a kernel that does not exist (the grader starts its own python3)
+    broken = nbformat.from_dict(json.loads(json.dumps(student)))
+    broken.metadata["kernelspec"] = {"name": "no-such-kernel", "display_name": "gone", "language": "python"}
+    _hand_in(tmp_path, "a_vandal", broken, RIGHT + (
         f"\nopen({str(honest)!r}, 'w').write('{{}}')\nopen({str(source_path)!r}, 'w').write('gone')\n"
         "open('beside.txt', 'w').write('x')"))
     _hand_in(tmp_path, "c_honest", student)
-    broken = nbformat.from_dict(json.loads(json.dumps(student)))
-    broken.metadata["kernelspec"] = {"name": "no-such-kernel", "display_name": "gone", "language": "python"}
-    _hand_in(tmp_path, "d_kernelspec", broken)
     _hand_in(tmp_path, "e_not_a_notebook", text='{"cells": 3, "metadata": {}, "nbformat": 4, "nbformat_minor": 5}')
     (tmp_path / "hand-in" / "f_link").mkdir()
     (tmp_path / "hand-in" / "f_link" / "01_fs.ipynb").symlink_to(source_path)  # the instructor's solutions
@@ -69,8 +69,7 @@ def test_no_submission_can_pass_a_check_it_fails_or_touch_other_files(tmp_path):
     scores = classroom.grade(tmp_path / "hand-in", source_path.parent, timeout=60, log=log.append)
     table = {s.student: (s.points, s.status) for s in scores}
     assert table == {"a_vandal": (2, "pass"), "b_cheat": (0, "fail"), "c_honest": (2, "pass"),
-                     "d_kernelspec": (2, "pass"), "e_not_a_notebook": (0, "unreadable"),
-                     "f_link": (0, "unreadable")}, log
+                     "e_not_a_notebook": (0, "unreadable"), "f_link": (0, "unreadable")}, log
     assert source_path.read_bytes() == source_bytes  # written back, and the vandal named
     assert json.loads(honest.read_text())["cells"]
     assert any(line.startswith("a_vandal:") and str(source_path) in line for line in log), log
