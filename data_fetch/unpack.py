@@ -80,6 +80,9 @@ def _check_one_member_per_file(names_and_kinds, archive: str) -> None:
             continue
         if key in files or key in folders:
             other = files.get(key, folders.get(key))
+            if other == name:
+                raise UnsafeArchiveError(f"{archive}: member {name!r} appears more than once; the same file twice, "
+                                         f"one would replace the other")
             raise UnsafeArchiveError(f"{archive}: members {other!r} and {name!r} land on the same file (they differ "
                                      f"only in spelling: './', '//', case or Unicode form); one would replace the other")
         files[key] = name
