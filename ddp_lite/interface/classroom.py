@@ -25,6 +25,7 @@ from __future__ import annotations
 import contextlib
 import copy
 import csv
+import hashlib
 import io
 import os
 import re
@@ -41,13 +42,18 @@ from ..core.outpaths import check_not_overlapping, check_output_folder
 from ..method.recipes import get_recipe
 from .grading_kernel import check_imports, run_graded
 
-__all__ = ["student_copy", "execute", "exercises", "grade_notebook", "grade", "format_grades", "write_csv",
+__all__ = ["GradingStopped", "student_copy", "execute", "exercises", "grade_notebook", "grade", "format_grades", "write_csv",
            "build_student", "build_solutions", "Score", "match_submissions", "read_hand_points",
            "merge_hand_points", "write_feedback", "open_answers", "exercise_table", "update_readme_table"]
 
 STATUSES = ("pass", "fail", "not run", "missing", "unreadable", "answered", "blank", "graded")
 OMIT_TAG = "student-omit"  # a source cell with this tag is not in the student copy
 ANSWER_SPAN = re.compile(r"<!-- answer -->.*?<!-- /answer -->", flags=re.S)  # cut from the student copy
+
+
+class GradingStopped(RuntimeError):
+    """What stops the grading instead of scoring a student 0: it is not the student's doing (no kernel
+    starts, the grader's own copy of a hand-in changed)."""
 
 
 @dataclass
@@ -226,7 +232,7 @@ def grade_notebook(submission, source, student: str = "", timeout: int = 600, pr
     if not started:
         # the kernel did not start: the machine's doing, not the student's (whatever the notebook names
         # as its kernel, the grader starts its own python3)
-        raise RuntimeError(f"no cell of {name} ran: the kernel did not start ({type(stopped).__name__}: "
+        raise GradingStopped(f"no cell of {name} ran: the kernel did not start ({type(stopped).__name__}: "
                            f"{stopped}); fix the environment and grade again") from stopped
     if executed is not None:
         _write(nb, executed)
@@ -301,38 +307,55 @@ def _inside(path: Path, folder: Path) -> bool:
     return os.path.commonpath([real, home]) == home
 
 
-def _snapshot(paths) -> dict:
-    """``{path: bytes}`` of the regular files among ``paths`` (what a later run must not have changed); a
-    symbolic link is left out (it is no hand-in, and writing back would put a file in its place)."""
-    kept = {}
-    for path in paths:
-        if os.path.islink(path):
-            continue
-        with contextlib.suppress(OSError, ValueError):
-            kept[Path(path)] = regular_file(path, "notebook").read_bytes()
-    return kept
+class _Snapshot:
+    """The hand-ins and source notebooks as read before any submission runs: each copied into a private
+    folder (mode 0700, removed at the end), its SHA-256 kept in memory. ``bytes(path)`` reads the copy
+    back and checks it against its hash; :meth:`restore` writes a changed original back from it."""
 
-
-def _restore(snapshot: dict) -> list[str]:
-    """Write back every file of ``snapshot`` whose bytes on disk differ (or that is gone, or was replaced by
-    a link or a folder); what was done, one line per file."""
-    done = []
-    for path, data in snapshot.items():
-        try:
-            if path.is_file() and not path.is_symlink() and path.read_bytes() == data:
+    def __init__(self, paths, folder: str):
+        self.folder, self.digests, self.copies = Path(folder), {}, {}
+        for number, path in enumerate(paths):
+            if os.path.islink(path):  # no hand-in, and writing back would put a file in its place
                 continue
-        except OSError:
-            pass
-        try:
-            if path.is_symlink():
-                path.unlink()
-            elif path.is_dir():
-                shutil.rmtree(path)
-            write_bytes_atomic(path, data, overwrite_readonly=True)
-            done.append(f"changed {path} while they ran; it was written back as read before grading")
-        except OSError as error:
-            done.append(f"changed {path} while they ran and it could not be written back ({error})")
-    return done
+            try:
+                data = regular_file(path, "notebook").read_bytes()
+            except (OSError, ValueError):
+                continue  # a FIFO, a folder: scored as unreadable, never read
+            copy_path = self.folder / f"{number}.ipynb"
+            write_bytes_atomic(copy_path, data)
+            self.copies[Path(path)], self.digests[Path(path)] = copy_path, hashlib.sha256(data).hexdigest()
+
+    def __contains__(self, path) -> bool:
+        return Path(path) in self.copies
+
+    def bytes(self, path) -> bytes:
+        data = self.copies[Path(path)].read_bytes()
+        if hashlib.sha256(data).hexdigest() != self.digests[Path(path)]:
+            raise GradingStopped(f"the grader's own copy of {path} changed during grading (a submission reached "
+                               f"it); grade again, in an account of its own")
+        return data
+
+    def restore(self) -> list[str]:
+        """Write back every original whose bytes differ from what was read (or that is gone, or was replaced
+        by a link or a folder); what was done, one line per file."""
+        done = []
+        for path, digest in self.digests.items():
+            try:
+                if path.is_file() and not path.is_symlink() and hashlib.sha256(path.read_bytes()).hexdigest() == digest:
+                    continue
+            except OSError:
+                pass
+            try:
+                data = self.bytes(path)
+                if path.is_symlink():
+                    path.unlink()
+                elif path.is_dir():
+                    shutil.rmtree(path)
+                write_bytes_atomic(path, data, overwrite_readonly=True)
+                done.append(f"changed {path} while they ran; it was written back as read before grading")
+            except OSError as error:
+                done.append(f"changed {path} while they ran and it could not be written back ({error})")
+        return done
 
 
 def grade(submissions_dir, source_dir="notebooks", timeout: int = 600, profile: str = "ci", log=print,
@@ -347,8 +370,8 @@ def grade(submissions_dir, source_dir="notebooks", timeout: int = 600, profile: 
     ``executed_dir``: write each executed notebook to ``<executed_dir>/<student>/`` (feedback).
     ``details``: log a line per student and notebook; else one line per student.
 
-    Every hand-in and source notebook is read before the first submission runs, and graded from that
-    copy; each student's notebooks run in a temporary folder of their own holding copies of them, and
+    Every hand-in and source notebook is copied (a private folder) and hashed before the first submission
+    runs, and graded from that copy; each student's notebooks run in a temporary folder of their own holding copies of them, and
     each check runs in this process (:func:`grade_notebook`). After each student, a hand-in or source
     notebook that changed on disk is written back and the student named in the log.
     """
@@ -373,7 +396,18 @@ def grade(submissions_dir, source_dir="notebooks", timeout: int = 600, profile: 
     for student in students:
         handed_in, notes, unmatched = match_submissions(_notebook_files(student), list(source_nbs))
         matched[student] = (handed_in, notes, unmatched)
-    kept = _snapshot(list(sources) + [p for handed_in, _, _ in matched.values() for p in handed_in.values()])
+    private = tempfile.mkdtemp(prefix="ddp-grade-copies-")  # mode 0700
+    try:
+        kept = _Snapshot(list(sources) + [p for handed_in, _, _ in matched.values() for p in handed_in.values()],
+                         private)
+        return _grade_students(students, sources, source_nbs, matched, kept, timeout, profile, log, executed_dir,
+                               details)
+    finally:
+        shutil.rmtree(private, ignore_errors=True)
+
+
+def _grade_students(students, sources, source_nbs, matched, kept, timeout, profile, log, executed_dir,
+                    details) -> list[Score]:
     scores = []
     for number, student in enumerate(students, 1):
         handed_in, notes, unmatched = matched[student]
@@ -396,17 +430,15 @@ def grade(submissions_dir, source_dir="notebooks", timeout: int = 600, profile: 
                         if path not in kept:  # a FIFO, a folder, a vanished file: scored, not read
                             regular_file(path, "notebook")
                             raise OSError(f"{path} could not be read")
-                        submission = nbformat.reads(kept[path].decode("utf-8"), as_version=4)
+                        data = kept.bytes(path)
+                        submission = nbformat.reads(data.decode("utf-8"), as_version=4)
                         nbformat.validate(submission)
-                        write_bytes_atomic(Path(workdir) / source_path.name, kept[path])
+                        write_bytes_atomic(Path(workdir) / source_path.name, data)
                         executed = Path(executed_dir) / student.name / source_path.name if executed_dir else None
                         result = grade_notebook(submission, source, student.name, timeout, profile, workdir=workdir,
                                                 name=source_path.stem, executed=executed)
-                    except RuntimeError as error:
-                        if "kernel did not start" in str(error):
-                            raise  # the machine's doing: stop, score nobody 0
-                        result = None
-                        why = f"{type(error).__name__}: {error}"
+                    except GradingStopped:
+                        raise  # not the student's doing: stop, score nobody 0
                     except Exception as error:  # the student's file is not a gradable notebook: 0, go on
                         why = f"{type(error).__name__}: {error}"
                     if result is None:
@@ -421,7 +453,7 @@ def grade(submissions_dir, source_dir="notebooks", timeout: int = 600, profile: 
                     log(f"{student.name:<16} {source_path.stem:<26} {sum(s.points for s in auto):g}/"
                         f"{sum(s.max_points for s in auto):g}" + ("  (not handed in)" if path is None else ""))
                 mine.extend(result)
-        for line in _restore(kept):
+        for line in kept.restore():
             log(f"{student.name}: their notebooks {line}")
         auto = [s for s in mine if s.kind == "auto"]
         log(f"[{number}/{len(students)}] {student.name}: {sum(s.points for s in auto):g}/"
