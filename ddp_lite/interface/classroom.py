@@ -9,12 +9,14 @@ a course database, with nbgrader's own preprocessors:
 - :func:`student_copy`: what a student gets (solutions → ``raise NotImplementedError()``, answers
   → "YOUR ANSWER HERE", outputs cleared, test cells locked, checksums recorded);
 - :func:`execute`: run a notebook top to bottom under a profile (``DDP_PROFILE``);
-- :func:`grade_notebook` / :func:`grade`: run submissions at ``ci`` and score each test cell.
+- :func:`grade_notebook` / :func:`grade`: run submissions at ``ci`` and score each test cell; a
+  submission's cells run in a kernel of its own, each check in the grader, calling the student's
+  functions in that kernel with data in and data out (:mod:`ddp_lite.interface.grading_kernel`).
 
 A test cell scores its points when it ran without an error and printed nothing on stderr
 (nbgrader's rule), and 0 when it failed, timed out, or never ran because the kernel died first.
 What is not the student's doing (no kernel starts, the feedback cannot be written) stops the
-grading with an error instead of scoring anyone 0.
+grading with an error (:class:`GradingStopped`) instead of scoring anyone 0.
 
 Notes that would give an open exercise's answer away are kept from the student copy: a cell tagged
 ``student-omit`` is left out, and in a Markdown cell the text between ``<!-- answer -->`` and
