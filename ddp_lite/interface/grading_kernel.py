@@ -108,12 +108,13 @@ def decode(data: bytes):
 
 
 def answer_call(namespace: dict, name: str, folder) -> None:
-    """Kernel side: call ``namespace[name]`` with the arguments in ``folder/args.npz``; write its return
-    value and the arguments after the call, or what it raised, to ``folder/answer.npz``."""
+    """Kernel side: call ``namespace[name]`` with the arguments (positional, keyword) in
+    ``folder/args.npz``; write its return value and the arguments after the call, or what it raised,
+    to ``folder/answer.npz``."""
     folder = Path(folder)
-    args = decode((folder / "args.npz").read_bytes())
+    args, kwargs = decode((folder / "args.npz").read_bytes())
     try:
-        value = namespace[name](*args)
+        value = namespace[name](*args, **kwargs)
         data = encode({"value": [value], "args": list(args)})
     except BaseException as error:  # the student's error is the answer: the grader reports it
         data = encode({"error": [type(error).__name__, str(error)]})
@@ -127,10 +128,10 @@ class RemoteFunction:
     def __init__(self, name: str, run, folder: Path):
         self.name, self._run, self._folder = name, run, folder
 
-    def __call__(self, *args):
+    def __call__(self, *args, **kwargs):
         args_file, answer_file = self._folder / "args.npz", self._folder / "answer.npz"
         answer_file.unlink(missing_ok=True)
-        args_file.write_bytes(encode(list(args)))
+        args_file.write_bytes(encode([list(args), kwargs]))
         failure = self._run("from ddp_lite.interface.grading_kernel import answer_call as __ddp_answer\n"
                             f"__ddp_answer(globals(), {self.name!r}, {str(self._folder)!r})\ndel __ddp_answer")
         try:
