@@ -140,3 +140,21 @@ def test_grade_is_refused_while_another_grading_writes_the_same_csv(tmp_path, ca
         other.wait()
     assert f"another ddp-lite command (process {other.pid}" in capsys.readouterr().err
     assert not (tmp_path / "grades.csv").exists()
+
+
+def test_sequence_is_refused_while_another_run_writes_the_same_folder(tmp_path, capsys):
+    from ddp_lite.data.formats import write_tum
+    from ddp_lite.world.scenes import make_scene
+    folder = write_tum(make_scene("desk", size=(16, 16), n_views=2), tmp_path / "capture")
+    out = tmp_path / "o"
+    other = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    try:
+        with open(lock_path(out), "w") as handle:
+            handle.write('{"pid": %d, "host": "%s", "started": "now"}' % (other.pid, os.uname().nodename))
+        assert main(["sequence", str(folder), "--format", "tum", "--out", str(out), "--profile", "ci",
+                     "--iterations", "2"]) == 2
+    finally:
+        other.kill()
+        other.wait()
+    assert f"another ddp-lite command (process {other.pid}" in capsys.readouterr().err
+    assert not out.exists() or not any(out.iterdir())  # nothing of this run written
