@@ -16,6 +16,8 @@ rule as before.
 """
 from __future__ import annotations
 
+# The kernel imports this module for every call (answer_call): numpy and the standard library only at
+# the top; nbformat and nbclient, which the grader's side needs, take a second to import.
 import ast
 import builtins
 import contextlib
@@ -25,7 +27,6 @@ import os
 import traceback
 from pathlib import Path
 
-import nbformat
 import numpy as np
 
 __all__ = ["encode", "decode", "answer_call", "RemoteFunction", "StudentError", "run_graded", "check_imports"]
@@ -177,6 +178,7 @@ def check_imports(sources) -> list[str]:
 
 def _run_check(cell, remote) -> None:
     """Execute the check cell's source here, with the student's names remote; its outputs as a cell's."""
+    import nbformat
     stdout, stderr = io.StringIO(), io.StringIO()
     error = None
     namespace = _StudentNames(remote)
@@ -201,6 +203,7 @@ def run_graded(nb, is_check, workdir, env: dict, timeout: int):
     against the kernel's state at that point (see the module docstring).
 
     Returns (the exception that stopped the run early or None, whether the kernel started)."""
+    import nbformat
     from jupyter_core.utils import run_sync
     from nbclient import NotebookClient
     from nbclient.exceptions import DeadKernelError
