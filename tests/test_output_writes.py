@@ -158,3 +158,22 @@ def test_sequence_is_refused_while_another_run_writes_the_same_folder(tmp_path, 
         other.wait()
     assert f"another ddp-lite command (process {other.pid}" in capsys.readouterr().err
     assert not out.exists() or not any(out.iterdir())  # nothing of this run written
+
+
+def test_complete_stopped_by_sigterm_mid_fit_says_so_and_leaves_the_old_outputs(tmp_path):
+    argv = _inputs(tmp_path)
+    argv[argv.index("--iterations") + 1] = "100000"  # still fitting when the signal comes
+    (tmp_path / "filled.npy").write_bytes(b"old depth")
+    (tmp_path / "filled.preview.png").write_bytes(b"old preview")
+    child = subprocess.Popen([sys.executable, "-m", "ddp_lite.interface.cli", *argv], stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, text=True, env={**os.environ, "OMP_NUM_THREADS": "1"})
+    try:
+        assert "fitting at" in child.stdout.readline()
+        child.terminate()
+        _, err = child.communicate(timeout=60)
+    finally:
+        child.kill()
+    assert child.returncode == 130 and "interrupted" in err and "Traceback" not in err, err
+    assert (tmp_path / "filled.npy").read_bytes() == b"old depth"
+    assert (tmp_path / "filled.preview.png").read_bytes() == b"old preview"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["depth.npy", "filled.npy", "filled.preview.png", "rgb.png"]
