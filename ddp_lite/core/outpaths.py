@@ -229,8 +229,8 @@ def output_set(targets, flag: str, overwrite_readonly: bool = False):
         >>> import tempfile, os
         >>> out = os.path.join(tempfile.mkdtemp(), "depth.npy")
         >>> with output_set([out, out + ".txt"], "--out") as staged:
-        ...     open(staged(out), "wb").write(b"depth") and open(staged(out + ".txt"), "w").write("its note")
-        8
+        ...     with open(staged(out), "wb") as depth, open(staged(out + ".txt"), "w") as note:
+        ...         _ = depth.write(b"depth"), note.write("its note")
         >>> sorted(os.listdir(os.path.dirname(out)))
         ['depth.npy', 'depth.npy.txt']
     """
