@@ -51,7 +51,7 @@ def main() -> None:
                 start = time.perf_counter()
                 error = classroom.execute(nb, profile=args.profile, workdir=path.parent, allow_errors=False)
                 runs.append((time.perf_counter() - start, nb, error))
-            entries = len(list(Path(folder).glob("*.pkl")))
+            entries = len(list(Path(folder).glob("*.npz")))
         (cold, nb_cold, _), (warm, nb_warm, _) = runs
         totals[0] += cold
         totals[1] += warm

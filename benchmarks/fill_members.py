@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 import bench_quality as bq
-from data_fetch.atomic import atomic_path
+from ddp_lite.core.files import atomic_path
 from ddp_lite.classical.baselines import BASELINES
 from ddp_lite.method.blend import FILL_MEMBERS
 from _common import add_profile_args, profile_from_args

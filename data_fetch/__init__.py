@@ -26,13 +26,16 @@ What ``fetch`` guarantees:
   matched; on a mismatch it is deleted (no final file, no ``.part``) and ``ChecksumError`` says so.
 * Offline or server down: a ``FetchError`` that says so and keeps the ``.part`` for resuming.
 * Nothing is fetched twice: a file present with the right hash is not requested again, and an
-  archive already unpacked (marker ``.<file>.unpacked``) is not unpacked again.
-* Archives are unpacked safely (``unpack.py``): absolute names, ``..``, links and special files
-  refuse the whole archive before anything is written.
+  archive already unpacked (marker ``.<file>.unpacked``) is not unpacked again; its unpacked files
+  are checked against it on every fetch (a missing one is unpacked again, one of another size is
+  kept and named).
+* Archives are unpacked safely (``unpack.py``): absolute names, ``..``, links and special files,
+  and two members landing on one file (``./a.txt`` and ``a.txt``, another case), refuse the whole
+  archive before anything is written.
 * Datasets behind a form (KITTI, Tanks and Temples): ``fetch`` prints exactly what to download and
   where to put it (``ManualDownloadRequired``, exit code 2), then, once the files are there,
   verifies (or records, with the flag) and unpacks them. A user's file that fails its hash is
-  renamed ``<file>.rejected``, not deleted.
+  renamed ``<file>.rejected`` (``.rejected-2``, ... after the first: never over an earlier one), not deleted.
 """
 from .download import ChecksumError, FetchError, ResumableDownloader
 from .fetch import ENV_VAR, REGISTRY_FILE, ManualDownloadRequired, UnpinnedFileError, data_dir, fetch

@@ -22,7 +22,7 @@ import requests
 import urllib3
 from tqdm.auto import tqdm
 
-from .files import regular_file
+from ddp_lite.core.files import regular_file
 
 __all__ = ["FetchError", "ChecksumError", "ResumableDownloader"]
 

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import datetime
 import fnmatch
+import itertools
 import json
 import os
 import re
@@ -21,11 +22,10 @@ from pathlib import Path
 import platformdirs
 import pooch
 
-from .atomic import write_bytes_atomic
+from ddp_lite.core.files import regular_file, write_bytes_atomic
 from .download import ChecksumError, FetchError, ResumableDownloader
-from .files import regular_file
 from .registry import Dataset, RemoteFile, get_dataset
-from .unpack import safe_extract
+from .unpack import archive_files, safe_extract
 
 __all__ = ["fetch", "data_dir", "ManualDownloadRequired", "UnpinnedFileError", "ENV_VAR", "REGISTRY_FILE"]
 
@@ -103,8 +103,22 @@ def _known_hash(folder: Path, entry: RemoteFile, trust: bool) -> str | None:
 
 
 def _unpack(folder: Path, entry: RemoteFile, sha256: str, say) -> None:
+    """Unpack the verified archive once; on a later fetch, check that every file it unpacked is still
+    there (a missing one is unpacked again) and has its size (one that differs is kept, and named)."""
     marker = folder / f".{Path(entry.name).name}.unpacked"
     if marker.exists() and regular_file(marker, "unpack marker").read_text().strip() == sha256:
+        expected = archive_files(folder / entry.name)
+        missing = sorted(name for name in expected if not (folder / name).is_file())
+        changed = sorted(name for name, size in expected.items()
+                         if name not in missing and (folder / name).stat().st_size != size)
+        if changed:
+            say(f"{entry.name}: {len(changed)} unpacked file(s) differ in size from the archive and are kept as they "
+                f"are: {', '.join(changed[:5])}{' ...' if len(changed) > 5 else ''} (delete them and fetch again to "
+                f"unpack them afresh)")
+        if missing:
+            say(f"{entry.name}: {len(missing)} unpacked file(s) missing ({', '.join(missing[:5])}"
+                f"{' ...' if len(missing) > 5 else ''}); unpacking them again")
+            safe_extract(folder / entry.name, folder, only=missing)
         return
     say(f"unpacking {entry.name} into {folder}")
     safe_extract(folder / entry.name, folder)
@@ -137,12 +151,28 @@ def _download(folder: Path, entry: RemoteFile, known: str | None, retries: int, 
     return path
 
 
+def _set_aside(path: Path, name: str) -> Path:
+    """Rename ``path`` to ``name`` beside it, or ``name-2``, ``name-3``, ...: never over an earlier one."""
+    for number in itertools.count(1):
+        aside = path.with_name(name if number == 1 else f"{name}-{number}")
+        try:
+            os.link(path, aside)  # fails if the name is taken: no race with another fetch
+        except FileExistsError:
+            continue
+        except OSError:  # a file system without hard links
+            if os.path.lexists(aside):
+                continue
+            os.replace(path, aside)
+            return aside
+        os.unlink(path)
+        return aside
+
+
 def _verify_manual(folder: Path, entry: RemoteFile, known: str) -> None:
     path = regular_file(folder / entry.name, "manual download")
     actual = pooch.file_hash(str(path), alg=known.split(":")[0] if ":" in known else "sha256")
     if actual != known.split(":")[-1]:
-        rejected = path.with_name(path.name + ".rejected")
-        os.replace(path, rejected)
+        rejected = _set_aside(path, path.name + ".rejected")
         raise ChecksumError(f"{entry.name}: SHA-256 is {actual}, expected {known}. The file was moved to "
                             f"{rejected} (not deleted: it was yours); download it again.")
 

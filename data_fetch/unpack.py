@@ -8,26 +8,31 @@ link of any kind is refused rather than judged. Tar members are then extracted w
 
 An archive may not expand to more than ``max_ratio`` times its own size, nor to more than the
 free disk space (both from the sizes its members declare; zip reading stops at the declared size).
+Member names are compared as the file system will see them: ``./a.txt``, ``a.txt`` and ``dir//a.txt``
+vs ``dir/a.txt`` are the same file, and so are names that differ only in case or Unicode form (one
+file on macOS and Windows). Two members naming one file, or a file that another member puts files
+under, refuse the whole archive: one would silently replace the other.
+
 Everything is extracted into a temporary folder beside the target and moved into place only
 after every member was read back whole (zip CRCs, tar/gzip lengths): a corrupt or truncated
 archive is a ``FetchError`` and leaves the target as it was.
 """
 from __future__ import annotations
 
-import collections
 import os
 import re
 import shutil
 import stat
 import tarfile
 import tempfile
+import unicodedata
 import zipfile
 import zlib
 from pathlib import Path, PurePosixPath
 
 from .download import FetchError
 
-__all__ = ["UnsafeArchiveError", "safe_extract", "check_member_name", "MAX_RATIO"]
+__all__ = ["UnsafeArchiveError", "safe_extract", "check_member_name", "archive_files", "member_path", "MAX_RATIO"]
 
 MAX_RATIO = 200  # unpacked bytes per archive byte; PNG/PFM datasets stay far below, a zip bomb does not
 _TAR_SUFFIXES = (".tar", ".tar.gz", ".tgz", ".tar.bz2", ".tbz2", ".tar.xz", ".txz")
@@ -45,6 +50,58 @@ def check_member_name(name: str, archive="archive") -> None:
         raise UnsafeArchiveError(f"{archive}: member {name!r} is an absolute path")
     if ".." in PurePosixPath(name).parts:
         raise UnsafeArchiveError(f"{archive}: member {name!r} contains '..'")
+
+
+def member_path(name: str) -> str:
+    """A member's name as the path it lands on: '.' and empty components dropped (``./a//b/`` → ``a/b``)."""
+    return "/".join(part for part in name.split("/") if part not in ("", "."))
+
+
+def _same_file_key(path: str) -> str:
+    """Names that one file system or another takes for the same file: any case, any Unicode form."""
+    return unicodedata.normalize("NFC", path).casefold()
+
+
+def _check_one_member_per_file(names_and_kinds, archive: str) -> None:
+    """Refuse two members landing on one file, and a file that another member treats as a folder."""
+    files, folders = {}, {}
+    for name, is_dir in names_and_kinds:
+        path = member_path(name)
+        if not path:
+            if is_dir:
+                continue  # the archive's own root folder ("./")
+            raise UnsafeArchiveError(f"{archive}: member {name!r} names no file")
+        key = _same_file_key(path)
+        if is_dir:
+            if key in files:
+                raise UnsafeArchiveError(f"{archive}: members {files[key]!r} and {name!r} are a file and a folder "
+                                         f"of the same name")
+            folders.setdefault(key, name)
+            continue
+        if key in files or key in folders:
+            other = files.get(key, folders.get(key))
+            if other == name:
+                raise UnsafeArchiveError(f"{archive}: member {name!r} appears more than once; the same file twice, "
+                                         f"one would replace the other")
+            raise UnsafeArchiveError(f"{archive}: members {other!r} and {name!r} land on the same file (they differ "
+                                     f"only in spelling: './', '//', case or Unicode form); one would replace the other")
+        files[key] = name
+    for key, name in list(files.items()) + list(folders.items()):
+        parts = key.split("/")
+        for depth in range(1, len(parts)):
+            parent = "/".join(parts[:depth])
+            if parent in files:
+                raise UnsafeArchiveError(f"{archive}: member {name!r} lies under {files[parent]!r}, which is a file")
+
+
+def archive_files(archive) -> dict:
+    """``{path: size}`` of the regular files an archive unpacks (paths as :func:`member_path` gives them)."""
+    archive = Path(archive)
+    if zipfile.is_zipfile(archive):
+        with zipfile.ZipFile(archive) as handle:
+            return {member_path(i.filename): i.file_size for i in handle.infolist() if not i.is_dir()}
+    with _open_tar(archive) as handle:
+        return {member_path(m.name): m.size for m in handle.getmembers() if m.isfile()}
 
 
 def _inside(target: Path, name: str) -> bool:
@@ -82,10 +139,11 @@ def _open_tar(archive: Path):
         raise UnsafeArchiveError(f"{archive.name} is neither a zip nor a tar archive") from None
 
 
-def safe_extract(archive, target, max_ratio: float = MAX_RATIO) -> Path:
+def safe_extract(archive, target, max_ratio: float = MAX_RATIO, only=None) -> Path:
     """Unpack ``archive`` (.zip or .tar*) into the folder ``target`` after checking every member;
-    returns ``target``. Refuses the whole archive (writing nothing) if any member is unsafe, if it
-    would expand to more than ``max_ratio`` × its size or the free space, or if it is corrupt."""
+    returns ``target``. Refuses the whole archive (writing nothing) if any member is unsafe, if two
+    land on one file, if it would expand to more than ``max_ratio`` × its size or the free space, or if
+    it is corrupt. ``only``: the file paths (:func:`archive_files`' keys) to unpack; None: all."""
     archive, target = Path(archive), Path(target)
     if zipfile.is_zipfile(archive):
         handle = zipfile.ZipFile(archive)
@@ -95,7 +153,7 @@ def safe_extract(archive, target, max_ratio: float = MAX_RATIO) -> Path:
             if stat.S_ISLNK(info.external_attr >> 16):
                 raise UnsafeArchiveError(f"{archive.name}: member {info.filename!r} is a symbolic link")
         total = sum(info.file_size for info in members)
-        names = [info.filename for info in members]
+        names = [(info.filename, info.is_dir()) for info in members]
     else:
         handle = _open_tar(archive)
         try:
@@ -110,12 +168,14 @@ def safe_extract(archive, target, max_ratio: float = MAX_RATIO) -> Path:
                 kind = "link" if (member.issym() or member.islnk()) else "special file"
                 raise UnsafeArchiveError(f"{archive.name}: member {member.name!r} is a {kind}")
         total = sum(member.size for member in members)
-        names = [member.name for member in members]
+        names = [(member.name, member.isdir()) for member in members]
     with handle:
-        duplicates = sorted(n for n, k in collections.Counter(names).items() if k > 1 and not n.endswith("/"))
-        if duplicates:  # the second copy would silently replace the first
-            raise UnsafeArchiveError(f"{archive.name}: member(s) {duplicates[:3]} appear more than once")
-        for name in names:
+        _check_one_member_per_file(names, archive.name)
+        if only is not None:
+            only = set(only)
+            members = [m for m, (name, is_dir) in zip(members, names) if not is_dir and member_path(name) in only]
+            total = sum(m.file_size if isinstance(m, zipfile.ZipInfo) else m.size for m in members)
+        for name, _ in names:
             if not _inside(target, name):
                 raise UnsafeArchiveError(f"{archive.name}: member {name!r} resolves outside {target}")
         target.mkdir(parents=True, exist_ok=True)

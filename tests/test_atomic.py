@@ -8,7 +8,7 @@ import pytest
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from data_fetch.atomic import atomic_path, write_bytes_atomic  # noqa: E402
+from ddp_lite.core.files import atomic_path, write_bytes_atomic  # noqa: E402
 from ddp_lite.evaluation.viz import save_figure  # noqa: E402
 
 

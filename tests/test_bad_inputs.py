@@ -35,7 +35,7 @@ from data_fetch import Dataset, FetchError, RemoteFile, fetch, safe_extract  # n
 from data_fetch.__main__ import main as fetch_main  # noqa: E402
 from ddp_lite import datasets as ds  # noqa: E402
 from ddp_lite.classical.stereo import disparity_to_depth  # noqa: E402
-from data_fetch.atomic import write_bytes_atomic  # noqa: E402
+from ddp_lite.core.files import write_bytes_atomic  # noqa: E402
 from ddp_lite.core.camera import Camera, look_at  # noqa: E402
 from ddp_lite.interface.cli import main as cli_main  # noqa: E402
 from ddp_lite.method.disparity import DisparityTransform  # noqa: E402

@@ -1,7 +1,13 @@
 """The fit cache (ddp_lite.method.cache): a hit returns what is stored, and every input that decides a fit misses."""
+import errno
+import io
+import json
+import os
 import pickle
 import subprocess
 import sys
+import warnings
+import zipfile
 
 import numpy as np
 import pytest
@@ -34,14 +40,36 @@ def _fit(rgb, depth, **config_changes):
     return ddp.complete_depth(rgb, depth, variant="d", config=_config(**config_changes))
 
 
+def _members(path) -> dict:
+    """The arrays of an entry, read as any .npz is (no pickles)."""
+    with np.load(path, allow_pickle=False) as archive:
+        return {name: archive[name] for name in archive.files}
+
+
+def _rewrite(path, members: dict):
+    buffer = io.BytesIO()
+    np.savez(buffer, **members)
+    path.write_bytes(buffer.getvalue())
+
+
+def _meta(members: dict) -> dict:
+    return json.loads(members["meta"].tobytes().decode())
+
+
+def _array_named(members: dict, field: str) -> str:
+    """The member name of the top-level result field ``field``."""
+    return f"a{_meta(members)['result']['fields'][field]['array']}"
+
+
 def test_a_hit_returns_the_stored_result_and_not_a_new_fit(folder):
     rgb, depth = _inputs()
     first = _fit(rgb, depth)
     [stored] = folder.iterdir()
+    assert zipfile.is_zipfile(stored) and stored.suffix == ".npz"
     # a marked result in the file: the second call must return it, so it read the file
-    marked = pickle.loads(stored.read_bytes())
-    marked.depth = np.full_like(marked.depth, 7.0)
-    stored.write_bytes(pickle.dumps(marked))
+    members = _members(stored)
+    members[_array_named(members, "depth")] = np.full_like(first.depth, 7.0)
+    _rewrite(stored, members)
     again = _fit(rgb, depth)
     assert np.all(again.depth == 7.0)
     assert again.iterations == first.iterations and len(list(folder.iterdir())) == 1
@@ -104,14 +132,109 @@ def test_no_entry_without_the_variable_with_a_callback_or_for_bad_input(folder, 
     assert not folder.exists()
 
 
-def test_an_unreadable_entry_is_fitted_again_and_replaced(folder):
+def test_an_unreadable_entry_is_fitted_again_with_a_warning_and_replaced(folder):
     rgb, depth = _inputs()
     first = _fit(rgb, depth)
     [stored] = folder.iterdir()
-    stored.write_bytes(b"not a pickle")
-    again = _fit(rgb, depth)
+    for junk in (b"not an entry", stored.read_bytes()[:200]):  # garbage; a truncated entry
+        stored.write_bytes(junk)
+        with pytest.warns(RuntimeWarning, match="ignoring the cache entry"):
+            again = _fit(rgb, depth)
+        np.testing.assert_array_equal(again.depth, first.depth)
+        np.testing.assert_array_equal(_members(stored)[_array_named(_members(stored), "depth")], first.depth)
+
+
+class _Planted:
+    """Unpickling this runs code: it creates ``marker``."""
+
+    def __init__(self, marker):
+        self.marker = str(marker)
+
+    def __reduce__(self):
+        return (open, (self.marker, "w"))
+
+
+def test_an_entry_never_runs_code(folder, tmp_path):
+    rgb, depth = _inputs()
+    first = _fit(rgb, depth)
+    [stored] = folder.iterdir()
+    marker = tmp_path / "ran"
+    members = _members(stored)
+    planted = [  # a pickle as the whole entry; an object array (a pickle inside the .npz) as the depth
+        pickle.dumps(_Planted(marker)),
+        None,
+    ]
+    for payload in planted:
+        if payload is None:
+            buffer = io.BytesIO()
+            np.savez(buffer, **{**members, _array_named(members, "depth"): np.array([_Planted(marker)], object)})
+            payload = buffer.getvalue()
+        stored.write_bytes(payload)
+        with pytest.warns(RuntimeWarning, match="ignoring the cache entry"):
+            again = _fit(rgb, depth)
+        assert not marker.exists()
+        np.testing.assert_array_equal(again.depth, first.depth)
+
+
+def test_an_entry_of_another_call_is_not_returned(folder):
+    rgb, depth = _inputs()
+    first = _fit(rgb, depth)
+    small_rgb, small_depth = rgb[:16, :24].copy(), depth[:16, :24].copy()
+    _fit(small_rgb, small_depth)
+    [mine] = [p for p in folder.iterdir() if _members(p)[_array_named(_members(p), "depth")].shape == (H, W)]
+    [other] = [p for p in folder.iterdir() if p != mine]
+    mine.write_bytes(other.read_bytes())  # swapped: another image's result under this call's name
+    with pytest.warns(RuntimeWarning, match="another call"):
+        again = _fit(rgb, depth)
+    assert again.depth.shape == (H, W)
     np.testing.assert_array_equal(again.depth, first.depth)
-    np.testing.assert_array_equal(pickle.loads(stored.read_bytes()).depth, first.depth)
+    # the other call's entry with this call's key written in: its shapes give it away
+    members = _members(other)
+    meta = _meta(_members(mine))
+    forged = {**members, "meta": np.frombuffer(json.dumps({**_meta(members), "key": meta["key"]}).encode(), np.uint8)}
+    _rewrite(mine, forged)
+    with pytest.warns(RuntimeWarning, match=r"\(16, 24"):
+        again = _fit(rgb, depth)
+    np.testing.assert_array_equal(again.depth, first.depth)
+    # non-finite depth under the right key and shape
+    members = _members(mine)
+    members[_array_named(members, "depth")] = np.full((H, W), np.nan, np.float32)
+    _rewrite(mine, members)
+    with pytest.warns(RuntimeWarning, match="finite"):
+        again = _fit(rgb, depth)
+    np.testing.assert_array_equal(again.depth, first.depth)
+
+
+def test_a_full_disk_returns_the_fit_and_leaves_no_partial_entry(folder, monkeypatch):
+    rgb, depth = _inputs()
+
+    def full(fd, data):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    with monkeypatch.context() as patch:
+        patch.setattr(os, "write", full)
+        with pytest.warns(RuntimeWarning, match="not cached"):
+            result = _fit(rgb, depth)
+    assert result.depth.shape == (H, W) and np.isfinite(result.depth).all()
+    assert list(folder.iterdir()) == []
+
+
+def test_a_cached_result_keeps_every_field(folder, monkeypatch):
+    rgb, depth = _inputs()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a clean store and read say nothing
+        _fit(rgb, depth)
+        stored = _fit(rgb, depth)
+    monkeypatch.delenv("DDP_CACHE")
+    computed = _fit(rgb, depth)
+    assert stored.rgb is None and stored.transform == computed.transform
+    assert stored.history.keys() == computed.history.keys()
+    for name, value in computed.history.items():
+        np.testing.assert_array_equal(stored.history[name], value)
+    assert stored.state.keys() == computed.state.keys()
+    for name, value in computed.state.items():
+        assert isinstance(stored.state[name], torch.Tensor) and torch.equal(stored.state[name], value)
+    assert (stored.iterations, stored.best_iteration, stored.fits) == (computed.iterations, computed.best_iteration, 1)
 
 
 def test_deep_image_prior_fits_are_cached_too(folder):

@@ -366,15 +366,15 @@ def test_renamed_copies_of_every_kind_are_matched(tmp_path, handed_in):
 
 def test_a_kernel_that_does_not_start_stops_the_grading_and_scores_nobody_0(tmp_path, monkeypatch, capsys):
     """The machine's fault (no kernel starts) is an error with exit 1, never a student's 0 in grades.csv."""
-    from nbgrader.preprocessors import Execute
+    from jupyter_client.manager import AsyncKernelManager
 
     from ddp_lite.interface.cli import main
     source_path = _tiny_source(tmp_path)
     _submit(tmp_path, "ada", nbformat.read(source_path, as_version=4))
 
-    def no_kernel(self, nb, resources):
+    async def no_kernel(self, **kwargs):
         raise RuntimeError("Kernel died before replying to kernel_info")
-    monkeypatch.setattr(Execute, "preprocess", no_kernel)
+    monkeypatch.setattr(AsyncKernelManager, "start_kernel", no_kernel)
     log = []
     with pytest.raises(RuntimeError, match="kernel did not start"):
         classroom.grade(tmp_path / "submissions", source_path.parent, timeout=30, log=log.append)

@@ -354,3 +354,53 @@ def test_dest_naming_a_file_and_bad_registry_entries_are_clear(server, tmp_path)
         with pytest.raises(FetchError, match="registry.json"):
             run(toy(server, sha256=None), tmp_path / "root", trust_first_download=True)
         assert (folder / "registry.json").read_text() == text  # not overwritten
+
+
+SAME_FILE = {
+    "zip-dot-slash": ("zip", [("a.txt", b"1", 0), ("./a.txt", b"2", 0)]),
+    "zip-double-slash": ("zip", [("dir/a.txt", b"1", 0), ("dir//a.txt", b"2", 0)]),
+    "zip-case": ("zip", [("Scene/im0.png", b"1", 0), ("scene/IM0.png", b"2", 0)]),
+    "zip-unicode-form": ("zip", [("caf\u00e9.txt", b"1", 0), ("cafe\u0301.txt", b"2", 0)]),
+    "zip-file-under-a-file": ("zip", [("a", b"1", 0), ("a/b.txt", b"2", 0)]),
+    "tar-dot-slash": ("tar", [("./a.txt", b"1", "file"), ("a.txt", b"2", "file")]),
+    "tar-dot-component": ("tar", [("dir/./a.txt", b"1", "file"), ("dir/a.txt", b"2", "file")]),
+}
+
+
+@pytest.mark.parametrize("case", sorted(SAME_FILE))
+def test_members_landing_on_one_file_refuse_the_archive(tmp_path, case):
+    kind, members = SAME_FILE[case]
+    archive = tmp_path / f"twice.{'zip' if kind == 'zip' else 'tar.gz'}"
+    archive.write_bytes(zip_bytes(members) if kind == "zip" else tar_bytes(members))
+    with pytest.raises(UnsafeArchiveError, match="same file|lies under|same name"):
+        safe_extract(archive, tmp_path / "out")
+    assert sorted(p.name for p in tmp_path.iterdir()) == [archive.name]
+
+
+def test_a_refetch_unpacks_a_missing_file_again_and_names_a_changed_one(server, tmp_path):
+    data = zip_bytes([("./Scene/calib.txt", b"ndisp=1\n", 0), ("Scene/im0.png", b"png", 0)])
+    dataset = toy(server, "Scene.zip", data, unpack=True)
+    run(dataset, tmp_path)
+    scene = tmp_path / "toy" / "Scene"
+    (scene / "calib.txt").unlink()
+    (scene / "im0.png").write_bytes(b"edited by the user")
+    said = []
+    fetch(dataset, dest=tmp_path, progressbar=False, backoff=0.0, say=said.append)
+    assert (scene / "calib.txt").read_bytes() == b"ndisp=1\n"  # back, from the verified archive
+    assert (scene / "im0.png").read_bytes() == b"edited by the user"  # the user's edit is kept, and said
+    assert any("missing" in line and "Scene/calib.txt" in line for line in said), said
+    assert any("differ" in line and "Scene/im0.png" in line for line in said), said
+    assert len(server.log) == 1
+
+
+def test_a_second_rejected_manual_download_does_not_replace_the_first(tmp_path):
+    pinned = Dataset("hand", "by hand", (RemoteFile("data.zip", None, sha(b"right"), None, False),), "-", "-", "-",
+                     "-", manual="put it in {dest}")
+    folder = tmp_path / "hand"
+    folder.mkdir()
+    for attempt in (b"first wrong", b"second wrong"):
+        (folder / "data.zip").write_bytes(attempt)
+        with pytest.raises(ChecksumError, match="rejected"):
+            run(pinned, tmp_path)
+    assert (folder / "data.zip.rejected").read_bytes() == b"first wrong"
+    assert (folder / "data.zip.rejected-2").read_bytes() == b"second wrong"

@@ -228,3 +228,16 @@ def test_the_fit_does_not_import_its_combiner():
     assert "ddp_lite.method.fit" in edges["ddp_lite.method.combine"]
     assert "ddp_lite.method.combine" not in edges["ddp_lite.method.fit"]
     assert not {"ddp_lite.method.blend", "ddp_lite.method.ensemble"} & set(edges["ddp_lite.method.fit"])
+
+
+def test_the_package_never_imports_the_downloader():
+    """``data_fetch`` may use ``ddp_lite.core`` (its file helpers), never the reverse: the kit reads files
+    the downloader left on disk and needs none of its code (no loader fetches)."""
+    root = PACKAGE.parent
+    found = []
+    for path in sorted(PACKAGE.rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            names = [a.name for a in node.names] if isinstance(node, ast.Import) else \
+                [node.module or ""] if isinstance(node, ast.ImportFrom) and node.level == 0 else []
+            found += [f"{path.relative_to(root)}:{node.lineno}: {n}" for n in names if n.split(".")[0] == "data_fetch"]
+    assert found == []

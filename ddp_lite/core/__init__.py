@@ -1,5 +1,6 @@
 """The kit's data model and the checks everything shares: cameras (``camera``), views and scenes
-(``views``), argument checks (``checks``), progress bars (``progress``), output paths (``outpaths``).
+(``views``), argument checks (``checks``), progress bars (``progress``), output paths (``outpaths``),
+atomic writes and the regular-file check every reader makes (``files``).
 
 Imports no other part of ddp_lite.
 """

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from data_fetch.atomic import atomic_path
+from .files import atomic_path
 from .camera import Camera
 from .checks import check_depth, check_image
 

@@ -19,8 +19,7 @@ import cv2
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from data_fetch.atomic import write_bytes_atomic
-from data_fetch.files import regular_file
+from ..core.files import regular_file, write_bytes_atomic
 from ..core.camera import Camera, check_intrinsics
 from ..core.checks import check_bool, report_skipped
 from .fileio import (check_same_size, checked_depth_png_bytes, float_depth, rgb_png_bytes, read_depth, read_rgb, npy_bytes, pfm_bytes,

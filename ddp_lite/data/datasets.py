@@ -22,7 +22,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from data_fetch.files import regular_file
+from ..core.files import regular_file
 from ..core.camera import Camera, check_intrinsics
 from ..core.checks import check_bool, report_skipped
 # Middlebury, the file formats and resize_scene lived here; their names stay importable from here.

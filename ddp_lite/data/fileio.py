@@ -26,9 +26,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from data_fetch.files import regular_file
+from ..core.files import regular_file, write_bytes_atomic
 
-from data_fetch.atomic import write_bytes_atomic
 from .textparse import parse_error
 
 

@@ -20,7 +20,7 @@ import zipfile
 import zlib
 from pathlib import Path
 
-from data_fetch.files import regular_file
+from ..core.files import regular_file
 from .colmap import (COLMAP_MODELS, ColmapCamera, read_colmap, read_colmap_cameras, read_colmap_images,
                      write_colmap)
 from .fileio import read_colmap_depth, write_colmap_depth

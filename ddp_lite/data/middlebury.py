@@ -19,7 +19,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from data_fetch.atomic import write_bytes_atomic
+from ..core.files import write_bytes_atomic
 from ..core.camera import Camera, check_intrinsics
 from .fileio import existing_path, read_image_file, rgb_png_bytes, read_rgb, read_text_file, read_pfm, write_pfm
 from .resample import check_optional_size, scene_depth_range, resize_scene

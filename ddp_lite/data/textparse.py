@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from data_fetch.files import regular_file
+from ..core.files import regular_file
 
 
 def parse_error(path, line: int | None, message: str) -> ValueError:

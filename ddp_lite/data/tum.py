@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation, Slerp
 
-from data_fetch.atomic import write_bytes_atomic
+from ..core.files import write_bytes_atomic
 from ..core.camera import Camera, check_intrinsics
 from ..core.checks import check_bool, report_skipped
 from .fileio import check_plausible_depth, check_same_size, checked_depth_png_bytes, rgb_png_bytes, read_depth, read_rgb

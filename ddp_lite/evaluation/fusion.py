@@ -35,7 +35,7 @@ import os
 import matplotlib
 import numpy as np
 
-from data_fetch.atomic import atomic_path
+from ..core.files import atomic_path
 from ..core.camera import Camera, backproject_pixels, look_at, project_points
 from ..core.checks import check_depth
 

@@ -10,7 +10,7 @@ import os
 import matplotlib
 import numpy as np
 
-from data_fetch.atomic import atomic_path
+from ..core.files import atomic_path
 
 __all__ = ["show_depth", "show_image", "show_error", "show_errors", "error_vmax", "outline", "overlay_holes", "save_figure",
            "HOLE_COLOUR", "HOLE_RGB"]

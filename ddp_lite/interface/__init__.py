@@ -1,6 +1,6 @@
 """How people use the kit: the ``ddp-lite`` command line (``cli`` and its ``cli_*`` handlers), the
-classroom tools (``classroom``: student copies, solutions, grading) and the notebooks' exercise
-checks (``exercises``).
+classroom tools (``classroom``: student copies, solutions, grading; ``grading_kernel``: a submission's
+code in its kernel, the checks in the grader) and the notebooks' exercise checks (``exercises``).
 
 May import every other part of ddp_lite.
 """

@@ -1,20 +1,23 @@
 """``ddp-lite student | solutions | grade``: the classroom commands, which call ``classroom``.
 
 Every output path is checked before the first notebook is read or run (a grading run takes
-minutes per student; a bad ``--csv`` found at the end would throw it away). Handlers take the
+minutes per student; a bad ``--csv`` found at the end would throw it away), and locked for the
+command's length: a second command writing the same output is refused at once. Handlers take the
 parsed namespace and return the exit code; the parser is in ``cli``.
 """
 from __future__ import annotations
 
 import os
 
-from ..core.outpaths import check_not_overlapping, check_output_file, check_output_folder
+from ..core.outpaths import check_not_overlapping, check_output_file, check_output_folder, output_lock
 
 
 def student_command(args) -> int:
     """``ddp-lite student``: the student copies of the notebooks (exercise answers removed)."""
     from .classroom import build_student
-    for path in build_student(args.source, args.out):
+    with output_lock([args.out], "--out"):
+        written = build_student(args.source, args.out)
+    for path in written:
         print(f"wrote {path}")
     return 0
 
@@ -27,8 +30,9 @@ def solutions_command(args) -> int:
         print(message, flush=True)
     from ..method.recipes import get_recipe
     recipe = get_recipe(args.recipe).name  # --recipe, else DDP_RECIPE, else kit
-    written = build_solutions(args.source, args.out, profile=args.profile, timeout=args.timeout, names=args.only,
-                              log=log, recipe=recipe)
+    with output_lock([args.out], "--out"):
+        written = build_solutions(args.source, args.out, profile=args.profile, timeout=args.timeout,
+                                  names=args.only, log=log, recipe=recipe)
     print(f"{len(written)} executed notebooks in {os.path.abspath(args.out)} ({args.profile}, recipe {recipe})")
     return 0
 
@@ -47,15 +51,17 @@ def grade_command(args) -> int:
 
     def log(message):
         print(message, flush=True)
-    scores = grade(args.submissions, args.source, timeout=args.timeout, profile=args.profile,
-                   executed_dir=args.executed, log=log, details=args.details)
-    if hand is not None:
-        scores = merge_hand_points(scores, hand, source=args.points)
-    print()
-    print(format_grades(scores))
-    write_csv(scores, args.csv)
-    print(f"per-exercise scores written to {os.path.abspath(args.csv)}")
-    if args.feedback:
-        for path in write_feedback(scores, args.feedback, args.submissions, args.source):
-            print(f"open answers: {path}")
+    outputs = [args.csv] + [folder for folder in (args.executed, args.feedback) if folder is not None]
+    with output_lock(outputs, "--csv" if len(outputs) == 1 else "--csv/--executed/--feedback"):
+        scores = grade(args.submissions, args.source, timeout=args.timeout, profile=args.profile,
+                       executed_dir=args.executed, log=log, details=args.details)
+        if hand is not None:
+            scores = merge_hand_points(scores, hand, source=args.points)
+        print()
+        print(format_grades(scores))
+        write_csv(scores, args.csv)
+        print(f"per-exercise scores written to {os.path.abspath(args.csv)}")
+        if args.feedback:
+            for path in write_feedback(scores, args.feedback, args.submissions, args.source):
+                print(f"open answers: {path}")
     return 0

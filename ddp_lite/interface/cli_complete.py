@@ -29,11 +29,10 @@ import time
 import cv2
 import numpy as np
 
-from data_fetch.atomic import write_bytes_atomic
-from data_fetch.files import regular_file
-from ..data.fileio import (DEPTH_RANGE_M, MEDIAN_RANGE_M, COMMON_SCALES, check_plausible_depth,  # noqa: F401 (their old home)
-                           check_same_size, depth_png_bytes, npy_bytes, pfm_bytes, read_depth, read_rgb)
-from ..core.outpaths import check_output_file
+from ..core.files import regular_file, write_bytes_atomic
+from ..data.fileio import (check_plausible_depth, check_same_size, depth_png_bytes, npy_bytes, pfm_bytes, read_depth,
+                           read_rgb)
+from ..core.outpaths import check_output_file, output_set
 
 
 def _exr_available() -> bool:
@@ -159,10 +158,17 @@ def _comparison(depth, rgb, filled, gt) -> str:
 
 
 def complete_command(args) -> int:
-    """``ddp-lite complete``: fill the holes of one depth map from its files."""
+    """``ddp-lite complete``: fill the holes of one depth map from its files. Its outputs are written
+    as one set under a lock taken before the fit (``ddp_lite.core.outpaths.output_set``)."""
     start = time.perf_counter()
     writers = _writers()
     _check_outputs(args, writers)
+    outputs = [args.out, _preview_path(args)] + ([_ply_path(args)] if args.intrinsics is not None else [])
+    with output_set(outputs, "--out", overwrite_readonly=args.force) as staged:
+        return _complete(args, writers, staged, start)
+
+
+def _complete(args, writers, staged, start) -> int:
     from ..method.config import FitConfig
     from ..method.combine import complete_depth
     from ..method.profiles import get_profile
@@ -210,13 +216,13 @@ def complete_command(args) -> int:
         result = complete_depth(small_rgb, small_depth, variant=args.variant, config=config)
     filled = fill_holes_at_full_size(depth, result.depth, raw=args.raw)
     comparison = _comparison(depth, rgb, filled, gt)
-    write_bytes_atomic(args.out, writers[os.path.splitext(args.out)[1].lower()](filled), overwrite_readonly=args.force)
-    _write_preview(_preview_path(args), depth, filled,
+    write_bytes_atomic(staged(args.out), writers[os.path.splitext(args.out)[1].lower()](filled))
+    _write_preview(staged(_preview_path(args)), depth, filled,
                    f"{os.path.basename(args.out)}: DDP {args.variant} fitted at {shape[0]}×{shape[1]}, "
                    + ("the net's output everywhere" if args.raw else "valid input kept"))
     if camera is not None:
         from ..evaluation.fusion import fuse_depths, save_ply
-        save_ply(fuse_depths([filled], [camera], [rgb], min_views=0), _ply_path(args))  # one view: every pixel once
+        save_ply(fuse_depths([filled], [camera], [rgb], min_views=0), staged(_ply_path(args)))  # one view: every pixel once
     print(comparison)
     share = result.history.get("blend_fill", 0.0)
     print(f"filled {holes.mean():.1%} holes in {time.perf_counter() - start:.1f} s (the fit {result.seconds:.1f} s"

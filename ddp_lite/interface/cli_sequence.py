@@ -15,7 +15,7 @@ import numpy as np
 
 from ..method.config import FitConfig
 from ..data.formats import load_sequence
-from ..core.outpaths import check_output_folder
+from ..core.outpaths import check_output_folder, output_lock
 from ..method.nets import check_input_size
 from ..method.profiles import get_profile
 from ..method.recipes import get_recipe
@@ -125,7 +125,7 @@ def sequence_command(args) -> int:
     source = {"path": os.path.abspath(args.path), "format": args.format,
               "options": {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in options.items()},
               "profile": profile.name}
-    with open_client(workers, args.scheduler) as client:
+    with output_lock([args.out], "--out"), open_client(workers, args.scheduler) as client:  # one writer at a time
         summary = run_sequence(scene, args.out, config, indices, client=client, threads=args.threads,
                                retries=args.retries, source=source)
     if summary["failed"]:

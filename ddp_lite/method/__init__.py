@@ -4,7 +4,7 @@
 ``coarse_to_fine``) and its combinations of fits, with ``complete_depth``, the entry point
 (``combine``, over ``blend`` and ``ensemble``); Deep Image Prior (``dip``); size and method switches
 (``profiles``, ``recipes``) and the loss a config optimises, written out (``equation``); the fit
-cache (``cache``).
+cache (``cache``, ``cache_entry``).
 
 May import: core, classical.
 """

@@ -17,9 +17,18 @@ So a cached result is the result the same call would compute now (fits are deter
 CPU: ``tests/test_fit.py::test_same_seed_same_numbers_and_inputs_untouched``), only without the
 wait; ``seconds`` is the time the fit took when it ran. A fit with a ``callback`` is never cached
 (the callback is what the caller wants to see), nor is a call whose arguments cannot be hashed,
-nor one that raises. Files are written
-atomically, so notebooks run side by side can share one folder. Unset (the default): no cache.
-Hashing is ``joblib.hash`` (MD5 of a pickle, arrays by their bytes).
+nor one that raises. Hashing is ``joblib.hash`` (MD5 of a pickle, arrays by their bytes).
+
+An entry cannot run code and cannot stand in for another call (:mod:`ddp_lite.method.cache_entry`):
+it is one ``.npz`` file read with ``allow_pickle=False`` (the result's arrays, and its structure as
+JSON naming only the kit's own result types), and it holds the key of the call that made it. On
+read the key, the function and the result type must match the call, and the result's images must
+have the shape of the call's input (``like``), hold floats and be finite; anything else (a foreign
+or swapped entry, a pickle, a truncated file) is ignored with a warning and fitted again. What this
+does not give: a person who can write the folder can still forge an entry for a call with the
+right key and shapes but other numbers; share a ``DDP_CACHE`` only with people you trust. Entries
+are written atomically, so notebooks run side by side can share one folder; a store that fails
+(a full disk, a read-only folder) warns and returns the fitted result. Unset (the default): no cache.
 """
 from __future__ import annotations
 
@@ -28,15 +37,14 @@ import functools
 import hashlib
 import inspect
 import os
-import pickle
+import warnings
 from pathlib import Path
 
 import numpy as np
 import torch
 
-from data_fetch.files import describe_kind, regular_file
-
-from data_fetch.atomic import write_bytes_atomic
+from ..core.files import describe_kind, regular_file, write_bytes_atomic
+from .cache_entry import BadEntry, Unstorable, entry_bytes, read_entry
 from .config import FitConfig
 from .profiles import current_profile_name
 from .recipes import current_recipe_name
@@ -100,11 +108,18 @@ def _key(function, arguments: dict) -> str | None:
         return None
 
 
-def cached(function):
+def cached(function=None, *, like: str | None = None, types=()):
     """Decorate a fit: when ``DDP_CACHE`` is set and no ``callback`` is given, return the stored result
-    of an identical earlier call, or compute, store and return it."""
+    of an identical earlier call, or compute, store and return it.
 
+    ``like`` names the argument whose (H, W) every image of a stored result must have
+    (``@cached(like="depth")``); an entry that does not is ignored with a warning and fitted again.
+    ``types``: the dataclasses a result holds (its own type, a transform...): an entry may name no other."""
+    if function is None:
+        return functools.partial(cached, like=like, types=types)
     signature = inspect.signature(function)
+    name = f"{function.__module__}.{function.__qualname__}"
+    result_type = signature.return_annotation if isinstance(signature.return_annotation, str) else None
 
     @functools.wraps(function)
     def wrapper(*args, **kwargs):
@@ -119,13 +134,20 @@ def cached(function):
         key = None if bound.arguments.get("callback") is not None else _key(function, bound.arguments)
         if key is None:
             return function(*args, **kwargs)
-        path = folder / f"{function.__name__}-{key}.pkl"
-        try:
-            return pickle.loads(regular_file(path).read_bytes())
-        except Exception:  # not there yet, or unreadable (say, pickled by another version of a dependency)
-            pass
+        path = folder / f"{function.__name__}-{key}.npz"
+        if os.path.lexists(path):
+            try:
+                shape = None if like is None else np.shape(bound.arguments.get(like))[:2]
+                return read_entry(regular_file(path, ENV_VAR), key, name, result_type, shape or None, types)
+            except (BadEntry, OSError, ValueError) as error:  # never trusted, never fatal: fit again
+                warnings.warn(f"{ENV_VAR}: ignoring the cache entry {path}: {error}; fitting again",
+                              RuntimeWarning, stacklevel=2)
         result = function(*args, **kwargs)
-        write_bytes_atomic(path, pickle.dumps(result, protocol=pickle.HIGHEST_PROTOCOL))
+        try:
+            write_bytes_atomic(path, entry_bytes(result, key, name, types))
+        except (Unstorable, OSError) as error:  # the fit is done: hand it back, say why it is not kept
+            warnings.warn(f"{ENV_VAR}: could not store the result in {path} ({error}); it is returned "
+                          f"but not cached", RuntimeWarning, stacklevel=2)
         return result
 
     return wrapper

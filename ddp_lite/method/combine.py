@@ -28,7 +28,7 @@ __all__ = ["complete_depth", "fit_ensemble", "fit_blended", "blend_members", "bl
            "with_fill", "mixed_with_fill"]
 
 
-@cached
+@cached(like="depth", types=(DepthResult, DisparityTransform))
 def complete_depth(rgb, depth, camera: Camera | None = None, neighbors=(), variant: str = "rgbd+warp",
                    config: FitConfig | None = None, gt_depth=None, transform: DisparityTransform | None = None,
                    callback=None, init: DepthResult | None = None) -> DepthResult:

@@ -31,7 +31,7 @@ class ImageResult:
     seconds: float
 
 
-@cached
+@cached(like="image", types=(ImageResult,))
 def fit_image(image, mask=None, config: FitConfig | None = None, clean=None, callback=None) -> ImageResult:
     """Deep Image Prior on an image: fit ``image`` (H, W, 3) float [0, 1] where ``mask`` (H, W) bool
     is True (default: everywhere) with a masked MSE; ``clean`` (H, W, 3), if given, is tracked as PSNR.

@@ -14,8 +14,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure  # no pyplot: no global figure state in a long run
 
-from data_fetch.atomic import write_bytes_atomic
-from data_fetch.files import regular_file
+from ..core.files import regular_file, write_bytes_atomic
 from ..data.fileio import depth_png_bytes, load_npy, npy_bytes
 from ..evaluation.fusion import fuse_depths, save_ply
 from .sequence_jobs import ViewJob

@@ -1,0 +1,130 @@
+"""Generic file helpers every writer and reader of the kit shares, the downloader included.
+
+- Atomic writes (:func:`atomic_path`, :func:`write_bytes_atomic`): write a temporary file next to
+  the target, then rename it over the target. A reader never sees a half-written file, and a failed
+  or interrupted write leaves the old file (or no file) behind, never a truncated one. The rename is
+  atomic because the temporary file is in the target's own folder (same file system). The new file
+  gets the mode a plain ``open`` would give it (``0o666`` less the umask), or, when it replaces a
+  file, that file's mode. A read-only target is refused unless ``overwrite_readonly``.
+- The one check every reader of a user's file makes first (:func:`regular_file`): the path names an
+  existing *regular* file. A FIFO, a device or a socket under a file's name makes a reader block
+  forever (hashing a FIFO waits for a writer that never comes) or read endless bytes; a folder where
+  a file is expected fails later with an error that names neither. It refuses all of them before a
+  byte is read, naming the argument the path came from.
+
+Standard library only, so ``data_fetch`` (which imports it from here) runs without torch.
+
+Example:
+    >>> import tempfile, os
+    >>> folder = tempfile.mkdtemp()
+    >>> regular_file(folder, "path")
+    Traceback (most recent call last):
+    ...
+    IsADirectoryError: path: ... is a folder; expected a file
+"""
+from __future__ import annotations
+
+import contextlib
+import os
+import stat
+import tempfile
+from pathlib import Path
+
+__all__ = ["atomic_path", "write_bytes_atomic", "regular_file", "describe_kind"]
+
+
+def _umask() -> int:
+    try:  # Linux: read it without changing it
+        with open("/proc/self/status") as status:
+            for line in status:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError):
+        pass
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+@contextlib.contextmanager
+def atomic_path(path, suffix: str | None = None, overwrite_readonly: bool = False):
+    """Yield a temporary path next to ``path``; on success it replaces ``path``, on error it is removed.
+
+    Args:
+        path: the file to write (str or ``os.PathLike``); its folder is created if missing.
+        suffix: the temporary file's ending; default ``path``'s own. Writers that pick the format
+            from the name (Open3D, Matplotlib) need the real one.
+        overwrite_readonly: replace ``path`` even if it is read-only (no write bit); else
+            ``PermissionError`` before anything is written.
+
+    Example:
+        >>> import numpy as np, tempfile, os
+        >>> target = os.path.join(tempfile.mkdtemp(), "depth.npy")
+        >>> with atomic_path(target) as tmp, open(tmp, "wb") as handle:
+        ...     np.save(handle, np.zeros(3))
+        >>> np.load(target).shape
+        (3,)
+    """
+    path = os.path.abspath(os.fspath(path))
+    if os.path.isdir(path):
+        raise IsADirectoryError(f"{path} is a folder; give a file name")
+    mode = 0o666 & ~_umask()
+    if os.path.exists(path):
+        mode = stat.S_IMODE(os.stat(path).st_mode)
+        if not mode & 0o222 and not overwrite_readonly:
+            raise PermissionError(f"{path} is read-only; refusing to replace it (make it writable, or force)")
+    directory = os.path.dirname(path)
+    os.makedirs(directory, exist_ok=True)
+    suffix = os.path.splitext(path)[1] if suffix is None else suffix
+    fd, tmp = tempfile.mkstemp(dir=directory, prefix=".tmp-", suffix=suffix)
+    os.close(fd)
+    os.chmod(tmp, mode)
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+        raise
+
+
+def write_bytes_atomic(path, data: bytes, overwrite_readonly: bool = False) -> None:
+    """Write ``data`` to ``path`` atomically."""
+    view = memoryview(data).cast("B")
+    with atomic_path(path, overwrite_readonly=overwrite_readonly) as tmp:
+        fd = os.open(tmp, os.O_WRONLY | os.O_TRUNC)
+        try:
+            while view:  # os.write may write less than it was given
+                view = view[os.write(fd, view):]
+        finally:
+            os.close(fd)
+
+
+def describe_kind(mode: int) -> str:
+    """What a ``st_mode`` is, in words: 'a file', 'a folder', 'a FIFO (named pipe)', 'a character device', ..."""
+    for test, words in ((stat.S_ISREG, "a file"), (stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO (named pipe)"),
+                        (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+                        (stat.S_ISSOCK, "a socket")):
+        if test(mode):
+            return words
+    return "not a regular file"
+
+
+def regular_file(path, name: str = "path") -> Path:
+    """``path`` as a ``Path`` if it names an existing regular file (a symlink to one is fine).
+
+    Raises ``FileNotFoundError`` (missing), ``IsADirectoryError`` (a folder) or ``ValueError``
+    (a FIFO, device or socket), each naming ``name`` and the path, before anything is opened."""
+    path = Path(path)
+    try:
+        mode = os.stat(path).st_mode  # follows symlinks: what a reader would open
+    except FileNotFoundError:
+        raise FileNotFoundError(f"{name}: {path} does not exist") from None
+    except NotADirectoryError:
+        raise FileNotFoundError(f"{name}: {path} does not exist (a part of it is a file, not a folder)") from None
+    if stat.S_ISREG(mode):
+        return path
+    if stat.S_ISDIR(mode):
+        raise IsADirectoryError(f"{name}: {path} is a folder; expected a file")
+    raise ValueError(f"{name}: {path} is {describe_kind(mode)}, not a regular file; refusing to read it "
+                     f"(a reader would block or read without end)")
