@@ -61,7 +61,7 @@ lab-command:
 TEST_WORKERS ?= 2
 
 test: $(STAMP)
-	DDP_PROFILE=ci MPLBACKEND=Agg $(if $(filter 0,$(TEST_WORKERS)),,OMP_NUM_THREADS=1) $(PY) -m pytest tests --nbval-lax --nbval-current-env notebooks -p no:cacheprovider -n $(TEST_WORKERS) --dist loadgroup --no-loadscope-reorder
+	DDP_PROFILE=ci MPLBACKEND=Agg $(if $(filter 0,$(TEST_WORKERS)),,OMP_NUM_THREADS=1) $(PY) -m pytest tests --nbval-lax --nbval-current-env notebooks -p no:cacheprovider -n $(TEST_WORKERS) --dist loadfile --no-loadscope-reorder
 
 # The classroom kit (README, "For instructors"). notebooks/ is the instructor version; `student`
 # strips solutions and outputs, `solutions` executes every notebook at $(SOLUTIONS_PROFILE) (class:

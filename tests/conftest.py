@@ -46,10 +46,22 @@ def _fit_cache_only_where_marked(request, monkeypatch):
 SLOW_NOTEBOOKS = ("10_", "12_", "05_", "06_", "11_", "07_")
 
 
+def pytest_xdist_make_scheduler(config, log):
+    """`make test` spreads whole files over its workers (a notebook's cells share one kernel; a module's
+    fixtures are built once), except the student copies, one notebook each, so both workers share them.
+    (pytest-xdist's own ``loadgroup`` cannot express this with pytest 9, whose test ids it no longer sets.)"""
+    from xdist.scheduler import LoadScopeScheduling
+
+    class FilesAndStudentCopies(LoadScopeScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            path, _, rest = nodeid.partition("::")
+            return nodeid if path.endswith("test_student_copies.py") and "[" in rest else path
+
+    return FilesAndStudentCopies(config, log)
+
+
 def pytest_collection_modifyitems(config, items):
-    """`make test` spreads groups of tests over its workers (``--dist loadgroup``), in collection order. A
-    group is a whole file (a notebook's cells share one kernel; a module's fixtures are built once),
-    except the student copies: one group per notebook, so both workers share them. The slow files go
+    """The workers take the files in collection order (``--no-loadscope-reorder``). The slow files go
     first, so the short ones fill the tails: the notebooks, slowest first, then the student copies in
     the same order (they read the notebooks' fits from the session's cache, so they come after
     them: a copy started before its notebook has ended would fit again), then the rest."""
@@ -64,12 +76,6 @@ def pytest_collection_modifyitems(config, items):
             return 1, notebook_rank(source.name) if source is not None else -1
         return 2, 0
 
-    for item in items:
-        group = item.path.name
-        if item.path.name == "test_student_copies.py" and getattr(item, "callspec", None):
-            source = item.callspec.params.get("source")
-            group = f"student copy of {source.name}" if source is not None else group
-        item.add_marker(pytest.mark.xdist_group(group))
     items.sort(key=rank)  # stable: a file's tests and a notebook's cells keep their order
 
 
