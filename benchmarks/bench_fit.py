@@ -14,7 +14,6 @@ from __future__ import annotations
 import argparse
 import ast
 import json
-import platform
 import resource
 import subprocess
 import sys
@@ -24,6 +23,7 @@ import numpy as np
 import torch
 
 from ddp_lite.method.variants import VARIANTS
+from isa import cpu_flags  # benchmarks/ is on the path: the scripts run from there
 
 
 CPU_FLAGS = ("avx512f", "avx512_bf16", "amx_bf16", "avx512_vnni")
@@ -31,18 +31,7 @@ CPU_FLAGS = ("avx512f", "avx512_bf16", "amx_bf16", "avx512_vnni")
 
 def cpu_summary() -> str:
     """The CPU model and whether it has the flags that decide bf16 / int8 speed (Linux /proc/cpuinfo)."""
-    model, flags = platform.processor() or "unknown CPU", set()
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                key, _, value = line.partition(":")
-                if key.strip() == "model name":
-                    model = value.strip()
-                elif key.strip() == "flags":
-                    flags = set(value.split())
-                    break
-    except OSError:
-        pass
+    model, flags = cpu_flags()
     marks = ", ".join(f"{flag} {'yes' if flag in flags else 'no'}" for flag in CPU_FLAGS)
     return f"CPU: {model}; {marks}"
 
