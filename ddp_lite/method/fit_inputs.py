@@ -19,7 +19,7 @@ from .nets import check_input_size
 from .variants import get_variant
 from ..core.views import image_and_camera
 
-__all__ = ["check_fit_inputs", "check_principal_point", "MIN_PARALLAX_PX"]
+__all__ = ["check_fit_inputs", "MIN_PARALLAX_PX"]  # a Camera checks its own K (core.camera.check_intrinsics)
 
 
 def _check_neighbors(neighbors) -> list[tuple[np.ndarray, Camera]]:
@@ -46,17 +46,6 @@ def _check_overlap(camera: Camera, depth: np.ndarray, neighbors) -> None:
 
 
 MIN_PARALLAX_PX = 0.5  # below this a neighbour's warp cannot tell one depth from another
-
-
-def check_principal_point(camera: Camera, name: str) -> None:
-    """Refuse intrinsics that belong to another image size: a principal point more than an image width
-    (height) outside the image (640×480's (319.5, 239.5) on a 48×32 image). A crop may move it outside
-    the image, but not that far; ``Camera.resized`` scales K with the image."""
-    cx, cy = float(camera.K[0, 2]), float(camera.K[1, 2])
-    W, H = camera.width, camera.height
-    if not (-W <= cx <= 2 * W and -H <= cy <= 2 * H):
-        raise ValueError(f"{name}: the principal point ({cx:.6g}, {cy:.6g}) px lies far outside its {W}×{H} (W×H) "
-                         f"image; are the intrinsics for another image size? (Camera.resized scales them)")
 
 
 def _check_useful_neighbors(camera: Camera, depth: np.ndarray, neighbors) -> None:
@@ -111,9 +100,6 @@ def check_fit_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth, t
         raise TypeError(f"camera must be a ddp_lite.Camera, got {type(camera).__name__}")
     if camera is not None and (camera.height, camera.width) != (H, W):
         raise ValueError(f"camera is {camera.width}×{camera.height} but depth is {W}×{H}")
-    for name, cam in ([("camera", camera)] if camera is not None else []) + [
-            (f"neighbors[{i}] camera", cam) for i, (_, cam) in enumerate(neighbors)]:
-        check_principal_point(cam, name)
     if spec.needs_neighbors and (camera is None or not neighbors):
         raise ValueError(f"variant {spec.name!r} needs camera and at least one neighbor; use 'rgbd' without them")
     if spec.needs_neighbors:
