@@ -322,24 +322,32 @@ def test_a_terminal_bar_shows_the_whole_commands_share_and_time_left(monkeypatch
 
 def test_time_left_skips_set_up_and_expects_an_auto_stop(monkeypatch):
     """Set-up before the first iteration is no iteration; a fit that may stop by itself expects to run
-    its expected share, until its stopper says more (hand-computed figures, one second per iteration)."""
+    its expected share, until its stopper says more, and the line gives the range from every fit
+    stopping at its earliest to every fit running to its cap (hand-computed, one second per iteration)."""
     from ddp_lite import progress as progress_module
     from ddp_lite.core.progress import command_progress, progress
     now = [0.0]
     monkeypatch.setattr(progress_module.time, "perf_counter", lambda: now[0])
-    with command_progress(400, expected_share=0.5) as clock:  # two fits of ≤ 200, expected to run half
+    # two fits of ≤ 200, expected to run half, at least a quarter
+    with command_progress(400, expected_share=0.5, earliest_share=0.25) as clock:
         now[0] += 100.0  # set-up: 100 s before the first iteration
         bar = progress(range(200), desc="fit", stream=_Terminal())
         for i in bar:
             now[0] += 1.0
             if i == 19:
                 break
-        # 20 run at 1 s each: this fit's 180 to its cap expected at half (90), the next fit's 200 too (100)
-        assert clock.summary() == "all 5%, 3:10 left"
-        bar.expect(150)  # its stopper now expects it to run 150 in all: 130 more, and the next fit 100
-        assert clock.summary() == "all 5%, 3:50 left"
-        bar.close()  # it stopped at 20: 180 handed back, the next fit expected at 100
-        assert clock.summary() == "all 50%, 1:40 left"
+        # 20 run at 1 s each; 380 to the caps: expected at half (190), at least a quarter (95)
+        assert clock.summary() == "all 5%, 3:10 left (1:35–6:20)"
+        # its stopper: 150 in all expected (130 more), 60 at least (40 more); the next fit 100 and 50
+        bar.expect(150, 60)
+        assert clock.summary() == "all 5%, 3:50 left (1:30–6:20)"
+        bar.close()  # it stopped at 20: 180 handed back, the next fit expected at 100, at least 50
+        assert clock.summary() == "all 50%, 1:40 left (0:50–3:20)"
+    with command_progress(100) as clock:  # fits that run to their cap: one time, no range
+        for _ in progress(range(100), desc="fit", stream=_Terminal()):
+            now[0] += 1.0
+            if clock.ran == 40:
+                assert clock.summary() == "all 40%, 1:00 left"
 
 
 def test_complete_with_intrinsics_writes_the_frame_as_a_point_cloud(tmp_path, capsys):

@@ -127,6 +127,20 @@ def test_plateau_stopper_events_by_hand(decays, expected):
     assert events == expected
 
 
+def test_the_stoppers_earliest_and_expected_stop_count_the_plateaus_still_to_come():
+    from ddp_lite.method.loop import EXPECTED_STOP_SHARE
+    stopper = PlateauStopper(patience=50, eval_every=10, decays=1)
+    stopper.update(1.0)  # a new best at iteration 10: a plateau needs 50 more, then the cut, then 50 more
+    assert stopper.earliest_stop(10, 600) == 110
+    assert stopper.expected_stop(10, 600) == round(EXPECTED_STOP_SHARE * 600)  # before the cut: the usual share
+    for error in (2.0, 2.0, 2.0, 2.0):  # 40 without a best: 10 to the plateau, then 50 after the cut
+        stopper.update(error)
+    assert stopper.earliest_stop(50, 600) == 110
+    assert stopper.update(2.0) == "decay"  # iteration 60: the cut; after it the next plateau is the stop
+    assert stopper.earliest_stop(60, 600) == stopper.expected_stop(60, 600) == 110
+    assert stopper.earliest_stop(60, 100) == 100  # never past the cap
+
+
 def test_plateau_decay_continues_the_same_run_and_cuts_the_rate():
     gt, depth = slanted_plane()
     base = FitConfig(iterations=300, auto_stop=True, patience=10, eval_every=5, **TINY)

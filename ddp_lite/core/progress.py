@@ -14,7 +14,10 @@ command's share and time left beside its own (``all 40%, 1:12 left``). The time 
 of the iterations run so far (from the first one: set-up before it is not an iteration) times the
 iterations still expected. A fit that may stop by itself expects to run ``expected_share`` of its
 cap until it says better (:meth:`CommandClock.expect`, from its stopper's state); a fit that stops
-early hands its unrun iterations back, so the share jumps ahead and the time left shrinks.
+early hands its unrun iterations back, so the share jumps ahead and the time left shrinks. Where
+fits may stop by themselves, no single time is honest (one stops at half its cap, the next runs
+to it), so the line gives the range too: every fit stopping at its earliest, every fit running to
+its cap (``all 40%, 1:12 left (0:50–1:40)``).
 """
 from __future__ import annotations
 
@@ -29,18 +32,22 @@ class CommandClock:
     """Iterations done of a whole command's ``total``, and the time left at the rate so far.
 
     ``expected_share``: the share of its iterations a fit is expected to run (below 1 where fits stop
-    by themselves); the open bar's own expectation (:meth:`expect`) replaces it for that bar.
+    by themselves), ``earliest_share`` the share it runs at least (default: ``expected_share``); the
+    open bar's own expectation (:meth:`expect`) replaces them for that bar.
     """
 
-    def __init__(self, total: int, expected_share: float = 1.0):
+    def __init__(self, total: int, expected_share: float = 1.0, earliest_share: float | None = None):
         if not (isinstance(total, int) and total >= 1):
             raise ValueError(f"total must be a positive number of iterations, got {total!r}")
         if not 0 < expected_share <= 1:
             raise ValueError(f"expected_share must be in (0, 1], got {expected_share!r}")
-        self.total, self.expected_share = total, float(expected_share)
+        earliest_share = expected_share if earliest_share is None else earliest_share
+        if not 0 < earliest_share <= expected_share:
+            raise ValueError(f"earliest_share must be in (0, expected_share={expected_share}], got {earliest_share!r}")
+        self.total, self.expected_share, self.earliest_share = total, float(expected_share), float(earliest_share)
         self.ran = self.skipped = 0  # iterations run; iterations handed back unrun by fits that stopped early
         self.first = self.last = None  # when the first and the latest iteration started: the rate's span
-        self.bar_left = None  # (planned, expected) iterations left of the open bar, when it has said so
+        self.bar_left = None  # (planned, expected, earliest) iterations left of the open bar, when it has said so
         self.start = time.perf_counter()
 
     @property
@@ -60,46 +67,71 @@ class CommandClock:
         self.skipped += n
         self.bar_left = None
 
-    def expect(self, planned_left: int, expected_left: int) -> None:
-        """The open bar has ``planned_left`` iterations to its cap and expects to run ``expected_left`` of them."""
-        self.bar_left = (max(0, int(planned_left)), max(0, int(expected_left)))
+    def expect(self, planned_left: int, expected_left: int, earliest_left: int | None = None) -> None:
+        """The open bar has ``planned_left`` iterations to its cap, expects to run ``expected_left`` of
+        them and runs at least ``earliest_left`` (default: ``expected_left``)."""
+        expected_left = max(0, int(expected_left))
+        earliest_left = expected_left if earliest_left is None else min(expected_left, max(0, int(earliest_left)))
+        self.bar_left = (max(0, int(planned_left)), expected_left, earliest_left)
 
-    def seconds_left(self) -> float | None:
-        """Seconds still expected, or None before a rate can be measured."""
+    def _rate(self) -> float | None:
+        """Seconds per iteration since the first one started, or None before there is one."""
         if self.first is None:
             return None
         if self.ran >= 2:
-            rate = (self.last - self.first) / (self.ran - 1)  # seconds per iteration since the first
+            rate = (self.last - self.first) / (self.ran - 1)
         else:
             rate = time.perf_counter() - self.first  # the first iteration, still running or just done
-        if rate <= 0:
-            return None
+        return rate if rate > 0 else None
+
+    def _iterations_left(self) -> tuple[float, float, float]:
+        """(earliest, expected, planned) iterations still to run."""
         planned_left = self.total - self.done
-        expected_left = planned_left * self.expected_share
-        if self.bar_left is not None:
-            bar_planned, bar_expected = self.bar_left
-            bar_planned = min(bar_planned, planned_left)
-            expected_left = bar_expected + (planned_left - bar_planned) * self.expected_share
-        return rate * expected_left
+        bar_planned, bar_expected, bar_earliest = self.bar_left if self.bar_left is not None else (0, 0, 0)
+        rest = planned_left - min(bar_planned, planned_left)  # of the fits after the open bar
+        return (bar_earliest + rest * self.earliest_share, bar_expected + rest * self.expected_share,
+                float(planned_left))
+
+    def seconds_left(self) -> float | None:
+        """Seconds still expected, or None before a rate can be measured."""
+        rate = self._rate()
+        return None if rate is None else rate * self._iterations_left()[1]
+
+    def seconds_left_range(self) -> tuple[float, float] | None:
+        """(earliest, latest) seconds left: every fit stopping at its earliest, every fit running to its cap."""
+        rate = self._rate()
+        if rate is None:
+            return None
+        earliest, _, planned = self._iterations_left()
+        return rate * earliest, rate * planned
 
     def summary(self) -> str:
-        """``all 40%, 1:12 left`` (no time until a rate is measured)."""
+        """``all 40%, 1:12 left``, with the range where fits may stop by themselves:
+        ``all 40%, 1:12 left (0:50–1:40)`` (no time until a rate is measured)."""
         share = self.done / self.total
         left = self.seconds_left()
         if left is None:
             return f"all {share:.0%}"
-        minutes, seconds = divmod(int(round(left)), 60)
-        return f"all {share:.0%}, {minutes}:{seconds:02d} left"
+        low, high = self.seconds_left_range()
+        span = f" ({_minutes(low)}–{_minutes(high)})" if _minutes(low) != _minutes(high) else ""
+        return f"all {share:.0%}, {_minutes(left)} left{span}"
+
+
+def _minutes(seconds: float) -> str:
+    """``1:05`` for 65 seconds."""
+    minutes, seconds = divmod(int(round(seconds)), 60)
+    return f"{minutes}:{seconds:02d}"
 
 
 _COMMAND: list[CommandClock] = []  # the innermost open command_progress, if any
 
 
 @contextlib.contextmanager
-def command_progress(total: int, expected_share: float = 1.0):
+def command_progress(total: int, expected_share: float = 1.0, earliest_share: float | None = None):
     """Count every bar opened inside the block toward ``total`` iterations (a whole command's), of
-    which fits that may stop by themselves are expected to run ``expected_share``."""
-    clock = CommandClock(total, expected_share)
+    which fits that may stop by themselves are expected to run ``expected_share`` and run at least
+    ``earliest_share``."""
+    clock = CommandClock(total, expected_share, earliest_share)
     _COMMAND.append(clock)
     try:
         yield clock
@@ -133,10 +165,12 @@ class _Counted:
             self.total = self.n
         self.clock.bar_left = None
 
-    def expect(self, expected_total: int) -> None:
-        """This bar now expects to run ``expected_total`` iterations in all (its stopper's estimate)."""
+    def expect(self, expected_total: int, earliest_total: int | None = None) -> None:
+        """This bar now expects to run ``expected_total`` iterations in all and at least
+        ``earliest_total`` (its stopper's estimates)."""
         if self.total:
-            self.clock.expect(self.total - self.n, min(expected_total, self.total) - self.n)
+            earliest = None if earliest_total is None else min(earliest_total, self.total) - self.n
+            self.clock.expect(self.total - self.n, min(expected_total, self.total) - self.n, earliest)
 
     def close(self) -> None:
         self._hand_back()

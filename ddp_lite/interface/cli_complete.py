@@ -173,7 +173,7 @@ def _complete(args, writers, staged, start) -> int:
     from ..method.combine import complete_depth
     from ..method.profiles import get_profile
     from ..core.progress import command_progress
-    from ..method.loop import expected_share
+    from ..method.loop import earliest_share, expected_share
     from ..core.checks import check_depth
     from ..method.nets import check_input_size
     from ..sequences.working_size import fill_holes_at_full_size, shrink, working_shape
@@ -212,7 +212,7 @@ def _complete(args, writers, staged, start) -> int:
     print(f"{depth.shape[0]}×{depth.shape[1]} (H×W), {holes.mean():.1%} holes; fitting at "
           f"{shape[0]}×{shape[1]} (--max-side {max_side}), profile '{profile.name}'", flush=True)
     planned = config.resolved_iterations(args.variant) * config.fit_count()  # every fit of the command
-    with command_progress(planned, expected_share(config)):
+    with command_progress(planned, expected_share(config), earliest_share(config)):
         result = complete_depth(small_rgb, small_depth, variant=args.variant, config=config)
     filled = fill_holes_at_full_size(depth, result.depth, raw=args.raw)
     comparison = _comparison(depth, rgb, filled, gt)

@@ -21,7 +21,7 @@ from ..method.device import resolve_device
 from ..evaluation.experiments import error_table, format_table, make_case
 from ..method.config import FitConfig
 from ..method.combine import complete_depth
-from ..method.loop import check_memory, expected_share
+from ..method.loop import check_memory, earliest_share, expected_share
 from ..method.nets import check_input_size
 from ..evaluation.metrics import hole_rmse
 from ..core.outpaths import check_output_file
@@ -59,7 +59,7 @@ def demo_command(args) -> int:
     print(f"{case.scene}\n{args.holes} holes: {np.isnan(case.depth).mean():.0%} of the reference view; "
           f"warp loss uses views {[n.name for n in case.neighbors]}")
     planned = config.resolved_iterations(VARIANT) * config.fit_count()  # every fit of the command
-    with command_progress(planned, expected_share(config)):
+    with command_progress(planned, expected_share(config), earliest_share(config)):
         result = complete_depth(case.rgb, case.depth, case.camera, case.neighbors, variant=VARIANT, config=config,
                                 gt_depth=case.scored_gt, transform=case.transform)
     estimates = {"linear": fill_linear(case.depth), "colorization": fill_colorization(case.depth, case.rgb),
