@@ -22,7 +22,11 @@ ifeq ($(strip $(DISPLAY)$(WAYLAND_DISPLAY)),)
 LAB_ARGS += --no-browser
 endif
 endif
-LAB_CMD := $(VENV)/bin/jupyter lab $(LAB_ARGS)
+# The notebooks' fits are kept in $(DDP_CACHE) (ddp_lite.method.cache): a notebook run again, after a
+# kernel restart or an edit further down, reads its fits back in seconds instead of minutes.
+# `DDP_CACHE= make lab` keeps nothing; `rm -r .cache/fits` frees the space (a few MB per fit).
+DDP_CACHE ?= $(CURDIR)/.cache/fits
+LAB_CMD := env DDP_CACHE=$(DDP_CACHE) $(VENV)/bin/jupyter lab $(LAB_ARGS)
 
 install: $(STAMP)
 
