@@ -20,7 +20,7 @@ import cv2
 import numpy as np
 import pytest
 
-from ddp_lite.classical.baselines import fill_colorization, fill_cross_bilateral, joint_bilateral_fill
+from ddp_lite.classical.guided_fills import fill_colorization, fill_cross_bilateral, joint_bilateral_fill
 from ddp_lite.core.camera import Camera, check_intrinsics
 from ddp_lite.core.checks import SkippedWarning
 from ddp_lite.core.views import View
