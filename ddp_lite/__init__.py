@@ -48,7 +48,7 @@ _PACKAGES = {  # sub-package → its modules, each one concern (the sub-package'
     "method": ('config', 'variants', 'disparity', 'losses', 'paper_method', 'hole_losses', 'hole_terms', 'nets', 'warp', 'loop',
                'device', 'fit', 'fit_inputs', 'combine', 'ensemble', 'blend', 'visibility', 'equation', 'coarse_to_fine', 'dip',
                'profiles', 'recipes', 'cache', 'cache_entry'),
-    "data": ('datasets', 'fileio', 'formats', 'colmap', 'tum', 'middlebury', 'textparse', 'resample'),
+    "data": ('datasets', 'fileio', 'file_writers', 'formats', 'colmap', 'tum', 'middlebury', 'textparse', 'resample'),
     "evaluation": ('metrics', 'fusion', 'experiments', 'viz', 'plane_sweep'),
     "studies": ('real_cases', 'additions', 'mvs_kinect_experiments'),
     "sequences": ('sequence', 'sequence_cost', 'sequence_files', 'sequence_jobs', 'runner', 'working_size'),

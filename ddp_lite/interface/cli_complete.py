@@ -30,8 +30,8 @@ import cv2
 import numpy as np
 
 from ..core.files import regular_file, write_bytes_atomic
-from ..data.fileio import (check_plausible_depth, check_same_size, depth_png_bytes, npy_bytes, pfm_bytes, read_depth,
-                           read_rgb)
+from ..data.file_writers import depth_png_bytes, npy_bytes, pfm_bytes
+from ..data.fileio import check_plausible_depth, check_same_size, read_depth, read_rgb
 from ..core.outpaths import check_output_file, output_set
 
 
