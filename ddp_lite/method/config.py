@@ -317,7 +317,7 @@ class FitConfig:
 
 def _did_you_mean(name: str) -> str:
     close = difflib.get_close_matches(name, FIELDS, n=1)
-    return f"; did you mean {close[0]!r}?" if close else "; see config.FIELDS"
+    return f"; did you mean {close[0]!r}?" if close else "; see ddp_lite.method.config.FIELDS"
 
 
 # the Profile fields for_profile copies as they are (channels, iterations, lr_milestones are derived)
