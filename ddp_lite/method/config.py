@@ -167,7 +167,8 @@ class FitConfig:
 
     Use :meth:`for_profile` for the sizes and schedules of ``DDP_PROFILE``. A field may be changed
     (``config.lr = 1e-2``); a misspelt one (``config.lerning_rate``) raises ``AttributeError`` instead of
-    being ignored. NumPy integers given for integer fields become Python ints.
+    being ignored. NumPy integers given for integer fields become Python ints. A field by its own name
+    goes through ``__getattr__`` (a type checker sees ``Any``); by its section it is typed.
 
     Example:
         >>> config = FitConfig(lr=1e-2, smoothness=1.0)
