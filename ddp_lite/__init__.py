@@ -44,15 +44,16 @@ _HOME_OF = {name: module for module, names in _HOMES.items() for name in names}
 _PACKAGES = {  # sub-package → its modules, each one concern (the sub-package's docstring says which)
     "core": ('checks', 'camera', 'views', 'progress', 'outpaths', 'files'),
     "world": ('scenes', 'render', 'textures', 'photo_texture', 'solids', 'terrain', 'organic', 'neighbors'),
-    "classical": ('baselines', 'stereo', 'holes', 'kinect'),
-    "method": ('config', 'variants', 'disparity', 'losses', 'paper_method', 'hole_terms', 'nets', 'warp', 'loop',
+    "classical": ('baselines', 'depth_fills', 'guided_fills', 'stereo', 'holes', 'kinect'),
+    "method": ('config', 'variants', 'disparity', 'losses', 'paper_method', 'hole_losses', 'hole_terms', 'nets', 'warp', 'loop',
                'device', 'fit', 'fit_inputs', 'combine', 'ensemble', 'blend', 'visibility', 'equation', 'coarse_to_fine', 'dip',
                'profiles', 'recipes', 'cache', 'cache_entry'),
-    "data": ('datasets', 'fileio', 'formats', 'colmap', 'tum', 'middlebury', 'textparse', 'resample'),
+    "data": ('datasets', 'fileio', 'file_writers', 'formats', 'colmap', 'tum', 'middlebury', 'textparse', 'resample'),
     "evaluation": ('metrics', 'fusion', 'experiments', 'viz', 'plane_sweep'),
     "studies": ('real_cases', 'additions', 'mvs_kinect_experiments'),
     "sequences": ('sequence', 'sequence_cost', 'sequence_files', 'sequence_jobs', 'runner', 'working_size'),
-    "interface": ('cli', 'cli_classroom', 'cli_complete', 'cli_demo', 'cli_sequence', 'classroom', 'grading_kernel',
+    "interface": ('cli', 'cli_classroom', 'cli_complete', 'cli_demo', 'cli_sequence', 'classroom', 'grading', 'grades',
+                  'grading_kernel',
                   'exercises'),
 }
 _PACKAGE_OF = {module: package for package, modules in _PACKAGES.items() for module in modules}

@@ -4,7 +4,9 @@ import cv2
 import numpy as np
 import pytest
 
-from ddp_lite.classical.baselines import BASELINES, fill, fill_colorization, fill_linear, fill_nearest, fill_telea
+from ddp_lite.classical.baselines import BASELINES, fill
+from ddp_lite.classical.depth_fills import fill_linear, fill_nearest, fill_telea
+from ddp_lite.classical.guided_fills import fill_colorization
 from ddp_lite.evaluation.metrics import hole_rmse
 
 H, W = 48, 64
@@ -153,7 +155,7 @@ def _brute_force_guided_filter(guide, target, weight, r, eps):
 
 
 def test_guided_filter_fill_matches_a_window_by_window_regression():
-    from ddp_lite.classical.baselines import fill_guided_filter
+    from ddp_lite.classical.guided_fills import fill_guided_filter
     rng = np.random.default_rng(3)
     rgb = rng.random((9, 11, 3))
     depth = 2.0 + rgb @ np.array([0.5, -0.3, 0.2]) + 0.05 * rng.standard_normal((9, 11))
@@ -172,7 +174,7 @@ def test_guided_filter_fill_matches_a_window_by_window_regression():
 
 
 def test_guided_filter_fill_reproduces_depth_affine_in_colour():
-    from ddp_lite.classical.baselines import fill_guided_filter
+    from ddp_lite.classical.guided_fills import fill_guided_filter
     v, u = np.mgrid[0:H, 0:W]
     rgb = np.stack([u / W, v / H, 0.5 + 0.3 * np.sin(u / 1.5)], axis=2)
     gt = 1.5 + 0.8 * rgb[..., 0] - 0.4 * rgb[..., 1] + 0.2 * rgb[..., 2]  # not planar in (u, v): sin(u / 1.5)
@@ -195,7 +197,7 @@ def _two_regions():
 
 
 def test_bilateral_solver_does_not_cross_a_colour_edge():
-    from ddp_lite.classical.baselines import fill_bilateral_solver
+    from ddp_lite.classical.guided_fills import fill_bilateral_solver
     rgb, depth, gt = _two_regions()
     out = fill_bilateral_solver(depth, rgb)
     np.testing.assert_allclose(out, gt, atol=1e-3)  # each side of the hole takes its own region's depth
@@ -203,7 +205,7 @@ def test_bilateral_solver_does_not_cross_a_colour_edge():
 
 
 def test_bilateral_solver_keeps_a_constant_and_goes_smoothly_between_two_values():
-    from ddp_lite.classical.baselines import fill_bilateral_solver
+    from ddp_lite.classical.guided_fills import fill_bilateral_solver
     depth = np.full((H, W), 2.5)
     depth[10:30, 10:40] = np.nan
     np.testing.assert_allclose(fill_bilateral_solver(depth, _grey()), 2.5, atol=1e-5)
@@ -217,7 +219,7 @@ def test_bilateral_solver_keeps_a_constant_and_goes_smoothly_between_two_values(
 
 
 def test_guided_fills_refuse_bad_parameters_and_need_the_image():
-    from ddp_lite.classical.baselines import fill_bilateral_solver, fill_guided_filter
+    from ddp_lite.classical.guided_fills import fill_bilateral_solver, fill_guided_filter
     depth, _, _ = _ramp()
     for call, match in ((lambda: fill_guided_filter(depth, _grey(), radius=0), "radius must be a positive integer"),
                         (lambda: fill_guided_filter(depth, _grey(), radius=1.5), "radius"),
@@ -231,11 +233,11 @@ def test_guided_fills_refuse_bad_parameters_and_need_the_image():
 
 
 def test_the_colorization_fill_zeroes_the_affinity_hole_term():
-    """The kit's affinity term (losses.affinity_loss) is the colorization system's residual in the holes:
+    """The kit's affinity term (hole_losses.affinity_loss) is the colorization system's residual in the holes:
     the fill scipy solves for makes it vanish there, a colour-blind fill does not."""
     import torch
-    from ddp_lite.classical.baselines import NEIGHBOUR_OFFSETS, colorization_affinities
-    from ddp_lite.method.losses import affinity_loss
+    from ddp_lite.classical.guided_fills import NEIGHBOUR_OFFSETS, colorization_affinities
+    from ddp_lite.method.hole_losses import affinity_loss
     rgb, depth, gt = _two_regions()
     rgb = rgb + 0.05 * np.random.default_rng(0).random(rgb.shape).astype(np.float32)  # texture on both sides
     holes = np.isnan(depth)

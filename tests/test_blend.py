@@ -138,7 +138,7 @@ def fill_case(seed):
 def two_fills_disparity(depth, rgb, transform):
     """The mean of the colorization fill and the bilateral solver's of 1/z, computed here from the two
     classical fills, in ``transform``'s disparity."""
-    from ddp_lite.classical.baselines import fill_bilateral_solver, fill_colorization
+    from ddp_lite.classical.guided_fills import fill_bilateral_solver, fill_colorization
     inverse = 1.0 / depth
     return transform.to_disparity(2.0 / (fill_colorization(inverse, rgb) + fill_bilateral_solver(inverse, rgb)))
 

@@ -16,7 +16,7 @@ from pathlib import Path
 import nbformat
 import pytest
 
-from ddp_lite import classroom
+from ddp_lite import classroom, grades, grading
 
 NOTEBOOKS = Path(__file__).resolve().parent.parent / "notebooks"
 SOURCES = sorted(NOTEBOOKS.glob("[0-9][0-9]_*.ipynb"))
@@ -137,7 +137,7 @@ def test_grader_scores_right_wrong_crashing_tampered_slow_and_missing_work(tmp_p
     _submit(tmp_path, "fay", _edit(source, "ex1_square", "import time\ntime.sleep(60)\ndef square(x):\n    return x * x"))
     (tmp_path / "submissions" / "gus").mkdir()  # handed in nothing
     log = []
-    scores = classroom.grade(tmp_path / "submissions", source_path.parent, timeout=5, log=log.append)
+    scores = grading.grade(tmp_path / "submissions", source_path.parent, timeout=5, log=log.append)
     table = {(s.student, s.exercise): (s.points, s.status) for s in scores}
     assert table[("ada", "01.1")] == (2, "pass") and table[("ada", "01.2")] == (3, "pass")
     assert table[("ben", "01.1")] == (0, "fail") and table[("ben", "01.2")] == (0, "fail")
@@ -147,10 +147,10 @@ def test_grader_scores_right_wrong_crashing_tampered_slow_and_missing_work(tmp_p
     assert table[("eve", "01.1")] == (0, "fail")  # the check came back from the source
     assert table[("fay", "01.1")] == (0, "fail") and table[("fay", "01.2")] == (3, "pass")  # timed out, went on
     assert table[("gus", "01.1")] == (0, "missing")
-    text = classroom.format_grades(scores)
+    text = grades.format_grades(scores)
     assert re.search(r"^ada\s+2\s+3\s+5/5\s+1/1$", text, flags=re.M), text
     assert re.search(r"^ben\s+0\s+0\s+0/5\s+0/1$", text, flags=re.M), text
-    classroom.write_csv(scores, tmp_path / "out" / "grades.csv")
+    grades.write_csv(scores, tmp_path / "out" / "grades.csv")
     rows = list(csv.DictReader(open(tmp_path / "out" / "grades.csv", encoding="utf-8")))
     assert len(rows) == 7 * 3 and rows[0] == {"student": "ada", "notebook": "01_tiny", "exercise": "01.1",
                                               "grade_id": "ex1_square_check", "kind": "auto", "points": "2",
@@ -165,9 +165,9 @@ def test_execute_refuses_bad_arguments(bad, match):
 
 def test_grade_refuses_a_folder_without_students(tmp_path):
     with pytest.raises(ValueError, match="submissions_dir"):
-        classroom.grade(tmp_path / "nowhere")
+        grading.grade(tmp_path / "nowhere")
     with pytest.raises(ValueError, match="no student folders"):
-        classroom.grade(tmp_path)
+        grading.grade(tmp_path)
 
 
 # --- the real notebooks at ci: minutes ------------------------------------------------------------
@@ -184,7 +184,7 @@ def test_solutions_get_full_marks(tmp_path):
     for path in chosen:
         shutil.copy(path, source_dir / path.name)
     shutil.copytree(source_dir, tmp_path / "submissions" / "teacher")
-    scores = classroom.grade(tmp_path / "submissions", source_dir, log=print)
+    scores = grading.grade(tmp_path / "submissions", source_dir, log=print)
     auto = [s for s in scores if s.kind == "auto"]
     assert auto and all(s.points == s.max_points and s.status == "pass" for s in auto), auto
 
@@ -213,7 +213,7 @@ def test_a_renamed_download_is_graded_and_an_unknown_file_is_named(tmp_path):
     nbformat.write(nbformat.read(source_path, as_version=4), folder / "01_tiny (1).ipynb")  # a browser's rename
     nbformat.write(nbformat.v4.new_notebook(), folder / "scratch.ipynb")
     log = []
-    scores = classroom.grade(tmp_path / "submissions", source_path.parent, timeout=30, log=log.append)
+    scores = grading.grade(tmp_path / "submissions", source_path.parent, timeout=30, log=log.append)
     assert {s.exercise: s.status for s in scores} == {"01.1": "pass", "01.2": "pass", "01.3": "answered"}
     assert any("'01_tiny (1).ipynb' as 01_tiny.ipynb" in line for line in log), log
     assert any("scratch.ipynb" in line and "not graded" in line for line in log), log
@@ -225,7 +225,7 @@ def test_match_submissions_prefers_the_exact_name_then_the_newest_copy(tmp_path)
     for i, name in enumerate(["01_a.ipynb", "01_a (1).ipynb", "Copy of 02_b.ipynb", "02_b-Copy1.ipynb", "x.ipynb"]):
         (tmp_path / name).write_text("{}")
         os.utime(tmp_path / name, (1000 + i, 1000 + i))
-    matched, notes, unmatched = classroom.match_submissions(sorted(tmp_path.iterdir()), names)
+    matched, notes, unmatched = grading.match_submissions(sorted(tmp_path.iterdir()), names)
     assert {k: v.name for k, v in matched.items()} == {"01_a.ipynb": "01_a.ipynb", "02_b.ipynb": "02_b-Copy1.ipynb"}
     assert sorted(p.name for p in unmatched) == ["01_a (1).ipynb", "Copy of 02_b.ipynb", "x.ipynb"]
     assert notes == ["graded '02_b-Copy1.ipynb' as 02_b.ipynb (the newest of 2 copies)"]
@@ -238,7 +238,7 @@ def test_grade_refuses_an_unwritable_feedback_folder_before_any_run(tmp_path):
     (tmp_path / "feedback" / "ada").write_text("a file where ada's folder goes")
     log = []
     with pytest.raises(ValueError, match="executed_dir"):
-        classroom.grade(tmp_path / "submissions", source_path.parent, executed_dir=tmp_path / "feedback", log=log.append)
+        grading.grade(tmp_path / "submissions", source_path.parent, executed_dir=tmp_path / "feedback", log=log.append)
     assert log == []  # nobody was graded, nobody scored 0
 
 
@@ -247,18 +247,18 @@ def test_hand_points_merge_into_the_scores_and_open_answers_go_to_one_file_per_s
     student = classroom.student_copy(nbformat.read(source_path, as_version=4))
     _submit(tmp_path, "cy", _edit(student, "ex3_answer", "Because it is quick."))
     _submit(tmp_path, "dan", student)
-    scores = classroom.grade(tmp_path / "submissions", source_path.parent, timeout=30, log=lambda *_: None)
+    scores = grading.grade(tmp_path / "submissions", source_path.parent, timeout=30, log=lambda *_: None)
     (tmp_path / "hand.csv").write_text("student,exercise,points,comment\ncy,01.3,0.5,fair\n")
-    merged = classroom.merge_hand_points(scores, classroom.read_hand_points(tmp_path / "hand.csv"))
+    merged = grades.merge_hand_points(scores, grades.read_hand_points(tmp_path / "hand.csv"))
     assert [(s.points, s.status) for s in merged if (s.student, s.exercise) == ("cy", "01.3")] == [(0.5, "graded")]
     assert [s for s in scores if s.status == "graded"] == []  # a new list; the input is unchanged
-    assert re.search(r"^cy\s+0\s+0\s+0/5\s+1/1\s+0.5/1$", classroom.format_grades(merged), flags=re.M)
+    assert re.search(r"^cy\s+0\s+0\s+0/5\s+1/1\s+0.5/1$", grades.format_grades(merged), flags=re.M)
     for bad, match in (("cy,01.1,1\n", "autograded"), ("cy,01.3,2\n", "more than"), ("zed,01.3,1\n", "zed"),
                        ("cy,01.3,-1\n", "line 2")):
         (tmp_path / "bad.csv").write_text("student,exercise,points\n" + bad)
         with pytest.raises(ValueError, match=match):
-            classroom.merge_hand_points(scores, classroom.read_hand_points(tmp_path / "bad.csv"))
-    written = classroom.write_feedback(merged, tmp_path / "open", tmp_path / "submissions", source_path.parent)
+            grades.merge_hand_points(scores, grades.read_hand_points(tmp_path / "bad.csv"))
+    written = grades.write_feedback(merged, tmp_path / "open", tmp_path / "submissions", source_path.parent)
     assert sorted(p.name for p in written) == ["cy.md", "dan.md"]
     text = (tmp_path / "open" / "cy.md").read_text()
     assert "## 01.3" in text and "> why?" in text and "Because it is quick." in text and "points: 0.5" in text
@@ -340,7 +340,7 @@ def test_a_submission_that_is_a_fifo_is_scored_unreadable_without_blocking(tmp_p
             os.close(fd)
     threading.Thread(target=unblock, daemon=True).start()
     log, start = [], time.monotonic()
-    scores = classroom.grade(tmp_path / "submissions", source_path.parent, timeout=30, log=log.append)
+    scores = grading.grade(tmp_path / "submissions", source_path.parent, timeout=30, log=log.append)
     assert time.monotonic() - start < 20, "the grader waited on the FIFO"
     assert any("ada/01_tiny.ipynb: unreadable" in line and "FIFO" in line for line in log), log
     assert {s.exercise: s.status for s in scores if s.student == "ada"} == {e: "unreadable" for e in ("01.1", "01.2", "01.3")}
@@ -348,9 +348,9 @@ def test_a_submission_that_is_a_fifo_is_scored_unreadable_without_blocking(tmp_p
     points = tmp_path / "points.csv"
     os.mkfifo(points)
     with pytest.raises(ValueError, match=r"points: .*FIFO"):
-        classroom.read_hand_points(points)
+        grades.read_hand_points(points)
     with pytest.raises(ValueError, match=r"points: .*folder"):
-        classroom.read_hand_points(tmp_path / "submissions")
+        grades.read_hand_points(tmp_path / "submissions")
 
 
 @pytest.mark.parametrize("handed_in", ["01_a - Copy.ipynb", "01_a - Copy (2).ipynb", "01_a(1).ipynb", "01_A.ipynb",
@@ -358,10 +358,10 @@ def test_a_submission_that_is_a_fifo_is_scored_unreadable_without_blocking(tmp_p
 def test_renamed_copies_of_every_kind_are_matched(tmp_path, handed_in):
     """Windows' " - Copy", no space before "(1)", another case, a doubled suffix: all the student's notebook."""
     (tmp_path / handed_in).write_text("{}")
-    matched, notes, unmatched = classroom.match_submissions([tmp_path / handed_in], ["01_a.ipynb", "02_b.ipynb"])
+    matched, notes, unmatched = grading.match_submissions([tmp_path / handed_in], ["01_a.ipynb", "02_b.ipynb"])
     assert {k: v.name for k, v in matched.items()} == {"01_a.ipynb": handed_in} and not unmatched
     assert notes == [f"graded {handed_in!r} as 01_a.ipynb"]
-    assert classroom._notebook_files(tmp_path) == [tmp_path / handed_in]  # found, whatever the suffix's case
+    assert grading.notebook_files(tmp_path) == [tmp_path / handed_in]  # found, whatever the suffix's case
 
 
 def test_a_kernel_that_does_not_start_stops_the_grading_and_scores_nobody_0(tmp_path, monkeypatch, capsys):
@@ -377,7 +377,7 @@ def test_a_kernel_that_does_not_start_stops_the_grading_and_scores_nobody_0(tmp_
     monkeypatch.setattr(AsyncKernelManager, "start_kernel", no_kernel)
     log = []
     with pytest.raises(RuntimeError, match="kernel did not start"):
-        classroom.grade(tmp_path / "submissions", source_path.parent, timeout=30, log=log.append)
+        grading.grade(tmp_path / "submissions", source_path.parent, timeout=30, log=log.append)
     assert not any("ada:" in line and "0/" in line for line in log), log
     csv_path = tmp_path / "grades.csv"
     assert main(["grade", str(tmp_path / "submissions"), "--source", str(source_path.parent),

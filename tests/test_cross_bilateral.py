@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from ddp_lite.classical.baselines import fill, fill_cross_bilateral, joint_bilateral_fill
+from ddp_lite.classical.baselines import fill
+from ddp_lite.classical.guided_fills import fill_cross_bilateral, joint_bilateral_fill
 
 
 def _brute_force(depth, guide, sigma_s, sigma_r, radius):

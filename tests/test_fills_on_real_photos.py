@@ -3,7 +3,9 @@ worse than copying the nearest valid pixel, and none overshooting the depth arou
 import numpy as np
 import pytest
 
-from ddp_lite.classical.baselines import BASELINES, fill_biharmonic, fill_cubic, fill_guided_filter, fill_nearest
+from ddp_lite.classical.baselines import BASELINES
+from ddp_lite.classical.depth_fills import fill_biharmonic, fill_cubic, fill_nearest
+from ddp_lite.classical.guided_fills import fill_guided_filter
 from ddp_lite.studies.real_cases import REAL_HOLES, make_real_case
 
 

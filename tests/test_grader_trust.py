@@ -6,7 +6,7 @@ from pathlib import Path
 
 import nbformat
 
-from ddp_lite import classroom
+from ddp_lite import classroom, grading
 
 RIGHT = "def fscore(precision, recall):\n    ### BEGIN SOLUTION\n    return 0.0 if precision + recall == 0 else " \
         "2 * precision * recall / (precision + recall)\n    ### END SOLUTION"
@@ -66,7 +66,7 @@ def test_no_submission_can_pass_a_check_it_fails_or_touch_other_files(tmp_path):
     (tmp_path / "hand-in" / "f_link").mkdir()
     (tmp_path / "hand-in" / "f_link" / "01_fs.ipynb").symlink_to(source_path)  # the instructor's solutions
     log = []
-    scores = classroom.grade(tmp_path / "hand-in", source_path.parent, timeout=60, log=log.append)
+    scores = grading.grade(tmp_path / "hand-in", source_path.parent, timeout=60, log=log.append)
     table = {s.student: (s.points, s.status) for s in scores}
     assert table == {"a_vandal": (2, "pass"), "b_cheat": (0, "fail"), "c_honest": (2, "pass"),
                      "e_not_a_notebook": (0, "unreadable"), "f_link": (0, "unreadable")}, log

@@ -3,7 +3,7 @@
 * one colour reader: pixels as stored (EXIF orientation not applied), and colour/depth of different
   sizes refused with the EXIF rotation named when it is the reason (``fileio.check_same_size``);
 * one depth reader (``fileio.read_depth``): 8-bit pictures refused, "no reading" sentinels warned;
-* one depth-writer rule (``fileio.depth_units``, ``fileio.float_depth``): no depth (NaN, inf, ≤ 0, −1)
+* one depth-writer rule (``file_writers.depth_units``, ``file_writers.float_depth``): no depth (NaN, inf, ≤ 0, −1)
   is stored as the format's hole, never wrapped around 16 bits;
 * a camera checked against its image (``camera.check_intrinsics``) wherever intrinsics enter;
 * nothing left out without a word (``checks.report_skipped``), and ``strict`` / ``--strict`` refuses;
@@ -20,11 +20,11 @@ import cv2
 import numpy as np
 import pytest
 
-from ddp_lite.classical.baselines import fill_colorization, fill_cross_bilateral, joint_bilateral_fill
+from ddp_lite.classical.guided_fills import fill_colorization, fill_cross_bilateral, joint_bilateral_fill
 from ddp_lite.core.camera import Camera, check_intrinsics
 from ddp_lite.core.checks import SkippedWarning
 from ddp_lite.core.views import View
-from ddp_lite.data import fileio
+from ddp_lite.data import file_writers, fileio
 from ddp_lite.data.formats import read_colmap, read_colmap_cameras, read_tum, write_colmap, write_tum
 from ddp_lite.evaluation import metrics
 from ddp_lite.interface.cli import main
@@ -151,13 +151,13 @@ def test_write_tum_stores_minus_one_and_inf_as_holes_not_as_wrapped_depth(tmp_pa
 def test_every_depth_writer_maps_no_depth_to_its_hole_value(tmp_path):
     depth = np.full((4, 5), 2.0, np.float32)
     depth[0, :4] = [-1.0, np.inf, -np.inf, 0.0]
-    units, lost = fileio.depth_units(depth, 1000.0)
+    units, lost = file_writers.depth_units(depth, 1000.0)
     assert units[0, :4].tolist() == [0, 0, 0, 0] and units[1, 0] == 2000 and lost == 0
-    colmap = np.frombuffer(fileio.colmap_depth_bytes(depth)[len(b"5&4&1&"):], "<f4").reshape(5, 4).T
+    colmap = np.frombuffer(file_writers.colmap_depth_bytes(depth)[len(b"5&4&1&"):], "<f4").reshape(5, 4).T
     assert colmap[0, :4].tolist() == [0.0, 0.0, 0.0, 0.0] and colmap[1, 0] == 2.0
-    assert np.isnan(fileio.float_depth(depth)[0, :4]).all()
+    assert np.isnan(file_writers.float_depth(depth)[0, :4]).all()
     # a valid depth that would be stored as the 65535 sentinel (13.107 m at 5000/m) does not fit
-    assert fileio.depth_units(np.full((2, 2), 13.107), 5000.0)[1] == 4
+    assert file_writers.depth_units(np.full((2, 2), 13.107), 5000.0)[1] == 4
 
 
 # --------------------------------------------------------------------------- a camera checked against its image

@@ -1,6 +1,5 @@
 """Profiles and recipes build exactly the configs they built when a profile still carried the
 method: every (profile, recipe, variant, net) pinned field by field, and the notebooks' first line."""
-import dataclasses
 
 import pytest
 
@@ -139,7 +138,7 @@ DESCRIBED = {
 
 
 def fields(config: FitConfig) -> dict:
-    return {f.name: getattr(config, f.name) for f in dataclasses.fields(config)}
+    return config.flat()
 
 
 def test_the_defaults_are_the_papers_and_unchanged():

@@ -125,7 +125,7 @@ def test_disparity_margin_sets_the_default_transform_range():
 
 
 def test_smoothness_is_zero_on_a_plane_and_hand_computed_on_a_parabola():
-    from ddp_lite.method.losses import smoothness_loss, smoothness_weights
+    from ddp_lite.method.hole_losses import smoothness_loss, smoothness_weights
     H, W = 12, 16
     v, u = torch.meshgrid(torch.arange(H, dtype=torch.float64), torch.arange(W, dtype=torch.float64), indexing="ij")
     plane = (0.2 + 0.01 * u + 0.02 * v)[None, None]  # disparity affine in (u, v): a plane
@@ -141,7 +141,7 @@ def test_smoothness_is_zero_on_a_plane_and_hand_computed_on_a_parabola():
 
 
 def test_smoothness_weights_relax_at_colour_edges_and_vanish_outside_the_region():
-    from ddp_lite.method.losses import smoothness_weights
+    from ddp_lite.method.hole_losses import smoothness_weights
     image = torch.zeros(1, 3, 6, 8)
     image[..., 4:] = 1.0  # a vertical colour edge between columns 3 and 4
     region = torch.ones(1, 1, 6, 8, dtype=torch.bool)
@@ -155,7 +155,7 @@ def test_smoothness_weights_relax_at_colour_edges_and_vanish_outside_the_region(
 
 
 def test_rgb_edge_guide_sees_an_edge_between_colours_of_equal_brightness_that_grey_misses():
-    from ddp_lite.method.losses import smoothness_weights
+    from ddp_lite.method.hole_losses import smoothness_weights
     image = torch.zeros(1, 3, 5, 8)
     image[0, 0, :, :4] = 0.9  # red left half, green right half: grey 0.3 on both sides
     image[0, 1, :, 4:] = 0.9
@@ -174,7 +174,7 @@ def test_rgb_edge_guide_sees_an_edge_between_colours_of_equal_brightness_that_gr
 def test_structure_edge_guide_ignores_fine_texture_and_keeps_a_strong_edge():
     from skimage.restoration import denoise_tv_chambolle
 
-    from ddp_lite.method.losses import STRUCTURE_TV_WEIGHT, smoothness_weights
+    from ddp_lite.method.hole_losses import STRUCTURE_TV_WEIGHT, smoothness_weights
     rng = np.random.default_rng(0)
     grey = np.where(np.arange(32) < 16, 0.2, 0.8)[None, :].repeat(24, 0)  # a step between columns 15 and 16
     grey = grey + 0.04 * rng.standard_normal(grey.shape)  # fine texture on both surfaces
@@ -193,7 +193,7 @@ def test_structure_edge_guide_ignores_fine_texture_and_keeps_a_strong_edge():
 
 
 def test_flatness_is_zero_on_a_constant_and_hand_computed_on_a_ramp():
-    from ddp_lite.method.losses import flatness_loss, smoothness_weights
+    from ddp_lite.method.hole_losses import flatness_loss, smoothness_weights
     H, W = 12, 16
     v, u = torch.meshgrid(torch.arange(H, dtype=torch.float64), torch.arange(W, dtype=torch.float64), indexing="ij")
     weights = smoothness_weights(torch.zeros(1, 3, H, W, dtype=torch.float64), torch.ones(1, 1, H, W, dtype=torch.bool))
@@ -224,7 +224,7 @@ def test_flatness_continues_a_border_hole_flat_where_curvature_alone_carries_the
 
 
 def test_flatness_region_is_the_border_holes_and_a_rim_of_the_enclosed_ones_by_brute_force():
-    from ddp_lite.method.losses import flatness_region
+    from ddp_lite.method.hole_losses import flatness_region
     rng = np.random.default_rng(3)
     holes = rng.random((20, 24)) < 0.03  # scattered pixels, some at the border
     holes[5:14, 6:17] = True  # enclosed

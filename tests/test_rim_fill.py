@@ -1,7 +1,7 @@
 """The linear fill `ddp-lite complete` compares against: triangulating the holes' rim only."""
 import numpy as np
 
-from ddp_lite.classical.baselines import fill_linear_from_rim
+from ddp_lite.classical.depth_fills import fill_linear_from_rim
 
 
 def _holes(depth):

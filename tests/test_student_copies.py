@@ -14,7 +14,7 @@ import nbformat
 import pytest
 from test_classroom import README, SOURCES, _checks, _meta  # tests/ is on sys.path (see conftest.py)
 
-from ddp_lite import classroom
+from ddp_lite import classroom, grading
 
 # What a course must give nbgrader's autograder per cell (README, "For instructors"); the student
 # copies below run with exactly this limit.
@@ -53,7 +53,7 @@ def test_untouched_student_copy_runs_to_the_end_fails_every_check_cleanly_and_sc
     handed_in.parent.mkdir()
     nbformat.write(classroom.student_copy(nbformat.read(source, as_version=4)), handed_in)
     executed = tmp_path / "executed.ipynb"
-    scores = classroom.grade_notebook(handed_in, source, "untouched", workdir=handed_in.parent, executed=executed,
+    scores = grading.grade_notebook(handed_in, source, "untouched", workdir=handed_in.parent, executed=executed,
                                       timeout=NBGRADER_TIMEOUT)  # every cell within what the README tells a course
     auto = [s for s in scores if s.kind == "auto"]
     assert len(auto) == len(_checks(nbformat.read(source, as_version=4))) and all(s.points == 0 and s.status == "fail" for s in auto)

@@ -1,5 +1,6 @@
 """Classical depth, the kit's foil and input: the stereo matcher (``stereo``), hole and sensor models
-(``holes``, ``kinect``) and the classical fills DDP is compared with (``baselines``).
+(``holes``, ``kinect``) and the classical fills DDP is compared with: ``baselines`` names them all,
+``depth_fills`` holds those that see the depth alone, ``guided_fills`` those guided by the colour image.
 
 May import: core.
 """

@@ -6,8 +6,8 @@ disparity), and returns depth as float32 metres, images as float32 (H, W, 3) in 
 the OpenCV convention with the (left / first) camera at the world origin.
 
 Here: KITTI, Tanks and Temples, NYU. Middlebury lives in ``ddp_lite.data.middlebury``, the file formats
-(PFM, depth PNG, ``.npy``) in ``ddp_lite.data.fileio``, resampling in ``ddp_lite.data.resample``; their names
-stay importable from here, as before.
+(PFM, depth PNG, ``.npy``) in ``ddp_lite.data.fileio`` (readers) and ``ddp_lite.data.file_writers``,
+resampling in ``ddp_lite.data.resample``; their names stay importable from here, as before.
 
 * **KITTI 2015**: disparity PNG uint16, d = value / 256, 0 = no ground truth; calibration
   ``P_rect_02``/``P_rect_03`` (3×4), baseline = (P2[0,3] − P3[0,3]) / f.
@@ -26,8 +26,9 @@ from ..core.files import regular_file
 from ..core.camera import Camera, check_intrinsics
 from ..core.checks import check_bool, report_skipped
 # Middlebury, the file formats and resize_scene lived here; their names stay importable from here.
-from .fileio import (check_same_size, existing_path, read_rgb, read_text_file, depth_png_bytes, npy_bytes, pfm_bytes, read_depth, read_depth_image,
-                     read_image_file, read_pfm, write_pfm)
+from .file_writers import depth_png_bytes, npy_bytes, pfm_bytes, write_pfm
+from .fileio import (check_same_size, existing_path, read_depth, read_depth_image, read_image_file, read_pfm, read_rgb,
+                     read_text_file)
 from .middlebury import (MiddleburyCalib, require_valid_depth, stereo_scene, load_middlebury, load_middlebury2006,
                          make_middlebury_fixture, parse_middlebury_calib, read_middlebury_calib)
 from .resample import check_optional_size, scene_depth_range, resize_view, resize_scene

@@ -23,7 +23,8 @@ from pathlib import Path
 from ..core.files import regular_file
 from .colmap import (COLMAP_MODELS, ColmapCamera, read_colmap, read_colmap_cameras, read_colmap_images,
                      write_colmap)
-from .fileio import read_colmap_depth, write_colmap_depth
+from .file_writers import write_colmap_depth
+from .fileio import read_colmap_depth
 from .resample import resize_scene
 from .tum import (TUM_DEPTH_FACTOR, TUM_INTRINSICS, associate, read_tum, read_tum_list, read_tum_trajectory,
                   write_tum)

@@ -21,7 +21,8 @@ import numpy as np
 
 from ..core.files import write_bytes_atomic
 from ..core.camera import Camera, check_intrinsics
-from .fileio import existing_path, read_image_file, rgb_png_bytes, read_rgb, read_text_file, read_pfm, write_pfm
+from .file_writers import rgb_png_bytes, write_pfm
+from .fileio import existing_path, read_image_file, read_pfm, read_rgb, read_text_file
 from .resample import check_optional_size, scene_depth_range, resize_scene
 from ..world.scenes import make_scene  # the renderer, for make_middlebury_fixture only
 from ..classical.stereo import disparity_to_depth, pixel_disparity

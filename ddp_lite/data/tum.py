@@ -22,7 +22,8 @@ from scipy.spatial.transform import Rotation, Slerp
 from ..core.files import write_bytes_atomic
 from ..core.camera import Camera, check_intrinsics
 from ..core.checks import check_bool, report_skipped
-from .fileio import check_plausible_depth, check_same_size, checked_depth_png_bytes, rgb_png_bytes, read_depth, read_rgb
+from .file_writers import checked_depth_png_bytes, rgb_png_bytes
+from .fileio import check_plausible_depth, check_same_size, read_depth, read_rgb
 from .resample import finish_scene, undistort_rgbd
 from .textparse import parse_error, parse_floats, quaternion_rotation, text_lines
 from ..core.views import Scene, View

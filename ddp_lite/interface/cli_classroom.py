@@ -45,8 +45,8 @@ def grade_command(args) -> int:
             check_output_folder(folder, flag)
             check_not_overlapping(folder, flag, args.submissions, "SUBMISSIONS")
             check_not_overlapping(folder, flag, args.source, "--source")
-    from .classroom import (format_grades, grade, merge_hand_points, read_hand_points, write_csv,
-                            write_feedback)
+    from .grades import format_grades, merge_hand_points, read_hand_points, write_csv, write_feedback
+    from .grading import grade
     hand = read_hand_points(args.points) if args.points else None  # a bad file is refused before any run
 
     def log(message):

@@ -30,8 +30,8 @@ import cv2
 import numpy as np
 
 from ..core.files import regular_file, write_bytes_atomic
-from ..data.fileio import (check_plausible_depth, check_same_size, depth_png_bytes, npy_bytes, pfm_bytes, read_depth,
-                           read_rgb)
+from ..data.file_writers import depth_png_bytes, npy_bytes, pfm_bytes
+from ..data.fileio import check_plausible_depth, check_same_size, read_depth, read_rgb
 from ..core.outpaths import check_output_file, output_set
 
 
@@ -141,7 +141,7 @@ def _write_preview(path: str, depth: np.ndarray, filled: np.ndarray, summary: st
 
 def _comparison(depth, rgb, filled, gt) -> str:
     """The line that puts DDP's fill beside classical ones at full size."""
-    from ..classical.baselines import fill_linear_from_rim, fill_navier_stokes
+    from ..classical.depth_fills import fill_linear_from_rim, fill_navier_stokes
     holes = ~np.isfinite(depth)
     linear = fill_linear_from_rim(depth)  # fill_linear's triangulation of every valid pixel takes 13 s at 500×741
     if gt is None:

@@ -16,7 +16,8 @@ import time
 import numpy as np
 from matplotlib.figure import Figure  # no pyplot: no backend to choose, no global figure state
 
-from ..classical.baselines import fill_colorization, fill_linear
+from ..classical.depth_fills import fill_linear
+from ..classical.guided_fills import fill_colorization
 from ..method.device import resolve_device
 from ..evaluation.experiments import error_table, format_table, make_case
 from ..method.config import FitConfig

@@ -84,11 +84,11 @@ def _plain(value):
     equally in any process (a pickled tensor does not: its bytes differ from run to run)."""
     if isinstance(value, torch.Tensor):
         return value.detach().cpu().numpy()
-    if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        fields = {f.name: _plain(getattr(value, f.name)) for f in dataclasses.fields(value)}
-        if isinstance(value, FitConfig):
-            fields.pop("progress")
+    if isinstance(value, FitConfig):  # its fields by their own names, as before it had sections
+        fields = {name: _plain(item) for name, item in value.flat().items() if name != "progress"}
         return (type(value).__qualname__, fields)
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return (type(value).__qualname__, {f.name: _plain(getattr(value, f.name)) for f in dataclasses.fields(value)})
     if isinstance(value, dict):
         return {key: _plain(item) for key, item in value.items()}
     if isinstance(value, (list, tuple)):

@@ -1,32 +1,15 @@
-"""The kit's terms in the holes: not in the paper, added to its loss by the ``kit`` recipe.
-
-    L = L_total (paper, :mod:`ddp_lite.method.paper_method`) + s·L_curv + f·L_flat + a·L_aff
-
-on the disparity Z in the *free* pixels (holes and held-out pixels), each relaxed at colour edges:
-
-- L_curv = Σ w·(|∂²Z/∂x²| + |∂²Z/∂y²|) / Σ w, curvature (``FitConfig.smoothness`` = s): zero on any
-  plane, it keeps a hole far from valid pixels from bending where nothing constrains it;
-- L_flat = Σ w'·(|∂Z/∂x| + |∂Z/∂y|) / Σ w, first order (``FitConfig.flatness`` = f): a hole that
-  reaches the border levels off instead of carrying the last slope outward; ``flatness_reach``
-  limits it, in enclosed holes, to a rim of that many px (w' = w there, 0 elsewhere);
-- both off (w = 0) in the holes within ``step_reach`` px of a depth step of the valid input, where a
-  hole is likely an occlusion band that belongs to the far side (:func:`~ddp_lite.method.losses.step_region`);
-- w = exp(-edge·|∇I|) of the grey image, or the largest over R, G, B (``smoothness_edge``,
-  ``edge_guide``; :func:`~ddp_lite.method.losses.smoothness_weights`);
-- L_aff = Σ |Z_p - Σ_q w_pq Z_q| / #free, Levin et al.'s colorization energy
-  (``FitConfig.affinity`` = a; :func:`~ddp_lite.method.losses.affinity_loss`).
-
-Why these weights and what they bought on the quality suite: ``docs/tuning_history.md``.
+"""The kit's hole terms of one fit, ready to add to the paper's loss each iteration: their weights
+and regions are computed once from the input (the formulas: :mod:`ddp_lite.method.hole_losses`).
 """
 from __future__ import annotations
 
 import numpy as np
 import torch
 
-from ..classical.baselines import NEIGHBOUR_OFFSETS, colorization_affinities
+from ..classical.guided_fills import NEIGHBOUR_OFFSETS, colorization_affinities
 from .config import FitConfig
+from .hole_losses import affinity_loss, flatness_loss, flatness_region, smoothness_loss, smoothness_weights, step_region
 from .loop import to_tensor
-from .losses import affinity_loss, flatness_loss, flatness_region, smoothness_loss, smoothness_weights, step_region
 
 __all__ = ["HoleTerms"]
 

@@ -16,7 +16,8 @@ import torch
 import torch.nn as nn
 import torch.nn.functional as F
 
-from ..classical.baselines import fill_colorization, fill_linear
+from ..classical.depth_fills import fill_linear
+from ..classical.guided_fills import fill_colorization
 from .losses import blur_valid, gaussian_kernel_1d  # SSIM's separable Gaussian, reused for the image input
 
 __all__ = ["UNet", "SkipNet", "make_noise", "make_input", "image_channels", "fill_channel", "build_net", "count_parameters"]
@@ -84,7 +85,7 @@ def image_channels(image: torch.Tensor, scale: float = 1.0, blur: float = 1.0) -
 
 def fill_channel(disparity: np.ndarray, rgb: np.ndarray | None, scale: float = 1.0) -> np.ndarray:
     """A classical fill of the input as one more input channel: ``disparity`` (H, W) in [0, 1] with NaN
-    holes → (H, W) float32, ``scale ×`` its colorization fill (``baselines.fill_colorization``, guided by
+    holes → (H, W) float32, ``scale ×`` its colorization fill (``guided_fills.fill_colorization``, guided by
     ``rgb`` (H, W, 3)), or its linear fill without colour.
 
     From this input the net starts close to a fill that already follows the colour, and its prior

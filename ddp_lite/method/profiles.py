@@ -28,16 +28,25 @@ DEFAULT = "class"
 
 @dataclass(frozen=True)
 class Profile:
-    """Sizes and schedules one profile uses everywhere. A field named like a ``FitConfig`` field is
+    """How big and how long: the sizes and the budget one profile uses everywhere.
+
+    The learning-rate schedule and auto-stop are budget, not method: they decide how many iterations a
+    fit spends and are tuned to that count (the paper's 5e-5 schedule is for 16000; 1e-2 fills in a few
+    hundred), while what a fit optimises is the recipe's. A field named like a ``FitConfig`` field is
     copied into the configs :meth:`FitConfig.for_profile` builds (``channels``, ``iterations`` and
     ``lr_milestones`` are derived per variant and net); the others size scenes, tables and DIP."""
 
     name: str
+    # how big
     size: tuple[int, int]  # (H, W) of scenes and images
     channels: tuple[int, ...]  # UNet encoder widths
     skip_channels: tuple[int, ...]  # SkipNet widths
+    n_views: int  # views per synthetic multi-view scene
+    seeds: tuple[int, ...]  # seeds for "mean and spread" tables
+    # how long
     iterations: int  # RGBD variants
     iterations_depth_only: int
+    image_iterations: int  # Deep Image Prior on a natural image
     lr: float
     lr_milestones: tuple[int, ...]  # iterations (as in FitConfig) where lr × lr_gamma; a shorter run skips them
     lr_gamma: float
@@ -45,9 +54,6 @@ class Profile:
     patience: int
     plateau_decays: int  # auto-stop: lr cuts on held-out plateaus before the stop
     eval_every: int
-    n_views: int  # views per synthetic multi-view scene
-    seeds: tuple[int, ...]  # seeds for "mean and spread" tables
-    image_iterations: int  # Deep Image Prior on a natural image
 
     def iterations_for(self, variant) -> int:
         """The iteration count of ``variant`` (a name or :class:`~ddp_lite.method.variants.Variant`) here."""

@@ -29,7 +29,6 @@ per-view fit in ``sequence_jobs``, the output folder (manifest, files, fusion) i
 """
 from __future__ import annotations
 
-import dataclasses
 import json
 import time
 
@@ -72,7 +71,7 @@ def run_sequence(scene: Scene, out, config: FitConfig | None = None, views=None,
     manifest = read_manifest(out)
     manifest.setdefault("views", {})
     manifest.update({"format": 1, "source": source or {"scene": scene.name}, "variant": VARIANT,
-                     "config": json.loads(json.dumps(dataclasses.asdict(config), default=str))})
+                     "config": json.loads(json.dumps(config.flat(), default=str))})
     todo, skipped = {}, []
     for job in jobs:
         if view_finished(out, manifest["views"].get(job.name), job):

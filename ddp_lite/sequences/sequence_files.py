@@ -15,7 +15,8 @@ import numpy as np
 from matplotlib.figure import Figure  # no pyplot: no global figure state in a long run
 
 from ..core.files import regular_file, write_bytes_atomic
-from ..data.fileio import depth_png_bytes, load_npy, npy_bytes
+from ..data.file_writers import depth_png_bytes, npy_bytes
+from ..data.fileio import load_npy
 from ..evaluation.fusion import fuse_depths, save_ply
 from .sequence_jobs import ViewJob
 from ..evaluation.viz import save_figure, show_depth, show_image

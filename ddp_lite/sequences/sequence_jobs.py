@@ -60,7 +60,7 @@ def _job_key(view, neighbors, config: FitConfig, transform: DisparityTransform) 
         for array in (rgb, depth, camera.K, camera.cam_from_world):
             if array is not None:
                 digest.update(np.ascontiguousarray(array).tobytes())
-    settings = dataclasses.asdict(config.replace(progress=False, device=None, max_memory_gb=None))
+    settings = config.replace(progress=False, device=None, max_memory_gb=None).flat()
     digest.update(json.dumps([settings, dataclasses.asdict(transform), VARIANT], sort_keys=True, default=str).encode())
     return digest.hexdigest()[:16]
 

@@ -1,0 +1,337 @@
+"""The grader: run hand-ins at ``ci`` and score each test cell, with the grader kept out of reach.
+
+- :func:`grade_notebook`: one submission against its source notebook; the submission's cells run in
+  a kernel of its own, each check in the grader, calling the student's functions in that kernel with
+  data in and data out (:mod:`ddp_lite.interface.grading_kernel`);
+- :func:`grade`: every student folder, hand-ins matched to the source notebooks by name
+  (:func:`match_submissions`), each read once into a private copy before any of them runs.
+
+A test cell scores its points when it ran without an error and printed nothing on stderr
+(nbgrader's rule), and 0 when it failed, timed out, or never ran because the kernel died first.
+What is not the student's doing (no kernel starts, the feedback cannot be written) stops the
+grading with an error (:class:`GradingStopped`) instead of scoring anyone 0. What is done with the
+scores afterwards (points given by hand, tables, CSV, feedback) is :mod:`ddp_lite.interface.grades`.
+"""
+from __future__ import annotations
+
+import contextlib
+import copy
+import hashlib
+import os
+import re
+import shutil
+import tempfile
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import nbformat
+
+from ..core.files import regular_file, write_bytes_atomic
+from ..core.outpaths import check_output_folder
+from .classroom import exercises, nbgrader_meta, read_notebook, source_notebooks, student_copy, write_notebook
+from .grading_kernel import check_imports, run_graded
+
+__all__ = ["GradingStopped", "Score", "grade_notebook", "grade", "match_submissions"]
+
+STATUSES = ("pass", "fail", "not run", "missing", "unreadable", "answered", "blank", "graded")
+
+
+class GradingStopped(RuntimeError):
+    """What stops the grading instead of scoring a student 0: it is not the student's doing (no kernel
+    starts, the grader's own copy of a hand-in changed)."""
+
+
+@dataclass
+class Score:
+    """One exercise of one student: an autograded check or a hand-graded answer."""
+    student: str
+    notebook: str  # file stem, e.g. "01_deep_image_prior"
+    exercise: str  # "01.2": notebook number, exercise number
+    grade_id: str
+    kind: str  # "auto" or "manual"
+    points: float  # scored (autograded) or 0 until a person grades it (manual)
+    max_points: float
+    status: str  # one of STATUSES
+
+
+def _check_ids(source) -> set:
+    """grade_ids of the source's autograded check cells (locked, graded, not a solution)."""
+    return {nbgrader_meta(c)["grade_id"] for c in source.cells
+            if nbgrader_meta(c).get("grade") and not nbgrader_meta(c).get("solution") and c.cell_type == "code"}
+
+
+def grade_notebook(submission, source, student: str = "", timeout: int = 600, profile: str = "ci",
+                   workdir=None, name: str | None = None, executed=None) -> list[Score]:
+    """Score one submitted notebook against its source notebook (both NotebookNodes or paths;
+    ``name``, the notebook's file stem such as "01_deep_image_prior", defaults to the source's).
+    ``executed``: where to write the executed notebook with its outputs (feedback), if given.
+    ``workdir``: the kernel's working folder (default: a new temporary folder, removed afterwards).
+
+    The test cells are taken from the source (matched by ``grade_id``), so an edited or deleted check
+    cannot pass; a missing solution cell just fails its check. The student's cells run in a fresh
+    kernel; each check cell runs in this process and calls the student's functions in that kernel
+    (:mod:`ddp_lite.interface.grading_kernel`), so nothing the submission does in its kernel changes a
+    check. ``submission=None`` scores a notebook that was not handed in: every exercise 0, status "missing".
+    """
+    if not isinstance(source, nbformat.NotebookNode):
+        name = name or Path(source).stem
+        source = read_notebook(source)
+    if not name:
+        raise ValueError("name: give the notebook's file stem when source is a NotebookNode")
+    expected = exercises(source)
+    if submission is None:
+        return [Score(student, name, f"{name[:2]}.{n}", m["grade_id"], "manual" if m.get("solution") else "auto",
+                      0.0, float(m["points"]), "missing") for n, m in expected]
+    if profile not in ("ci", "class", "paper"):
+        raise ValueError(f"profile must be 'ci', 'class' or 'paper', got {profile!r}")
+    if not (isinstance(timeout, int) and timeout > 0):
+        raise ValueError(f"timeout must be a positive number of seconds, got {timeout!r}")
+    nb = read_notebook(submission) if not isinstance(submission, nbformat.NotebookNode) else copy.deepcopy(submission)
+    locked = {nbgrader_meta(c)["grade_id"]: c for c in student_copy(source).cells
+              if nbgrader_meta(c).get("locked") and nbgrader_meta(c).get("grade_id")}
+    for index, cell in enumerate(nb.cells):
+        grade_id = nbgrader_meta(cell).get("grade_id")
+        if grade_id in locked:  # nbgrader's OverwriteCells, from the source instead of a database
+            nb.cells[index] = copy.deepcopy(locked[grade_id])
+    checks = _check_ids(source)
+    for cell in nb.cells:  # "not run" stays visible afterwards
+        if cell.cell_type == "code":
+            cell.outputs, cell.execution_count = [], None
+    env = {**os.environ, "DDP_PROFILE": profile, "DDP_RECIPE": "kit", "MPLBACKEND": "Agg"}
+    for variable in ("PWD", "OLDPWD"):  # no path to the grader's folder handed to the submission
+        env.pop(variable, None)
+    with contextlib.ExitStack() as stack:
+        if workdir is None:
+            workdir = stack.enter_context(tempfile.TemporaryDirectory(prefix="ddp-grade-"))
+        stopped, started = run_graded(nb, lambda c: nbgrader_meta(c).get("grade_id") in checks, workdir, env, timeout)
+    if not started:
+        # the kernel did not start: the machine's doing, not the student's (whatever the notebook names
+        # as its kernel, the grader starts its own python3)
+        raise GradingStopped(f"no cell of {name} ran: the kernel did not start ({type(stopped).__name__}: "
+                           f"{stopped}); fix the environment and grade again") from stopped
+    if executed is not None:
+        write_notebook(nb, executed)
+
+    from nbgrader.utils import determine_grade
+    graded = {nbgrader_meta(c)["grade_id"]: c for c in nb.cells if nbgrader_meta(c).get("grade")}
+    scores = []
+    for number, meta in expected:
+        kind = "manual" if meta.get("solution") else "auto"
+        label = f"{name[:2]}.{number}"
+        cell = graded.get(meta["grade_id"])
+        if cell is None:
+            scores.append(Score(student, name, label, meta["grade_id"], kind, 0.0, float(meta["points"]), "missing"))
+            continue
+        if kind == "manual":
+            points, maximum = determine_grade(cell)  # 0 if unchanged from the student copy, None if answered
+            status = "blank" if points == 0 else "answered"
+            scores.append(Score(student, name, label, meta["grade_id"], kind, 0.0, maximum, status))
+        elif cell.execution_count is None:
+            scores.append(Score(student, name, label, meta["grade_id"], kind, 0.0, float(meta["points"]), "not run"))
+        else:
+            points, maximum = determine_grade(cell)
+            scores.append(Score(student, name, label, meta["grade_id"], kind, float(points), maximum,
+                                "pass" if points == maximum else "fail"))
+    return scores
+
+
+# What a browser, a file manager or Jupyter makes of a file name on a second download or a duplicate:
+# "01_x (1).ipynb", "01_x(1).ipynb", "Copy of 01_x.ipynb", "01_x-Copy1.ipynb", "01_x - Copy (2).ipynb"
+# (Windows), "01_x.ipynb.ipynb", and any of them in another case ("01_X.IPYNB").
+_RENAMED = re.compile(r"^(?:Copy of )?(?P<stem>.+?)(?:\.ipynb)?(?: ?\(\d+\)|-Copy\d*| - Copy(?: \(\d+\))?)?\.ipynb$",
+                      re.IGNORECASE)
+
+
+def notebook_files(folder: Path) -> list[Path]:
+    """A student's notebooks: every ``.ipynb`` under ``folder`` whatever the suffix's case, checkpoints left out."""
+    return sorted(p for p in folder.rglob("*") if p.suffix.lower() == ".ipynb" and ".ipynb_checkpoints" not in p.parts)
+
+
+def match_submissions(files, names) -> tuple[dict, list[str], list]:
+    """Match handed-in notebook files to source notebook names.
+
+    Args:
+        files: the student's ``.ipynb`` paths.
+        names: the source notebooks' file names ("01_deep_image_prior.ipynb", ...).
+
+    Returns:
+        (``{name: path}``, notes on renamed files taken for a source, the files matched to nothing).
+        The exact name wins; else a renamed copy ("01_x (1).ipynb", "Copy of 01_x.ipynb",
+        "01_x-Copy1.ipynb", "01_x - Copy.ipynb", another case), the most recently modified one when
+        there are several.
+    """
+    files = [Path(f) for f in files]
+    matched, notes = {}, []
+    for name in names:
+        exact = [f for f in files if f.name == name]
+        if exact:
+            matched[name] = exact[0]
+            continue
+        renamed = [f for f in files if (m := _RENAMED.match(f.name)) and (m.group("stem") + ".ipynb").lower() == name.lower()]
+        if renamed:
+            matched[name] = max(renamed, key=lambda f: (f.stat().st_mtime, f.name))
+            notes.append(f"graded {matched[name].name!r} as {name}"
+                         + (f" (the newest of {len(renamed)} copies)" if len(renamed) > 1 else ""))
+    used = set(matched.values())
+    return matched, notes, [f for f in files if f not in used]
+
+
+def _inside(path: Path, folder: Path) -> bool:
+    """``path`` resolves to a place inside ``folder`` (no link out of it on the way)."""
+    real, home = os.path.realpath(path), os.path.realpath(folder)
+    return os.path.commonpath([real, home]) == home
+
+
+class _Snapshot:
+    """The hand-ins and source notebooks as read before any submission runs: each copied into a private
+    folder (mode 0700, removed at the end), its SHA-256 kept in memory. ``bytes(path)`` reads the copy
+    back and checks it against its hash; :meth:`restore` writes a changed original back from it."""
+
+    def __init__(self, paths, folder: str):
+        self.folder, self.digests, self.copies = Path(folder), {}, {}
+        for number, path in enumerate(paths):
+            if os.path.islink(path):  # no hand-in, and writing back would put a file in its place
+                continue
+            try:
+                data = regular_file(path, "notebook").read_bytes()
+            except (OSError, ValueError):
+                continue  # a FIFO, a folder: scored as unreadable, never read
+            copy_path = self.folder / f"{number}.ipynb"
+            write_bytes_atomic(copy_path, data)
+            self.copies[Path(path)], self.digests[Path(path)] = copy_path, hashlib.sha256(data).hexdigest()
+
+    def __contains__(self, path) -> bool:
+        return Path(path) in self.copies
+
+    def bytes(self, path) -> bytes:
+        data = self.copies[Path(path)].read_bytes()
+        if hashlib.sha256(data).hexdigest() != self.digests[Path(path)]:
+            raise GradingStopped(f"the grader's own copy of {path} changed during grading (a submission reached "
+                               f"it); grade again, in an account of its own")
+        return data
+
+    def restore(self) -> list[str]:
+        """Write back every original whose bytes differ from what was read (or that is gone, or was replaced
+        by a link or a folder); what was done, one line per file."""
+        done = []
+        for path, digest in self.digests.items():
+            try:
+                if path.is_file() and not path.is_symlink() and hashlib.sha256(path.read_bytes()).hexdigest() == digest:
+                    continue
+            except OSError:
+                pass
+            try:
+                data = self.bytes(path)
+                if path.is_symlink():
+                    path.unlink()
+                elif path.is_dir():
+                    shutil.rmtree(path)
+                write_bytes_atomic(path, data, overwrite_readonly=True)
+                done.append(f"changed {path} while they ran; it was written back as read before grading")
+            except OSError as error:
+                done.append(f"changed {path} while they ran and it could not be written back ({error})")
+        return done
+
+
+def grade(submissions_dir, source_dir="notebooks", timeout: int = 600, profile: str = "ci", log=print,
+          executed_dir=None, details: bool = False) -> list[Score]:
+    """Grade every student folder in ``submissions_dir`` (``<dir>/<student>/**/NN_name.ipynb``).
+
+    A notebook is matched to its source by file name (a renamed download such as "01_x (1).ipynb"
+    too, see :func:`match_submissions`); a notebook that is missing scores 0, one that crashes or
+    times out scores 0 for what did not run, an unreadable file scores 0 ("unreadable", the log says
+    why), and none stops the others. What is not the student's doing (no kernel, an unwritable
+    ``executed_dir``) raises instead: every output path is checked before the first notebook runs.
+    ``executed_dir``: write each executed notebook to ``<executed_dir>/<student>/`` (feedback).
+    ``details``: log a line per student and notebook; else one line per student.
+
+    Every hand-in and source notebook is copied (a private folder) and hashed before the first submission
+    runs, and graded from that copy; each student's notebooks run in a temporary folder of their own holding copies of them, and
+    each check runs in this process (:func:`grade_notebook`). After each student, a hand-in or source
+    notebook that changed on disk is written back and the student named in the log.
+    """
+    submissions_dir = Path(submissions_dir)
+    if not submissions_dir.is_dir():
+        raise ValueError(f"submissions_dir {str(submissions_dir)!r} is not a folder")
+    students = sorted(p for p in submissions_dir.iterdir() if p.is_dir() and not p.name.startswith("."))
+    if not students:
+        raise ValueError(f"submissions_dir {str(submissions_dir)!r} has no student folders (<dir>/<student>/*.ipynb)")
+    sources = source_notebooks(source_dir)
+    if executed_dir is not None:
+        check_output_folder(executed_dir, "executed_dir (--executed)")
+        for student in students:
+            check_output_folder(Path(executed_dir) / student.name, "executed_dir (--executed)")
+    source_nbs = {path.name: read_notebook(path) for path in sources}
+    # the checks' modules are loaded now, before a submission could edit their files
+    for module in check_imports(c.source for nb in source_nbs.values() for c in nb.cells
+                                if nbgrader_meta(c).get("grade") and not nbgrader_meta(c).get("solution")):
+        with contextlib.suppress(ImportError):
+            __import__(module)
+    matched = {}
+    for student in students:
+        handed_in, notes, unmatched = match_submissions(notebook_files(student), list(source_nbs))
+        matched[student] = (handed_in, notes, unmatched)
+    private = tempfile.mkdtemp(prefix="ddp-grade-copies-")  # mode 0700
+    try:
+        kept = _Snapshot(list(sources) + [p for handed_in, _, _ in matched.values() for p in handed_in.values()],
+                         private)
+        return _grade_students(students, sources, source_nbs, matched, kept, timeout, profile, log, executed_dir,
+                               details)
+    finally:
+        shutil.rmtree(private, ignore_errors=True)
+
+
+def _grade_students(students, sources, source_nbs, matched, kept, timeout, profile, log, executed_dir,
+                    details) -> list[Score]:
+    scores = []
+    for number, student in enumerate(students, 1):
+        handed_in, notes, unmatched = matched[student]
+        for note in notes:
+            log(f"{student.name}: {note}")
+        if unmatched:
+            log(f"{student.name}: not graded, no notebook of that name: "
+                + ", ".join(repr(str(p.relative_to(student))) for p in unmatched))
+        mine = []
+        with tempfile.TemporaryDirectory(prefix="ddp-grade-") as workdir:
+            for source_path in sources:
+                source = source_nbs[source_path.name]
+                path = handed_in.get(source_path.name)
+                result = None
+                if path is not None:
+                    try:
+                        if os.path.islink(path) or not _inside(path, student):  # the source's solutions, say
+                            raise ValueError(f"{path.name} is a symbolic link to {os.path.realpath(path)}; a hand-in "
+                                             f"must be the student's own file")
+                        if path not in kept:  # a FIFO, a folder, a vanished file: scored, not read
+                            regular_file(path, "notebook")
+                            raise OSError(f"{path} could not be read")
+                        data = kept.bytes(path)
+                        submission = nbformat.reads(data.decode("utf-8"), as_version=4)
+                        nbformat.validate(submission)
+                        write_bytes_atomic(Path(workdir) / source_path.name, data)
+                        executed = Path(executed_dir) / student.name / source_path.name if executed_dir else None
+                        result = grade_notebook(submission, source, student.name, timeout, profile, workdir=workdir,
+                                                name=source_path.stem, executed=executed)
+                    except GradingStopped:
+                        raise  # not the student's doing: stop, score nobody 0
+                    except Exception as error:  # the student's file is not a gradable notebook: 0, go on
+                        why = f"{type(error).__name__}: {error}"
+                    if result is None:
+                        log(f"{student.name}/{path.name}: unreadable, scored 0 ({why.splitlines()[0][:300]})")
+                        mine.extend(replace(s, status="unreadable")
+                                    for s in grade_notebook(None, source, student.name, name=source_path.stem))
+                        continue
+                else:
+                    result = grade_notebook(None, source, student.name, name=source_path.stem)
+                if details:
+                    auto = [s for s in result if s.kind == "auto"]
+                    log(f"{student.name:<16} {source_path.stem:<26} {sum(s.points for s in auto):g}/"
+                        f"{sum(s.max_points for s in auto):g}" + ("  (not handed in)" if path is None else ""))
+                mine.extend(result)
+        for line in kept.restore():
+            log(f"{student.name}: their notebooks {line}")
+        auto = [s for s in mine if s.kind == "auto"]
+        log(f"[{number}/{len(students)}] {student.name}: {sum(s.points for s in auto):g}/"
+            f"{sum(s.max_points for s in auto):g} autograded points, {len(handed_in)}/{len(sources)} notebooks handed in")
+        scores.extend(mine)
+    return scores
