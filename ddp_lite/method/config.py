@@ -59,6 +59,7 @@ class FitConfig:
     lambda_w: float = 0.5  # SSIM share of L_warp
     gammas: tuple | None = None  # (γ1, γ2); None → (0.96, 0.02) with warp, (0.98, 0.01) without
     warp_occlusion: bool = False  # L_warp skips pixels a nearer point hides from the neighbour (warp.Warper; not in the paper)
+    warp_confidence: bool = False  # L_warp only where the images single out one depth (method.warp_confidence; not in the paper)
     reg_noise_std: float = 0.0  # DIP input jitter: n + σ·N(0, 1) every iteration
     average_outputs: float = 0.0  # DIP output averaging: EMA weight (0.99 in DIP), 0 = off
     ensemble: int = 1  # fits with seeds seed, seed+1, ...; their disparities are averaged
@@ -175,7 +176,7 @@ class FitConfig:
                 ("smoothness_edge", 0.0, None, False, False), ("disparity_margin", 1.0, None, False, False),
                 ("holdout_fraction", 0.0, 0.5, True, True)):
             check_real(getattr(self, name), f"config.{name}", low, high, low_open, high_open)
-        for name in ("auto_stop", "blend_paper", "channels_last", "progress", "warp_occlusion"):
+        for name in ("auto_stop", "blend_paper", "channels_last", "progress", "warp_occlusion", "warp_confidence"):
             check_bool(getattr(self, name), f"config.{name}")
         if self.bf16 is not None:  # None: decided by the hardware (use_bf16)
             check_bool(self.bf16, "config.bf16")
