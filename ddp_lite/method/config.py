@@ -92,6 +92,7 @@ class LossConfig(_Section):
     lambda_w: float = 0.5  # SSIM share of L_warp
     gammas: tuple | None = None  # (γ1, γ2); None → (0.96, 0.02) with warp, (0.98, 0.01) without
     warp_occlusion: bool = False  # L_warp skips pixels a nearer point hides from the neighbour (warp.Warper; not in the paper)
+    warp_confidence: bool = False  # L_warp only where the images single out one depth (method.warp_confidence; not in the paper)
     disparity_margin: float = 1.25  # transform=None: d_min / margin … d_max × margin around the valid depth
 
 
@@ -152,7 +153,7 @@ SECTION_OF = {f.name: section for section, cls in SECTIONS.items() for f in data
 # sequence's manifest): the order of the fields when FitConfig had no sections, so a config hashes as it did.
 FIELDS = ("net", "channels", "down", "up", "pad", "noise_channels", "net_input", "image_input", "image_blur",
           "fill_input", "lr", "schedule", "iterations", "lr_milestones", "lr_gamma", "lambda_z", "lambda_i",
-          "lambda_w", "gammas", "warp_occlusion", "reg_noise_std", "average_outputs", "ensemble", "blend_paper",
+          "lambda_w", "gammas", "warp_occlusion", "warp_confidence", "reg_noise_std", "average_outputs", "ensemble", "blend_paper",
           "blend_weight", "blend_fill", "smoothness", "smoothness_edge", "edge_guide", "flatness", "affinity",
           "flatness_reach", "step_reach", "disparity_margin", "auto_stop", "holdout_fraction", "holdout", "patience",
           "plateau_decays", "eval_every", "seed", "device", "bf16", "channels_last", "progress", "callback_every",
@@ -289,7 +290,7 @@ class FitConfig:
                 ("smoothness_edge", 0.0, None, False, False), ("disparity_margin", 1.0, None, False, False),
                 ("holdout_fraction", 0.0, 0.5, True, True)):
             check_real(getattr(self, name), f"config.{name}", low, high, low_open, high_open)
-        for name in ("auto_stop", "blend_paper", "channels_last", "progress", "warp_occlusion"):
+        for name in ("auto_stop", "blend_paper", "channels_last", "progress", "warp_occlusion", "warp_confidence"):
             check_bool(getattr(self, name), f"config.{name}")
         if self.bf16 is not None:  # None: decided by the hardware (use_bf16)
             check_bool(self.bf16, "config.bf16")

@@ -35,6 +35,9 @@ def loss_equation(config, variant: str) -> str:
         warp = "L^{\\mathrm{warp}}"
         if getattr(config, "warp_occlusion", False):  # only the pixels the neighbour can see (method.visibility)
             warp = "\\underbrace{L^{\\mathrm{warp}}_{\\mathrm{visible}}}_{\\text{not in the paper}}"
+        if getattr(config, "warp_confidence", False):  # only where the images single out a depth (method.warp_confidence)
+            where = "visible, confident" if getattr(config, "warp_occlusion", False) else "confident"
+            warp = f"\\underbrace{{L^{{\\mathrm{{warp}}}}_{{\\mathrm{{{where}}}}}}}_{{\\text{{not in the paper}}}}"
         paper.append(_weight(w_warp) + warp)
     kit = []
     if config.smoothness > 0:

@@ -17,7 +17,7 @@ W_nbr is a neighbour's image warped into the reference view through the predicte
 The kit's additions sit beside this, each in its own module: terms in the holes
 (:mod:`ddp_lite.method.hole_terms`) and other net inputs (:mod:`ddp_lite.method.nets`), both off in
 the ``paper`` recipe; the warp term's occlusion test (:mod:`ddp_lite.method.visibility`, off unless
-asked for); auto-stop (:mod:`ddp_lite.method.loop`, a profile's budget), ensembles
+asked for) and its confidence mask (:mod:`ddp_lite.method.warp_confidence`, off unless asked for); auto-stop (:mod:`ddp_lite.method.loop`, a profile's budget), ensembles
 (:mod:`ddp_lite.method.ensemble`, off unless asked for), bfloat16 (:func:`ddp_lite.method.device.use_bf16`).
 """
 from __future__ import annotations
@@ -29,6 +29,7 @@ from .disparity import DisparityTransform
 from .losses import ConstantTarget, disparity_loss, rgb_loss, warp_loss
 from .variants import get_variant
 from .warp import Warper
+from .warp_confidence import warp_confidence
 
 __all__ = ["PaperLoss"]
 
@@ -51,6 +52,10 @@ class PaperLoss:
         self.warpers = [Warper(camera, cam, device=device, occlusion=config.warp_occlusion)  # T_nbr^ref; occlusion: the kit's
                         for _, cam in neighbors] if use_warp else []
         self.neighbor_images = [image for image, _ in neighbors] if use_warp else []  # I_nbr
+        # the kit's: per neighbour, the pixels whose photometric match singles out one depth (1, 1, H, W) bool,
+        # from the images alone, once per fit (it does not depend on the fit's depth)
+        self.confident = [warp_confidence(rgb, image, camera, cam, transform.d_min, transform.d_max, config.lambda_w)
+                          for image, cam in neighbors] if use_warp and config.warp_confidence else None
 
     def __call__(self, disparity: torch.Tensor, colour: torch.Tensor | None = None):
         """``disparity`` (1, 1, H, W) is Z_out, ``colour`` (1, 3, H, W) I_out (the RGBD variants)."""
@@ -63,7 +68,10 @@ class PaperLoss:
         if self.w_warp > 0:
             depth = self.transform.to_depth(disparity)  # D_out_ref: differentiable, a tensor in and out
             pairs = [warper(image, depth) for warper, image in zip(self.warpers, self.neighbor_images)]  # W_nbr^ref
-            terms["warp"] = warp_loss(self.rgb_target, [p[0] for p in pairs], [p[1] for p in pairs],
+            valid = [p[1] for p in pairs]
+            if self.confident is not None:  # the kit's: only where the neighbour's evidence is unambiguous
+                valid = [v & c for v, c in zip(valid, self.confident)]
+            terms["warp"] = warp_loss(self.rgb_target, [p[0] for p in pairs], valid,
                                       config.lambda_w)  # Eq. 5, mean over the N neighbours
             total = total + self.w_warp * terms["warp"]  # Eq. 2, + (1 - γ1 - γ2) L_warp
         return total, terms

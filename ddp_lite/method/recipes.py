@@ -131,6 +131,7 @@ def describe_method(settings: dict) -> str:
             + (f" + the colour image (blurred, σ {settings.get('image_blur', 1.0):g} px; not for depth-only)"
                if settings.get("image_input", 0.0) else "")
             + (", the warp term only where the neighbour can see" if settings.get("warp_occlusion") else "")
+            + (", the warp term only where the images single out one depth" if settings.get("warp_confidence") else "")
             + (f", mean of {ensemble} fits" if ensemble > 1 else "")
             + ((", blended with the paper recipe's fit, " + ("weight from a held-out ring" if settings.get("blend_weight", 0.5) is None
                else f"weight {settings.get('blend_weight', 0.5):g}")) if settings.get("blend_paper") else "")

@@ -1,0 +1,74 @@
+"""Where does the warp term point? Its photometric cost inside the real pair's holes, at the truth and at its own minimum.
+
+    python benchmarks/study_warp_residual.py            # the five real hole kinds at 125×185, ~15 s
+
+For each real case (``ddp_lite.studies.real_cases``, the right view as the neighbour), a plane sweep of the
+warp term's own per-pixel cost (``warp_confidence.photometric_cost``: λw (1 − SSIM) + (1 − λw) L1, through
+the kit's ``Warper``) over the fit's depth range, 0.25 px of disparity apart. Inside the scored holes:
+the cost at the ground truth (warped through the true depth map) and at the sweep's minimum, and how far
+that minimum's disparity lies from the truth; split by visible / hidden in the neighbour (the kit's
+``Visibility`` on the true depth) and by textured / flat colour (grey-level std over 5×5 above / below
+0.03, as ``RealCase.regions``). Then the share of hole pixels ``warp_confidence`` keeps, and how often
+the minimum is wrong (> 2 px) among the kept and the dropped ones. Ground truth is used only to score.
+"""
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402
+import torch  # noqa: E402
+from scipy import ndimage  # noqa: E402
+
+from ddp_lite.method.disparity import DisparityTransform  # noqa: E402
+from ddp_lite.method.loop import to_tensor  # noqa: E402
+from ddp_lite.method.visibility import Visibility  # noqa: E402
+from ddp_lite.method.warp import Warper  # noqa: E402
+from ddp_lite.method.warp_confidence import cost_volume, photometric_cost, sweep_planes, warp_confidence  # noqa: E402
+from ddp_lite.studies.real_cases import REAL_HOLES, make_real_case  # noqa: E402
+
+WRONG_PX = 2.0  # a minimum this far from the truth pulls the fit wrong
+
+
+def study(holes: str) -> None:
+    case = make_real_case(holes, 4)
+    nbr = case.neighbors[0]
+    ref, image = to_tensor(case.rgb, "cpu"), to_tensor(nbr.rgb, "cpu")
+    transform = DisparityTransform.from_depth(case.depth)  # the fit's range (the default a user gets)
+    planes = sweep_planes(case.camera, nbr.camera, transform.d_min, transform.d_max)
+    cost = cost_volume(ref, image, case.camera, nbr.camera, planes).numpy()  # (D, H, W)
+    at_min = cost.min(axis=0)
+    seen = np.isfinite(at_min)  # some plane lands inside the neighbour (not so at the left border: no minimum)
+    disparity_min = case.fb / planes[cost.argmin(axis=0)]
+    truth = np.where(np.isfinite(case.gt), case.gt, np.nanmedian(case.gt)).astype(np.float32)
+    with torch.no_grad():
+        warped, _ = Warper(case.camera, nbr.camera)(image, to_tensor(truth, "cpu"))
+        at_truth = photometric_cost(ref, warped)[0, 0].numpy()
+        hidden = Visibility(case.camera, nbr.camera)(to_tensor(truth, "cpu"))[0, 0].numpy()
+        confident = warp_confidence(ref, image, case.camera, nbr.camera, transform.d_min, transform.d_max)[0, 0].numpy()
+    wrong = np.abs(disparity_min - case.fb / truth) > WRONG_PX
+    grey = case.rgb.mean(axis=2)
+    std = np.sqrt(np.maximum(ndimage.uniform_filter(grey ** 2, 5) - ndimage.uniform_filter(grey, 5) ** 2, 0))
+    textured, scored = std > 0.03, case.scored_holes & seen
+    valid = np.isfinite(case.depth) & np.isfinite(case.gt) & seen
+    print(f"{holes}: {scored.sum()} hole px with a minimum (of {case.scored_holes.sum()}), {len(planes)} planes; hidden {hidden[scored].mean():.2f}, "
+          f"textured {textured[scored].mean():.2f}")
+    print(f"  {'pixels':22s} {'n':>5s} {'cost@truth':>10s} {'cost@min':>9s} {'|d_min-d|':>9s} {'>2px':>5s}")
+    for name, mask in (("holes", scored), ("holes visible", scored & ~hidden), ("holes hidden", scored & hidden),
+                       ("holes visible textured", scored & ~hidden & textured),
+                       ("holes visible flat", scored & ~hidden & ~textured), ("valid input", valid)):
+        if mask.any():
+            error = np.abs(disparity_min - case.fb / truth)[mask]
+            print(f"  {name:22s} {mask.sum():5d} {at_truth[mask].mean():10.3f} {at_min[mask].mean():9.3f} "
+                  f"{np.median(error):9.2f} {wrong[mask].mean():5.2f}")
+    kept = scored & confident
+    print(f"  warp_confidence keeps {kept.sum() / scored.sum():.2f} of the holes (wrong among kept "
+          f"{wrong[kept].mean() if kept.any() else float('nan'):.2f}, among dropped {wrong[scored & ~confident].mean():.2f}), "
+          f"{confident[valid].mean():.2f} of the valid input")
+
+
+if __name__ == "__main__":
+    torch.set_num_threads(1)
+    for kind in REAL_HOLES:
+        study(kind)
