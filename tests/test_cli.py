@@ -79,7 +79,11 @@ def test_usage_errors_exit_2_and_failures_at_run_time_exit_1(tmp_path, capsys):
 def test_ctrl_c_prints_one_line_exits_130_and_leaves_no_file(tmp_path):
     out = tmp_path / "demo.png"
     env = {**os.environ, "PYTHONPATH": str(ROOT), "DDP_PROFILE": "ci", "OMP_NUM_THREADS": "1", "MPLBACKEND": "Agg"}
-    process = subprocess.Popen([sys.executable, "-u", "-c", "import sys; from ddp_lite.interface.cli import main; sys.exit(main())",
+    # Ctrl-C as from a terminal: SIGINT neither blocked nor ignored in the command, whatever this test's
+    # process passes on (a signal mask and an ignored SIGINT are inherited across exec)
+    as_from_a_terminal = ("import signal, sys; signal.pthread_sigmask(signal.SIG_UNBLOCK, [signal.SIGINT]); "
+                          "signal.signal(signal.SIGINT, signal.default_int_handler); ")
+    process = subprocess.Popen([sys.executable, "-u", "-c", as_from_a_terminal + "from ddp_lite.interface.cli import main; sys.exit(main())",
                                 "demo", "--iterations", "100000", "--out", str(out)], cwd=tmp_path, env=env,
                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 120
