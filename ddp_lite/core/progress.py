@@ -109,12 +109,11 @@ class CommandClock:
         """``all 40%, 1:12 left``, with the range where fits may stop by themselves:
         ``all 40%, 1:12 left (0:50–1:40)`` (no time until a rate is measured)."""
         share = self.done / self.total
-        left = self.seconds_left()
-        if left is None:
+        rate = self._rate()
+        if rate is None:
             return f"all {share:.0%}"
-        low, high = self.seconds_left_range()
-        span = f" ({_minutes(low)}–{_minutes(high)})" if _minutes(low) != _minutes(high) else ""
-        return f"all {share:.0%}, {_minutes(left)} left{span}"
+        low, left, high = (_minutes(rate * n) for n in self._iterations_left())
+        return f"all {share:.0%}, {left} left" + (f" ({low}–{high})" if low != high else "")
 
 
 def _minutes(seconds: float) -> str:
