@@ -15,6 +15,7 @@ import argparse
 import json
 import os
 import re
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -111,8 +112,9 @@ def complete_full_size(isa: str, threads: int) -> dict:
                 errors=[(share, round(error, 2)) for share, error in errors], summary=out.strip().splitlines()[-1])
 
 
-def notebook_seconds(isa: str, threads: int, path: Path, profile: str = "class") -> float:
-    """Wall time of one notebook executed at ``profile`` in a fresh kernel (nbconvert, kernel start included)."""
+def notebook_seconds(isa: str, threads: int, path: Path, profile: str = "class", keep: Path | None = None) -> float:
+    """Wall time of one notebook executed at ``profile`` in a fresh kernel (nbconvert, kernel start included);
+    with ``keep`` the executed notebook (its printed figures) is written there as ``<name>.<profile>.<isa>.ipynb``."""
     env = dict(os.environ, OMP_NUM_THREADS=str(threads), DDP_PROFILE=profile, MPLBACKEND="Agg", **ISA_ENV[isa])
     env.pop("DDP_CACHE", None)
     with tempfile.TemporaryDirectory() as folder:
@@ -121,6 +123,9 @@ def notebook_seconds(isa: str, threads: int, path: Path, profile: str = "class")
                               "--ExecutePreprocessor.timeout=3600", "--output-dir", folder, str(path)],
                              capture_output=True, text=True, env=env, cwd=path.parent)
         seconds = time.perf_counter() - start
+        if keep is not None and not run.returncode:
+            keep.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(Path(folder) / path.name, keep / f"{path.stem}.{profile}.{isa}.ipynb")
     if run.returncode:
         raise SystemExit(f"{path.name} failed:\n{run.stderr[-3000:]}")
     return seconds
@@ -133,6 +138,7 @@ def main() -> None:
     parser.add_argument("--notebooks", action="store_true", help="also time every notebook (at --profile)")
     parser.add_argument("--profile", default="class", help="the notebooks' profile (class; ci as in make test)")
     parser.add_argument("--only", nargs="+", metavar="NAME", help="notebooks whose name contains NAME")
+    parser.add_argument("--keep", type=Path, metavar="DIR", help="write the executed notebooks (outputs included) here")
     parser.add_argument("--skip", nargs="+", default=[], choices=["loop", "fit", "complete"], help="parts to skip")
     args = parser.parse_args()
     for isa in args.isa:
@@ -155,7 +161,7 @@ def main() -> None:
             for path in sorted(NOTEBOOKS.glob("[0-9][0-9]_*.ipynb")):
                 if args.only and not any(name in path.name for name in args.only):
                     continue
-                seconds = notebook_seconds(isa, args.threads, path, args.profile)
+                seconds = notebook_seconds(isa, args.threads, path, args.profile, args.keep)
                 print(f"notebook {path.stem} at {args.profile}: {seconds:.0f} s ({seconds / 60:.1f} min)", flush=True)
 
 

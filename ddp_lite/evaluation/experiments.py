@@ -17,6 +17,7 @@ from ..method.disparity import DisparityTransform
 from ..method.config import FitConfig
 from ..method.combine import complete_depth
 from ..method.fit import DepthResult
+from ..method.side_by_side import run_side_by_side, side_by_side_workers
 from .fusion import points_from_depth
 from ..classical.holes import edge_band_holes, random_holes
 from .metrics import cloud_scores, disparity_rmse, edge_band, texture_leakage  # re-exported: notebooks import them here
@@ -27,7 +28,7 @@ from ..classical.stereo import sgm_depth_subsampled
 from ..method.variants import get_variant
 from ..core.views import LABEL_SKY
 
-__all__ = ["Case", "make_case", "sgm_depth_at_scale", "edge_band", "disparity_rmse", "run_variants", "error_table", "format_table",
+__all__ = ["Case", "make_case", "sgm_depth_at_scale", "edge_band", "disparity_rmse", "run_variants", "run_cases", "run_jobs", "error_table", "format_table",
            "format_ranking", "texture_leakage", "format_mean_spread", "cloud_scores", "ablation", "TABLE2_CONFIGS"]
 
 
@@ -120,14 +121,32 @@ def make_case(scene_name: str = "house", profile: Profile | str | None = None, r
 
 def run_variants(case: Case, variants=("d", "rgbd", "rgbd+warp"), profile=None, net: str = "unet",
                  **config_overrides) -> dict[str, DepthResult]:
-    """Fit each DDP variant on ``case`` with the profile's config; {variant: DepthResult}."""
-    results = {}
-    for variant in variants:
-        config = FitConfig.for_profile(profile, variant=variant, net=net, **config_overrides)
-        neighbors = case.neighbors if get_variant(variant).needs_neighbors else ()
-        results[variant] = complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant,
-                                          config=config, gt_depth=case.scored_gt, transform=case.transform)
-    return results
+    """Fit each DDP variant on ``case`` with the profile's config; {variant: DepthResult}. The fits are
+    independent and run side by side (:mod:`ddp_lite.method.side_by_side`)."""
+    results = run_jobs([(case, variant, net, config_overrides) for variant in variants], profile)
+    return dict(zip(variants, results))
+
+
+def run_cases(cases, variant: str = "rgbd", profile=None, net: str = "unet", **config_overrides) -> list[DepthResult]:
+    """Fit ``variant`` on each of ``cases`` with the profile's config, side by side → one DepthResult per case."""
+    return run_jobs([(case, variant, net, config_overrides) for case in cases], profile)
+
+
+def run_jobs(jobs, profile=None) -> list[DepthResult]:
+    """Each ``(case, variant, net, {FitConfig field: value})`` of ``jobs`` fitted with the profile's config
+    (the case's ground truth for the fit's history) → DepthResults in the same order. The fits are
+    independent: on a CPU they run side by side, one torch thread each, as many at once as torch has
+    threads (:mod:`ddp_lite.method.side_by_side`); a fit gives the numbers of one thread."""
+    configs = [FitConfig.for_profile(profile, variant=variant, net=net, **options) for _, variant, net, options in jobs]
+    partners = [case.neighbors if get_variant(variant).needs_neighbors else () for case, variant, *_ in jobs]
+
+    def fit(k: int) -> DepthResult:
+        case, variant = jobs[k][0], jobs[k][1]
+        return complete_depth(case.rgb, case.depth, case.camera, partners[k], variant=variant, config=configs[k],
+                              gt_depth=case.scored_gt, transform=case.transform)
+    workers = min((side_by_side_workers(config, job[1], job[0].depth.shape, len(neighbors), len(jobs))
+                   for config, job, neighbors in zip(configs, jobs, partners)), default=1)
+    return run_side_by_side(fit, len(jobs), workers)
 
 
 def error_table(case: Case, estimates: dict, band: int = 3) -> dict[str, dict[str, float]]:
@@ -221,14 +240,15 @@ def ablation(cases, configs: dict | None = None, profile=None, holes: str = "edg
     """
     configs = TABLE2_CONFIGS if configs is None else configs
     runs, examples = [], {}
-    for scene, seed in cases:
-        case = make_case(scene, profile, holes=holes, seed=seed)
+    made = [(scene, seed, make_case(scene, profile, holes=holes, seed=seed)) for scene, seed in cases]
+    jobs = [(case, variant, net, {**config_overrides, **(extra[0] if extra else {}), "seed": seed, "progress": False})
+            for _, seed, case in made for net, variant, *extra in configs.values()]
+    fitted = iter(run_jobs(jobs, profile))  # every fit of the table side by side, in the table's order
+    for scene, seed, case in made:
         gt_points = points_from_depth(case.scored_gt, case.camera)
         distance = tau * float(np.nanmedian(case.scored_gt))
         run, results = {}, {}
-        for row, (net, variant, *extra) in configs.items():
-            options = {**config_overrides, **(extra[0] if extra else {})}
-            result = run_variants(case, (variant,), profile, net=net, seed=seed, progress=False, **options)[variant]
+        for row, result in zip(configs, fitted):
             merged = np.where(case.scored, result.merged(case.depth), np.nan)  # "SGM+DDP", sky not scored
             run[row] = {**error_table(case, {row: result})[row],
                         **cloud_scores(points_from_depth(merged, case.camera), gt_points, distance)}

@@ -19,7 +19,8 @@ from ..core.camera import Camera
 from ..core.checks import MIN_VALID_PIXELS, check_callback
 from .config import FitConfig
 from .disparity import DisparityTransform
-from .ensemble import mean_outputs, parallel_members, run_members
+from .ensemble import mean_outputs, parallel_members
+from .side_by_side import run_side_by_side
 from .fit import DepthResult, FitInputs, check_inputs, run_fit
 from .recipes import get_recipe
 from .variants import get_variant
@@ -82,7 +83,7 @@ def fit_ensemble(inputs: FitInputs, config: FitConfig, callback, init) -> DepthR
         return run_fit(inputs, config.replace(seed=config.seed + k, ensemble=1), callback=callback, init=init)
 
     workers = parallel_members(config, inputs.spec, inputs.depth.shape, len(inputs.neighbors), callback)
-    members = run_members(fit_member, int(config.ensemble), workers)
+    members = run_side_by_side(fit_member, int(config.ensemble), workers)
     return combined_result(members, inputs.transform, members[0].history)
 
 
@@ -114,7 +115,7 @@ def fit_blended(inputs: FitInputs, config: FitConfig, callback, init) -> DepthRe
 
     workers = parallel_members(members[0].replace(ensemble=2), inputs.spec, depth.shape, len(inputs.neighbors),
                                callback)
-    fits = run_members(fit_member, 2, workers)
+    fits = run_side_by_side(fit_member, 2, workers)
     extra = {}
     if weight is None:
         weight, extra["blend_ring_errors"] = best_weight(fits[0].disparity, fits[1].disparity,

@@ -15,7 +15,7 @@ from ..classical.baselines import BASELINES
 from ..classical.stereo import pixel_disparity
 from ..method.config import FitConfig
 from ..method.combine import complete_depth, mixed_with_fill
-from ..method.ensemble import run_members
+from ..method.side_by_side import run_side_by_side
 from ..method.profiles import get_profile
 from ..method.recipes import get_recipe
 from ..evaluation.experiments import Case, make_case
@@ -85,7 +85,7 @@ def _best_fill_px(case: Case) -> tuple[str, float]:
 
 def run_additions(cases: dict[str, Case], profile=None, seeds=(0, 1, 2), variant: str = "rgbd", log=print) -> dict:
     """Fit every step of :func:`addition_steps` on every case and seed: the fits of a case side by side,
-    one torch thread each, as many at once as torch has threads (``ensemble.run_members``).
+    one torch thread each, as many at once as torch has threads (``side_by_side.run_side_by_side``).
 
     Returns ``{"steps": [names], "best_fill": {case: (name, px)}, "px": {case: {step: [px per seed]}},
     "ratio": {case: {step: [DDP px / best fill px, per seed]}}, "example": {case: {step: depth}}}``
@@ -110,7 +110,7 @@ def run_additions(cases: dict[str, Case], profile=None, seeds=(0, 1, 2), variant
             config = FitConfig.for_profile(profile, variant=variant, recipe="paper", seed=seed, progress=False,
                                            **steps[step])
             return complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant, config=config)
-        fits = dict(zip(jobs, run_members(fit, len(jobs), workers)))
+        fits = dict(zip(jobs, run_side_by_side(fit, len(jobs), workers)))
         for i, step in enumerate(names):
             if mixes_fill[step]:
                 share = FitConfig.for_profile(profile, variant=variant, recipe="paper", **steps[step]).blend_fill

@@ -3,7 +3,7 @@ Kinect-style readings filled and scored by PSNR (paper Fig. 8).
 
 - ``sweep_views``: ``plane_sweep`` of every view of a scene against its best neighbours.
 - ``complete_views``: DDP (the profile's config) on each view's holes, "MVS+DDP" style: the input
-  kept where valid.
+  kept where valid; the views' fits side by side.
 - ``fused_scores``: Fusibile-style fusion of a list of depth maps, scored P/R/F (%) against points.
 - ``reprojection_psnr``: the paper's PSNR for NYU (Sec. 4.4): warp a neighbour image into the
   reference view through a depth map and compare with the reference image, 20·log10(1/√MSE).
@@ -19,6 +19,7 @@ import numpy as np
 from ..classical.baselines import fill
 from ..method.config import FitConfig
 from ..method.combine import complete_depth
+from ..method.side_by_side import run_side_by_side, side_by_side_workers
 from ..evaluation.fusion import fuse_depths, points_from_depth
 from ..evaluation.metrics import cloud_scores, psnr
 from ..world.neighbors import select_neighbors
@@ -42,11 +43,16 @@ def scene_neighbors(scene: Scene, n: int):
 
 def complete_views(views, depths, neighbors_of, profile=None, variant: str = "rgbd+warp", log=print) -> list:
     """DDP (``FitConfig.for_profile``) on each of ``depths`` (H, W metres, NaN holes) of ``views``, with
-    ``neighbors_of(i)`` as warp partners → list of (H, W) depths, the input kept where it was valid."""
+    ``neighbors_of(i)`` as warp partners → list of (H, W) depths, the input kept where it was valid.
+    The views' fits are independent: they run side by side (:mod:`ddp_lite.method.side_by_side`)."""
     config = FitConfig.for_profile(profile, variant=variant, progress=False)
+
+    def fit(i: int):
+        return complete_depth(views[i].rgb, depths[i], views[i].camera, neighbors_of(i), variant=variant, config=config)
+    shape = np.shape(depths[0]) if len(depths) else (0, 0)
+    workers = side_by_side_workers(config, variant, shape, len(neighbors_of(0)) if len(depths) else 0, len(depths))
     out = []
-    for i, (view, depth) in enumerate(zip(views, depths)):
-        result = complete_depth(view.rgb, depth, view.camera, neighbors_of(i), variant=variant, config=config)
+    for i, (depth, result) in enumerate(zip(depths, run_side_by_side(fit, len(depths), workers))):
         out.append(result.merged(depth))
         log(f"view {i}: {np.isnan(depth).mean():.0%} holes, {result.iterations} iterations, {result.seconds:.0f} s")
     return out

@@ -35,6 +35,7 @@ from ..method.combine import blend_members, blended_result, complete_depth, mixe
 from ..classical.holes import random_holes
 from ..data.middlebury import load_middlebury, load_motorcycle
 from ..method.profiles import get_profile
+from ..method.side_by_side import run_side_by_side, side_by_side_workers
 from ..classical.stereo import sgm_disparity, sgm_left_right_failures
 from ..core.views import Scene, View
 
@@ -183,27 +184,53 @@ def compare_fills(case: RealCase, profile=None, recipes=("paper", "kit"), varian
     from the input depth's range, with the profile's size and budget (``rgbd+warp`` warps the right
     view). Names: the fills' keys, then ``"DDP <recipe>"``. A blend of two recipes listed before it
     (``photo`` after ``paper`` and ``kit``) is built from their fits: two fits fewer, the same method.
+    The fits run side by side (:mod:`ddp_lite.method.side_by_side`).
     """
     disparity_in = case.fb / case.depth  # (H, W) px (plus doffs: a constant, it cancels in every error)
     out = {name: fill(disparity_in, case.rgb) for name, fill in BASELINES.items()}
-    fitted = []  # (config without the fill's share, its result): a blend of fits done here fits nothing again
-    for recipe in recipes:
-        config = FitConfig.for_profile(profile, variant=variant, recipe=recipe, seed=seed, progress=progress)
+    configs = [FitConfig.for_profile(profile, variant=variant, recipe=recipe, seed=seed, progress=progress)
+               for recipe in recipes]
+    fitted = _plain_fits(case, variant, configs)  # (config without the fill's share, its result), side by side
+    for recipe, config in zip(recipes, configs):
         out[f"DDP {recipe}"] = case.fb / _fit_reusing(case, variant, config, fitted).merged(case.depth)
     return out
 
 
+def _plain_fits(case: RealCase, variant: str, configs: list) -> list:
+    """The plain fits the recipes ``configs`` need (each without its fill's share; a blend of two fits
+    listed before it needs none of its own), fitted side by side → [(config, DepthResult)]."""
+    planned = []
+    for config in configs:
+        if config.blend_fill is None:
+            continue  # its share is chosen on depth held out of the fit: a fit of its own
+        base = config.replace(blend_fill=0.0)
+        if base.blend_paper and base.blend_weight is not None and all(m in planned for m in blend_members(base)):
+            continue
+        if base not in planned:
+            planned.append(base)
+    neighbors = case.neighbors if variant == "rgbd+warp" else ()
+
+    def fit(k: int):
+        return complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant, config=planned[k])
+    workers = min((side_by_side_workers(c, variant, case.depth.shape, len(neighbors), len(planned)) for c in planned),
+                  default=1)
+    return list(zip(planned, run_side_by_side(fit, len(planned), workers)))
+
+
 def _fit_reusing(case: RealCase, variant: str, config: FitConfig, fitted: list):
-    """``complete_depth`` of ``case`` under ``config``, built from the fits in ``fitted`` where it is a
-    blend of them (``photo`` after ``kit`` and ``paper``, same seed: the two fits it would run again).
-    Each fit done here is appended to ``fitted``, without its share of the fill, which is mixed in after."""
+    """``complete_depth`` of ``case`` under ``config``, taken from the fits in ``fitted`` where it is one
+    of them or a blend of them (``photo`` after ``kit`` and ``paper``, same seed: the two fits it would
+    run again). A fit done here is appended to ``fitted``, without its share of the fill, which is mixed in after."""
     neighbors = case.neighbors if variant == "rgbd+warp" else ()
     share = config.blend_fill
     if share is None:  # the share is chosen on depth held out of the fit: a fit of its own
         return complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant, config=config)
     base = config.replace(blend_fill=0.0)
+    same = [result for c, result in fitted if c == base]
     done = [result for wanted in blend_members(base) for c, result in fitted if c == wanted]
-    if base.blend_paper and base.blend_weight is not None and len(done) == 2:
+    if same:
+        result = same[0]
+    elif base.blend_paper and base.blend_weight is not None and len(done) == 2:
         result = blended_result(done, done[0].transform, base.blend_weight)
     else:
         result = complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant, config=base)

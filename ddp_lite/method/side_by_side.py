@@ -1,0 +1,55 @@
+"""Independent fits side by side: on a CPU, one torch thread each, as many at once as torch has threads.
+
+A net of the kit's sizes does not keep two cores busy: two one-thread fits side by side do ~1.3× the
+work of one two-thread fit (``benchmarks/bench_ensemble.py --fits``), more where a machine has more
+cores. Whatever fits do not depend on each other run here: the members of an ensemble or a blend, the
+views of a multi-view scene, the rows of a table. A fit run side by side gives the numbers it gives
+with ``torch.set_num_threads(1)``, on any machine (one thread's sums are taken in one order).
+
+Example:
+    >>> run_side_by_side(lambda k: k * k, 3, workers=2)
+    [0, 1, 4]
+"""
+from __future__ import annotations
+
+from concurrent.futures import ThreadPoolExecutor
+
+import torch
+
+from .device import resolve_device
+from .loop import estimate_peak_memory_gb, memory_limit_gb
+from .variants import get_variant
+
+__all__ = ["side_by_side_workers", "run_side_by_side"]
+
+
+def side_by_side_workers(config, variant: str, shape, n_neighbors: int, jobs: int, callback=None) -> int:
+    """How many of ``jobs`` fits of ``config`` (``variant``, images of ``shape`` (H, W), ``n_neighbors``
+    warp partners) run at once: on a CPU one per torch thread, as many as fit in memory side by side;
+    1 with a ``callback`` (it may draw figures, which wants the main thread) or on a GPU."""
+    device = resolve_device(config)
+    if device.type != "cpu" or callback is not None:
+        return 1
+    workers = max(1, min(int(jobs), torch.get_num_threads()))
+    limit, _ = memory_limit_gb(config, device)
+    if limit is not None and workers > 1:
+        one = estimate_peak_memory_gb(config, get_variant(variant).out_channels, *shape, n_neighbors)
+        workers = min(workers, max(1, int(limit // one)))
+    return workers
+
+
+def run_side_by_side(fit, count: int, workers: int) -> list:
+    """``[fit(k) for k in range(count)]``: in rounds of ``workers`` side by side in threads, each on one
+    torch thread; what is left over (fewer than ``workers``) in turn on all threads, since one
+    one-thread fit alone would leave a core idle."""
+    side_by_side = count - count % workers if workers > 1 else 0
+    results = []
+    if side_by_side:
+        threads = torch.get_num_threads()
+        torch.set_num_threads(1)
+        try:
+            with ThreadPoolExecutor(max_workers=workers) as pool:
+                results = list(pool.map(fit, range(side_by_side)))
+        finally:
+            torch.set_num_threads(threads)
+    return results + [fit(k) for k in range(side_by_side, count)]
