@@ -125,4 +125,5 @@ STUDY.update({
     "warp-g98": dict(gammas=(0.98, 0.01)),  # ... rgbd+warp at rgbd's γ: the warp term at 0.01
     "g96": dict(gammas=(0.96, 0.02)),  # ... rgbd at rgbd+warp's γ (run with rgbd: the warp share is dropped)
     "warp-holes3": dict(warp_reach=3.0),  # the warp term only in the holes and 3 px around them, not on the valid input
+    "warp-holes3-conf": dict(warp_reach=3.0, warp_confidence=True),  # ... and there only where the images single out one depth
 })
