@@ -122,4 +122,9 @@ STUDY = {name: {"blend_fill": 0.0, **overrides} for name, overrides in STUDY.ite
 STUDY.update({
     "narrow": dict(channels=(8, 16, 32, 64, 128)),  # time to quality: class's net at half its widths (2.1× less time per iteration held to AVX2)
     "mid": dict(channels=(12, 24, 48, 96, 192)),  # ... at three quarters of its widths: the narrow net lost on the blob holes
+    # where the warp term costs on the real pair: turning it on also moves γ1, γ2 (0.98, 0.01 → 0.96, 0.02) ...
+    "warp-g98": dict(gammas=(0.98, 0.01)),  # ... rgbd+warp at rgbd's γ: the warp term at 0.01
+    "g96": dict(gammas=(0.96, 0.02)),  # ... rgbd at rgbd+warp's γ (run with rgbd: the warp share is dropped)
+    "warp-holes3": dict(warp_reach=3.0),  # the warp term only in the holes and 3 px around them, not on the valid input
+    "warp-holes3-conf": dict(warp_reach=3.0, warp_confidence=True),  # ... and there only where the images single out one depth
 })

@@ -93,6 +93,8 @@ class LossConfig(_Section):
     gammas: tuple | None = None  # (γ1, γ2); None → (0.96, 0.02) with warp, (0.98, 0.01) without
     warp_occlusion: bool = False  # L_warp skips pixels a nearer point hides from the neighbour (warp.Warper; not in the paper)
     warp_confidence: bool = False  # L_warp only where the images single out one depth (method.warp_confidence; not in the paper)
+    warp_reach: float | None = None  # L_warp only on the unfitted pixels (holes, held-out) and within this many px of
+    # them, off the valid input L_disp pins (paper_method.warp_region; None: every pixel, the paper)
     disparity_margin: float = 1.25  # transform=None: d_min / margin … d_max × margin around the valid depth
 
 
@@ -153,7 +155,7 @@ SECTION_OF = {f.name: section for section, cls in SECTIONS.items() for f in data
 # sequence's manifest): the order of the fields when FitConfig had no sections, so a config hashes as it did.
 FIELDS = ("net", "channels", "down", "up", "pad", "noise_channels", "net_input", "image_input", "image_blur",
           "fill_input", "lr", "schedule", "iterations", "lr_milestones", "lr_gamma", "lambda_z", "lambda_i",
-          "lambda_w", "gammas", "warp_occlusion", "warp_confidence", "reg_noise_std", "average_outputs", "ensemble", "blend_paper",
+          "lambda_w", "gammas", "warp_occlusion", "warp_confidence", "warp_reach", "reg_noise_std", "average_outputs", "ensemble", "blend_paper",
           "blend_weight", "blend_fill", "smoothness", "smoothness_edge", "edge_guide", "flatness", "affinity",
           "flatness_reach", "step_reach", "disparity_margin", "auto_stop", "holdout_fraction", "holdout", "patience",
           "plateau_decays", "eval_every", "seed", "device", "bf16", "channels_last", "progress", "callback_every",
@@ -311,6 +313,8 @@ class FitConfig:
             check_real(self.flatness_reach, "config.flatness_reach", 0.0, None)
         if self.step_reach is not None:
             check_real(self.step_reach, "config.step_reach", 0.0, None)
+        if self.warp_reach is not None:
+            check_real(self.warp_reach, "config.warp_reach", 0.0, None)
         if self.max_memory_gb is not None:
             check_real(self.max_memory_gb, "config.max_memory_gb", 0.0, None, low_open=True)
         if self.device is not None:

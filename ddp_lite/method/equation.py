@@ -33,11 +33,12 @@ def loss_equation(config, variant: str) -> str:
         paper.append(_weight(w_rgb) + "L^{\\mathrm{RGB}}")
     if w_warp > 0:
         warp = "L^{\\mathrm{warp}}"
-        if getattr(config, "warp_occlusion", False):  # only the pixels the neighbour can see (method.visibility)
-            warp = "\\underbrace{L^{\\mathrm{warp}}_{\\mathrm{visible}}}_{\\text{not in the paper}}"
-        if getattr(config, "warp_confidence", False):  # only where the images single out a depth (method.warp_confidence)
-            where = "visible, confident" if getattr(config, "warp_occlusion", False) else "confident"
-            warp = f"\\underbrace{{L^{{\\mathrm{{warp}}}}_{{\\mathrm{{{where}}}}}}}_{{\\text{{not in the paper}}}}"
+        where = [name for name, on in (("visible", getattr(config, "warp_occlusion", False)),  # method.visibility
+                                       ("confident", getattr(config, "warp_confidence", False)),  # method.warp_confidence
+                                       ("holes", getattr(config, "warp_reach", None) is not None))  # paper_method.warp_region
+                 if on]
+        if where:  # the kit's masks on the warp term
+            warp = f"\\underbrace{{L^{{\\mathrm{{warp}}}}_{{\\mathrm{{{', '.join(where)}}}}}}}_{{\\text{{not in the paper}}}}"
         paper.append(_weight(w_warp) + warp)
     kit = []
     if config.smoothness > 0:

@@ -17,12 +17,15 @@ W_nbr is a neighbour's image warped into the reference view through the predicte
 The kit's additions sit beside this, each in its own module: terms in the holes
 (:mod:`ddp_lite.method.hole_terms`) and other net inputs (:mod:`ddp_lite.method.nets`), both off in
 the ``paper`` recipe; the warp term's occlusion test (:mod:`ddp_lite.method.visibility`, off unless
-asked for) and its confidence mask (:mod:`ddp_lite.method.warp_confidence`, off unless asked for); auto-stop (:mod:`ddp_lite.method.loop`, a profile's budget), ensembles
+asked for), its confidence mask (:mod:`ddp_lite.method.warp_confidence`, off unless asked for) and its
+restriction to the holes (:func:`warp_region`, off unless asked for); auto-stop (:mod:`ddp_lite.method.loop`, a profile's budget), ensembles
 (:mod:`ddp_lite.method.ensemble`, off unless asked for), bfloat16 (:func:`ddp_lite.method.device.use_bf16`).
 """
 from __future__ import annotations
 
+import numpy as np
 import torch
+from scipy import ndimage
 
 from .config import FitConfig
 from .disparity import DisparityTransform
@@ -31,7 +34,28 @@ from .variants import get_variant
 from .warp import Warper
 from .warp_confidence import warp_confidence
 
-__all__ = ["PaperLoss"]
+__all__ = ["PaperLoss", "warp_region"]
+
+
+def warp_region(fit_mask: torch.Tensor, reach: float) -> torch.Tensor:
+    """(1, 1, H, W) bool: the pixels the warp term keeps with ``FitConfig.warp_reach`` (the kit's, not the
+    paper's): those ``fit_mask`` (1, 1, H, W) bool leaves unfitted (holes, held-out pixels) and every pixel
+    within ``reach`` px of one (Euclidean distance between pixel centres, so ``reach`` 0 is the holes alone,
+    1 adds their 4-neighbours).
+
+    Where the input depth is valid L_disp pins it, and on real data that depth came from the same kind
+    of photometric matching the warp term redoes; outside this region the term passes no gradient at all.
+
+    Example:
+        >>> mask = torch.ones(1, 1, 1, 7, dtype=torch.bool); mask[..., 3] = False
+        >>> warp_region(mask, 1.0)[0, 0, 0].tolist()
+        [False, False, True, True, True, False, False]
+    """
+    free = ~fit_mask[0, 0].cpu().numpy()
+    if not free.any():
+        return torch.zeros_like(fit_mask)
+    near = ndimage.distance_transform_edt(~free) <= reach  # distance to the nearest unfitted pixel, 0 on them
+    return torch.from_numpy(np.asarray(near))[None, None].to(fit_mask.device)
 
 
 class PaperLoss:
@@ -56,6 +80,8 @@ class PaperLoss:
         # from the images alone, once per fit (it does not depend on the fit's depth)
         self.confident = [warp_confidence(rgb, image, camera, cam, transform.d_min, transform.d_max, config.lambda_w)
                           for image, cam in neighbors] if use_warp and config.warp_confidence else None
+        # the kit's: the warp term only in the holes and a ring around them, off the valid input L_disp pins
+        self.region = warp_region(fit_mask, config.warp_reach) if use_warp and config.warp_reach is not None else None
 
     def __call__(self, disparity: torch.Tensor, colour: torch.Tensor | None = None):
         """``disparity`` (1, 1, H, W) is Z_out, ``colour`` (1, 3, H, W) I_out (the RGBD variants)."""
@@ -71,6 +97,8 @@ class PaperLoss:
             valid = [p[1] for p in pairs]
             if self.confident is not None:  # the kit's: only where the neighbour's evidence is unambiguous
                 valid = [v & c for v, c in zip(valid, self.confident)]
+            if self.region is not None:  # the kit's: only in the holes and within warp_reach px of them
+                valid = [v & self.region for v in valid]
             terms["warp"] = warp_loss(self.rgb_target, [p[0] for p in pairs], valid,
                                       config.lambda_w)  # Eq. 5, mean over the N neighbours
             total = total + self.w_warp * terms["warp"]  # Eq. 2, + (1 - γ1 - γ2) L_warp

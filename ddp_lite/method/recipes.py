@@ -132,6 +132,8 @@ def describe_method(settings: dict) -> str:
                if settings.get("image_input", 0.0) else "")
             + (", the warp term only where the neighbour can see" if settings.get("warp_occlusion") else "")
             + (", the warp term only where the images single out one depth" if settings.get("warp_confidence") else "")
+            + (f", the warp term only in the holes and within {settings['warp_reach']:g} px of them"
+               if settings.get("warp_reach") is not None else "")
             + (f", mean of {ensemble} fits" if ensemble > 1 else "")
             + ((", blended with the paper recipe's fit, " + ("weight from a held-out ring" if settings.get("blend_weight", 0.5) is None
                else f"weight {settings.get('blend_weight', 0.5):g}")) if settings.get("blend_paper") else "")
