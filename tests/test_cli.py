@@ -354,6 +354,24 @@ def test_time_left_skips_set_up_and_expects_an_auto_stop(monkeypatch):
                 assert clock.summary() == "all 40%, 1:00 left"
 
 
+def test_time_left_over_units_that_report_their_end_counts_the_first_from_the_start(monkeypatch):
+    """A sequence's views report when they end: after the first of six (60 s) five are left, 5:00, not
+    the 0:00 a rate measured from the first report would give (hand-computed)."""
+    from ddp_lite import progress as progress_module
+    from ddp_lite.core.progress import CommandClock
+    now = [0.0]
+    monkeypatch.setattr(progress_module.time, "perf_counter", lambda: now[0])
+    clock = CommandClock(6)
+    clock.begin()
+    assert clock.summary() == "all 0%"  # no view done: no rate yet
+    now[0] += 60.0
+    clock.advance()
+    assert clock.summary() == "all 17%, 5:00 left"
+    now[0] += 30.0  # the second view took 30 s: 45 s a view so far
+    clock.advance()
+    assert clock.summary() == "all 33%, 3:00 left"
+
+
 def test_complete_with_intrinsics_writes_the_frame_as_a_point_cloud(tmp_path, capsys):
     import open3d as o3d
     depth, _ = _pair(tmp_path)

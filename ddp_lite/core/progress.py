@@ -47,6 +47,7 @@ class CommandClock:
         self.total, self.expected_share, self.earliest_share = total, float(expected_share), float(earliest_share)
         self.ran = self.skipped = 0  # iterations run; iterations handed back unrun by fits that stopped early
         self.first = self.last = None  # when the first and the latest iteration started: the rate's span
+        self.from_start = False  # True after begin(): ``first`` is when the first unit began, not ended
         self.bar_left = None  # (planned, expected, earliest) iterations left of the open bar, when it has said so
         self.start = time.perf_counter()
 
@@ -54,6 +55,11 @@ class CommandClock:
     def done(self) -> int:
         """Iterations run or handed back, of ``total``."""
         return min(self.total, self.ran + self.skipped)
+
+    def begin(self) -> None:
+        """The first unit starts now. For units that report when they end, not when they begin (the views
+        of a sequence): the rate is then the time since this call over the units done, the first included."""
+        self.first, self.from_start = time.perf_counter(), True
 
     def advance(self, n: int = 1) -> None:
         """``n`` iterations were run."""
@@ -78,6 +84,9 @@ class CommandClock:
         """Seconds per iteration since the first one started, or None before there is one."""
         if self.first is None:
             return None
+        if self.from_start:
+            rate = (self.last - self.first) / self.ran if self.ran else None
+            return rate if rate else None
         if self.ran >= 2:
             rate = (self.last - self.first) / (self.ran - 1)
         else:

@@ -89,6 +89,7 @@ def run_sequence(scene: Scene, out, config: FitConfig | None = None, views=None,
         + (f" on {len(client.scheduler_info()['workers'])} Dask workers" if client is not None and todo else ""))
     computed, failed = [], {}
     clock = CommandClock(max(len(todo), 1))  # the whole run's share and time left, on every view's line
+    clock.begin()  # a view's line comes when it ends: the rate counts the first view from here
     for key, outcome in run_jobs(fit_view, {k: (job,) for k, job in todo.items()}, client=client, retries=retries):
         job = todo[key]
         entry = manifest["views"][job.name]
