@@ -6,20 +6,13 @@ import pytest
 import torch
 from scipy import ndimage
 
-from ddp_lite import Camera, FitConfig
+from ddp_lite import FitConfig
 from ddp_lite.method.losses import ssim, warp_loss
 from ddp_lite.method.warp_confidence import cost_volume, photometric_cost, sweep_planes, warp_confidence
+from conftest import rectified_pair
 
 FOCAL, BASELINE, WIDTH, HEIGHT = 60.0, 0.1, 96, 40
 D_MIN, D_MAX = FOCAL * BASELINE / 14.0, FOCAL * BASELINE / 1.0  # disparities 1-14 px
-
-
-def rectified_pair():
-    """Left camera at the origin, right camera BASELINE m to its right: disparity d = f·B/Z px."""
-    K = np.array([[FOCAL, 0.0, WIDTH / 2], [0.0, FOCAL, HEIGHT / 2], [0.0, 0.0, 1.0]])
-    right = np.eye(4)
-    right[0, 3] = -BASELINE
-    return Camera(K, np.eye(4), WIDTH, HEIGHT), Camera(K, right, WIDTH, HEIGHT)
 
 
 def texture(width, seed):
@@ -39,7 +32,7 @@ def test_a_textured_plane_is_confident_and_its_flat_part_is_not():
     canvas = texture(WIDTH + d, seed=0)
     canvas[:, 64:] = 0.5
     left_image, right_image = canvas[:, :WIDTH], canvas[:, d:d + WIDTH]
-    left, right = rectified_pair()
+    left, right = rectified_pair(WIDTH, HEIGHT, FOCAL, BASELINE)
     confident = warp_confidence(as_tensor(left_image), as_tensor(right_image), left, right, D_MIN, D_MAX)[0, 0].numpy()
     textured = confident[:, d + 8:56]  # seen by the right camera, 8 px from the flat part
     flat = confident[:, 72:]
@@ -52,7 +45,7 @@ def test_the_band_the_right_camera_cannot_see_is_not_confident():
     # A wall at d_b = 3 px and a box over columns [40, 64) at d_f = 11 px, both textured. The right camera
     # sees the box 8 px further left than the wall: the wall's columns [32, 40) are hidden behind it.
     left_image, right_image, band_columns = occluded_band_pair()
-    left, right = rectified_pair()
+    left, right = rectified_pair(WIDTH, HEIGHT, FOCAL, BASELINE)
     confident = warp_confidence(as_tensor(left_image), as_tensor(right_image), left, right, D_MIN, D_MAX)[0, 0].numpy()
     band = confident[:, band_columns]
     assert band.mean() < 0.05, band.mean()
@@ -77,7 +70,7 @@ def test_the_cost_is_the_warp_loss_per_pixel():
 
 
 def test_the_sweep_spans_the_range_at_the_step_asked_for():
-    left, right = rectified_pair()
+    left, right = rectified_pair(WIDTH, HEIGHT, FOCAL, BASELINE)
     planes = sweep_planes(left, right, D_MIN, D_MAX, step_px=0.25)
     disparity = FOCAL * BASELINE / planes
     assert planes[0] == pytest.approx(D_MIN) and planes[-1] == pytest.approx(D_MAX)
@@ -95,7 +88,7 @@ def test_the_fit_gets_no_pull_from_the_warp_term_where_it_is_not_confident():
     d = 6
     canvas = texture(WIDTH + d, seed=0)
     canvas[:, 64:] = 0.5
-    left, right = rectified_pair()
+    left, right = rectified_pair(WIDTH, HEIGHT, FOCAL, BASELINE)
     rgb, nbr = as_tensor(canvas[:, :WIDTH]), as_tensor(canvas[:, d:d + WIDTH])
     transform = DisparityTransform(D_MIN, D_MAX)
     target, mask = torch.zeros(1, 1, HEIGHT, WIDTH), torch.zeros(1, 1, HEIGHT, WIDTH, dtype=torch.bool)
@@ -125,7 +118,7 @@ def occluded_band_pair(d_wall=3, d_box=11, a=40, b=64):
 
 def test_the_left_right_check_alone_finds_the_band():
     left_image, right_image, band = occluded_band_pair()
-    left, right = rectified_pair()
+    left, right = rectified_pair(WIDTH, HEIGHT, FOCAL, BASELINE)
     args = (as_tensor(left_image), as_tensor(right_image), left, right, D_MIN, D_MAX)
     checked = warp_confidence(*args, uniqueness=0.0, erode_px=0)[0, 0].numpy()
     unchecked = warp_confidence(*args, uniqueness=0.0, lr_tolerance_px=np.inf, erode_px=0)[0, 0].numpy()
@@ -140,7 +133,7 @@ def test_uniqueness_alone_rejects_a_repeated_pattern():
     columns = np.arange(WIDTH + d)
     canvas = np.repeat((0.3 + 0.4 * (columns % 4 < 2))[None, :, None], 3, axis=2).repeat(HEIGHT, axis=0)
     left_image, right_image = canvas[:, :WIDTH].astype(np.float32), (0.9 * canvas[:, d:d + WIDTH] + 0.05).astype(np.float32)
-    left, right = rectified_pair()
+    left, right = rectified_pair(WIDTH, HEIGHT, FOCAL, BASELINE)
     args = (as_tensor(left_image), as_tensor(right_image), left, right, D_MIN, D_MAX)
     unique = warp_confidence(*args, lr_tolerance_px=np.inf, erode_px=0)[0, 0].numpy()
     textured = texture(WIDTH + d, seed=3)  # the same plane, a texture that does not repeat
@@ -152,7 +145,7 @@ def test_uniqueness_alone_rejects_a_repeated_pattern():
 
 def test_the_neighbourhood_is_a_square_erosion():
     left_image, right_image, _ = occluded_band_pair()
-    left, right = rectified_pair()
+    left, right = rectified_pair(WIDTH, HEIGHT, FOCAL, BASELINE)
     args = (as_tensor(left_image), as_tensor(right_image), left, right, D_MIN, D_MAX)
     alone = warp_confidence(*args, erode_px=0)[0, 0].numpy()
     eroded = warp_confidence(*args, erode_px=2)[0, 0].numpy()

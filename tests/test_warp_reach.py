@@ -6,20 +6,13 @@ import pytest
 import torch
 from scipy import ndimage
 
-from ddp_lite import Camera, FitConfig
+from ddp_lite import FitConfig
 from ddp_lite.method.disparity import DisparityTransform
 from ddp_lite.method.paper_method import PaperLoss, warp_region
+from conftest import rectified_pair
 
 FOCAL, BASELINE, WIDTH, HEIGHT = 60.0, 0.1, 64, 32
 D_MIN, D_MAX = FOCAL * BASELINE / 14.0, FOCAL * BASELINE / 1.0  # disparities 1-14 px
-
-
-def rectified_pair():
-    """Left camera at the origin, right camera BASELINE m to its right: disparity d = f·B/Z px."""
-    K = np.array([[FOCAL, 0.0, WIDTH / 2], [0.0, FOCAL, HEIGHT / 2], [0.0, 0.0, 1.0]])
-    right = np.eye(4)
-    right[0, 3] = -BASELINE
-    return Camera(K, np.eye(4), WIDTH, HEIGHT), Camera(K, right, WIDTH, HEIGHT)
 
 
 def fit_mask_with_a_hole(top=10, left=20, size=8):
@@ -49,7 +42,7 @@ def test_the_warp_term_passes_no_gradient_to_valid_pixels_outside_the_region():
     canvas = ndimage.gaussian_filter(rng.random((HEIGHT, WIDTH + 6, 3)), (1.0, 1.0, 0)).astype(np.float32)
     as_tensor = lambda image: torch.from_numpy(np.ascontiguousarray(image.transpose(2, 0, 1)))[None]
     rgb, nbr = as_tensor(canvas[:, :WIDTH]), as_tensor(canvas[:, 6:6 + WIDTH])
-    left, right = rectified_pair()
+    left, right = rectified_pair(WIDTH, HEIGHT, FOCAL, BASELINE)
     transform = DisparityTransform(D_MIN, D_MAX)
     mask = fit_mask_with_a_hole()
     target = torch.full((1, 1, HEIGHT, WIDTH), 0.4)
