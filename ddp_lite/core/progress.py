@@ -49,7 +49,6 @@ class CommandClock:
         self.first = self.last = None  # when the first and the latest iteration started: the rate's span
         self.from_start = False  # True after begin(): ``first`` is when the first unit began, not ended
         self.bar_left = None  # (planned, expected, earliest) iterations left of the open bar, when it has said so
-        self.start = time.perf_counter()
 
     @property
     def done(self) -> int:

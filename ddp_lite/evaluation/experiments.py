@@ -17,7 +17,7 @@ from ..method.disparity import DisparityTransform
 from ..method.config import FitConfig
 from ..method.combine import complete_depth
 from ..method.fit import DepthResult
-from ..method.side_by_side import run_side_by_side, side_by_side_workers
+from ..method.side_by_side import run_fits
 from .fusion import points_from_depth
 from ..classical.holes import edge_band_holes, random_holes
 from .metrics import cloud_scores, disparity_rmse, edge_band, texture_leakage  # re-exported: notebooks import them here
@@ -144,9 +144,8 @@ def run_jobs(jobs, profile=None) -> list[DepthResult]:
         case, variant = jobs[k][0], jobs[k][1]
         return complete_depth(case.rgb, case.depth, case.camera, partners[k], variant=variant, config=configs[k],
                               gt_depth=case.scored_gt, transform=case.transform)
-    workers = min((side_by_side_workers(config, job[1], job[0].depth.shape, len(neighbors), len(jobs))
-                   for config, job, neighbors in zip(configs, jobs, partners)), default=1)
-    return run_side_by_side(fit, len(jobs), workers)
+    return run_fits(fit, [(config, variant, case.depth.shape, len(neighbors))
+                          for config, (case, variant, *_), neighbors in zip(configs, jobs, partners)])
 
 
 def error_table(case: Case, estimates: dict, band: int = 3) -> dict[str, dict[str, float]]:

@@ -82,6 +82,11 @@ class PaperLoss:
                           for image, cam in neighbors] if use_warp and config.warp_confidence else None
         # the kit's: the warp term only in the holes and a ring around them, off the valid input L_disp pins
         self.region = warp_region(fit_mask, config.warp_reach) if use_warp and config.warp_reach is not None else None
+        # both as one mask per neighbour, combined here once, not every iteration; None: the paper's warp term
+        self.warp_keep = self.confident
+        if self.region is not None:
+            self.warp_keep = ([self.region & c for c in self.confident] if self.confident
+                              else [self.region] * len(self.warpers))
 
     def __call__(self, disparity: torch.Tensor, colour: torch.Tensor | None = None):
         """``disparity`` (1, 1, H, W) is Z_out, ``colour`` (1, 3, H, W) I_out (the RGBD variants)."""
@@ -95,10 +100,8 @@ class PaperLoss:
             depth = self.transform.to_depth(disparity)  # D_out_ref: differentiable, a tensor in and out
             pairs = [warper(image, depth) for warper, image in zip(self.warpers, self.neighbor_images)]  # W_nbr^ref
             valid = [p[1] for p in pairs]
-            if self.confident is not None:  # the kit's: only where the neighbour's evidence is unambiguous
-                valid = [v & c for v, c in zip(valid, self.confident)]
-            if self.region is not None:  # the kit's: only in the holes and within warp_reach px of them
-                valid = [v & self.region for v in valid]
+            if self.warp_keep is not None:  # the kit's masks
+                valid = [v & keep for v, keep in zip(valid, self.warp_keep)]
             terms["warp"] = warp_loss(self.rgb_target, [p[0] for p in pairs], valid,
                                       config.lambda_w)  # Eq. 5, mean over the N neighbours
             total = total + self.w_warp * terms["warp"]  # Eq. 2, + (1 - γ1 - γ2) L_warp

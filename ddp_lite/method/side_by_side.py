@@ -20,7 +20,7 @@ from .device import resolve_device
 from .loop import estimate_peak_memory_gb, memory_limit_gb
 from .variants import get_variant
 
-__all__ = ["side_by_side_workers", "run_side_by_side"]
+__all__ = ["side_by_side_workers", "run_side_by_side", "run_fits"]
 
 
 def side_by_side_workers(config, variant: str, shape, n_neighbors: int, jobs: int, callback=None) -> int:
@@ -53,3 +53,11 @@ def run_side_by_side(fit, count: int, workers: int) -> list:
         finally:
             torch.set_num_threads(threads)
     return results + [fit(k) for k in range(side_by_side, count)]
+
+
+def run_fits(fit, jobs) -> list:
+    """``[fit(k) for k in range(len(jobs))]`` side by side, as many at once as every job allows
+    (:func:`side_by_side_workers`); ``jobs``: one ``(config, variant, shape (H, W), n_neighbors)`` per fit."""
+    workers = min((side_by_side_workers(config, variant, shape, n_neighbors, len(jobs))
+                   for config, variant, shape, n_neighbors in jobs), default=1)
+    return run_side_by_side(fit, len(jobs), workers)

@@ -19,7 +19,7 @@ import numpy as np
 from ..classical.baselines import fill
 from ..method.config import FitConfig
 from ..method.combine import complete_depth
-from ..method.side_by_side import run_side_by_side, side_by_side_workers
+from ..method.side_by_side import run_fits
 from ..evaluation.fusion import fuse_depths, points_from_depth
 from ..evaluation.metrics import cloud_scores, psnr
 from ..world.neighbors import select_neighbors
@@ -49,10 +49,9 @@ def complete_views(views, depths, neighbors_of, profile=None, variant: str = "rg
 
     def fit(i: int):
         return complete_depth(views[i].rgb, depths[i], views[i].camera, neighbors_of(i), variant=variant, config=config)
-    shape = np.shape(depths[0]) if len(depths) else (0, 0)
-    workers = side_by_side_workers(config, variant, shape, len(neighbors_of(0)) if len(depths) else 0, len(depths))
+    jobs = [(config, variant, np.shape(depth), len(neighbors_of(i))) for i, depth in enumerate(depths)]
     out = []
-    for i, (depth, result) in enumerate(zip(depths, run_side_by_side(fit, len(depths), workers))):
+    for i, (depth, result) in enumerate(zip(depths, run_fits(fit, jobs))):
         out.append(result.merged(depth))
         log(f"view {i}: {np.isnan(depth).mean():.0%} holes, {result.iterations} iterations, {result.seconds:.0f} s")
     return out

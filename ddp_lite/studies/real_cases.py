@@ -35,7 +35,7 @@ from ..method.combine import blend_members, blended_result, complete_depth, mixe
 from ..classical.holes import random_holes
 from ..data.middlebury import load_middlebury, load_motorcycle
 from ..method.profiles import get_profile
-from ..method.side_by_side import run_side_by_side, side_by_side_workers
+from ..method.side_by_side import run_fits
 from ..classical.stereo import sgm_disparity, sgm_left_right_failures
 from ..core.views import Scene, View
 
@@ -212,29 +212,24 @@ def _plain_fits(case: RealCase, variant: str, configs: list) -> list:
 
     def fit(k: int):
         return complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant, config=planned[k])
-    workers = min((side_by_side_workers(c, variant, case.depth.shape, len(neighbors), len(planned)) for c in planned),
-                  default=1)
-    return list(zip(planned, run_side_by_side(fit, len(planned), workers)))
+    return list(zip(planned, run_fits(fit, [(c, variant, case.depth.shape, len(neighbors)) for c in planned])))
 
 
 def _fit_reusing(case: RealCase, variant: str, config: FitConfig, fitted: list):
-    """``complete_depth`` of ``case`` under ``config``, taken from the fits in ``fitted`` where it is one
-    of them or a blend of them (``photo`` after ``kit`` and ``paper``, same seed: the two fits it would
-    run again). A fit done here is appended to ``fitted``, without its share of the fill, which is mixed in after."""
-    neighbors = case.neighbors if variant == "rgbd+warp" else ()
+    """``complete_depth`` of ``case`` under ``config``, from the plain fits in ``fitted`` (:func:`_plain_fits`):
+    one of them, or a blend of two (``photo`` after ``kit`` and ``paper``, same seed), with the config's
+    share of the fill mixed in after."""
     share = config.blend_fill
     if share is None:  # the share is chosen on depth held out of the fit: a fit of its own
+        neighbors = case.neighbors if variant == "rgbd+warp" else ()
         return complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant, config=config)
     base = config.replace(blend_fill=0.0)
     same = [result for c, result in fitted if c == base]
-    done = [result for wanted in blend_members(base) for c, result in fitted if c == wanted]
     if same:
         result = same[0]
-    elif base.blend_paper and base.blend_weight is not None and len(done) == 2:
+    else:  # _plain_fits planned no fit of its own: a blend of two it did
+        done = [result for wanted in blend_members(base) for c, result in fitted if c == wanted]
         result = blended_result(done, done[0].transform, base.blend_weight)
-    else:
-        result = complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant, config=base)
-        fitted.append((base, result))
     return mixed_with_fill(result, case.depth, case.rgb, share) if share else result
 
 
