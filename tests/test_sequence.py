@@ -13,6 +13,7 @@ import time
 
 import numpy as np
 import pytest
+import torch
 
 from ddp_lite.interface.cli import main
 from ddp_lite.method.config import FitConfig
@@ -78,6 +79,24 @@ def test_two_dask_workers_give_the_serial_depths(serial, tum, tmp_path):
     assert main(_cli(tum, tmp_path, "--workers", "2")) == 0
     depths = _depths(tmp_path)
     assert depths.keys() == reference.keys()
+    for name in reference:
+        np.testing.assert_array_equal(depths[name], reference[name])
+
+
+def test_views_side_by_side_in_process_give_the_serial_depths(serial, tum, tmp_path):
+    _, reference = serial
+    lines = []
+    threads = torch.get_num_threads()
+    torch.set_num_threads(2)  # as on a 2-core laptop: two views at once, one thread each
+    try:
+        config = FitConfig.for_profile("ci", variant=VARIANT, seed=0, progress=False, iterations=ITERATIONS)
+        summary = run_sequence(read_tum(tum), tmp_path, config, log=lines.append)
+    finally:
+        torch.set_num_threads(threads)
+    assert "2 at a time in this process" in lines[0]
+    assert sorted(summary["computed"]) == sorted(reference) and not summary["failed"]
+    assert torch.get_num_threads() == threads
+    depths = _depths(tmp_path)
     for name in reference:
         np.testing.assert_array_equal(depths[name], reference[name])
 
@@ -151,6 +170,22 @@ def test_run_jobs_keys_results_and_returns_failures():
     assert dict(run_jobs(abs, {"a": (-1,), "b": (2,)})) == {"a": 1, "b": 2}
     outcome = dict(run_jobs(fails, {"a": (1,)}))["a"]
     assert isinstance(outcome, ValueError) and str(outcome) == "bad 1"
+    # in threads: every key once, the first to finish first; each job ran in a thread other than the caller's
+    release = threading.Event()
+
+    def job(x):
+        if x == 0:
+            release.wait(10)  # finishes only after job 1 has been yielded
+        return x, threading.get_ident()
+    order = []
+    for key, (x, ident) in run_jobs(job, {"slow": (0,), "fast": (1,)}, workers=2):
+        order.append(key)
+        assert ident != threading.get_ident()
+        release.set()
+    assert order == ["fast", "slow"]
+    assert dict(run_jobs(fails, {"a": (1,), "b": (2,)}, workers=2))["b"].args == ("bad 2",)
+    with pytest.raises(ValueError, match="workers must be a positive integer"):
+        next(run_jobs(abs, {"a": (1,)}, workers=0))
 
 
 def test_plan_refuses_bad_input_before_any_fit(tum):

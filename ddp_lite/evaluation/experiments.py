@@ -201,7 +201,7 @@ def format_ranking(table: dict[str, dict[str, float]], digits: int = 3) -> str:
 def format_mean_spread(runs: list[dict[str, dict[str, float]]], digits: int = 2, title: str = "") -> str:
     """A plain-text table of "mean ± std" over several ``{row: {column: value}}`` tables (same rows
     and columns, e.g. one per scene and seed), rows in the order of the first; std is the sample
-    std (0 for a single run)."""
+    std. A single run has no spread: its values alone."""
     rows, columns = list(runs[0]), list(next(iter(runs[0].values())))
     width = max(len(str(r)) for r in rows) + 2
     cell = 2 * (digits + 5) + 3
@@ -211,8 +211,8 @@ def format_mean_spread(runs: list[dict[str, dict[str, float]]], digits: int = 2,
         text = f"{str(row):<{width}}"
         for column in columns:
             values = np.array([run[row][column] for run in runs], dtype=float)
-            spread = values.std(ddof=1) if len(values) > 1 else 0.0
-            text += f"{f'{values.mean():.{digits}f} ± {spread:.{digits}f}':>{cell}}"
+            mean = f"{values.mean():.{digits}f}"
+            text += f"{f'{mean} ± {values.std(ddof=1):.{digits}f}' if len(values) > 1 else mean:>{cell}}"
         lines.append(text)
     return "\n".join(lines)
 

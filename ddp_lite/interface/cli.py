@@ -191,7 +191,7 @@ def build_parser() -> argparse.ArgumentParser:
     seq.add_argument("--views", nargs="+", default=None, help="view indices or names (default: all)")
     seq.add_argument("--workers", type=_number(int, 0, "--workers"), default=0,
                      help="start a Dask LocalCluster of N one-thread worker processes, at most the CPU count "
-                          "(default 0: in this process)")
+                          "(default 0: in this process, as many views at once as it has torch threads, one thread each)")
     seq.add_argument("--scheduler", default=None, help="join a running Dask cluster, e.g. tcp://host:8786")
     _add_profile(seq, what="the net and budget of each fit: ci (seconds), class (minutes on a laptop CPU), "
                            "paper (the paper's net and schedule, a GPU); the images keep their size unless --size")

@@ -12,6 +12,7 @@ Example:
 """
 from __future__ import annotations
 
+import contextlib
 from concurrent.futures import ThreadPoolExecutor
 
 import torch
@@ -20,7 +21,7 @@ from .device import resolve_device
 from .loop import estimate_peak_memory_gb, memory_limit_gb
 from .variants import get_variant
 
-__all__ = ["side_by_side_workers", "run_side_by_side", "run_fits"]
+__all__ = ["side_by_side_workers", "run_side_by_side", "run_fits", "torch_threads"]
 
 
 def side_by_side_workers(config, variant: str, shape, n_neighbors: int, jobs: int, callback=None) -> int:
@@ -45,14 +46,21 @@ def run_side_by_side(fit, count: int, workers: int) -> list:
     side_by_side = count - count % workers if workers > 1 else 0
     results = []
     if side_by_side:
-        threads = torch.get_num_threads()
-        torch.set_num_threads(1)
-        try:
-            with ThreadPoolExecutor(max_workers=workers) as pool:
-                results = list(pool.map(fit, range(side_by_side)))
-        finally:
-            torch.set_num_threads(threads)
+        with torch_threads(1), ThreadPoolExecutor(max_workers=workers) as pool:
+            results = list(pool.map(fit, range(side_by_side)))
     return results + [fit(k) for k in range(side_by_side, count)]
+
+
+@contextlib.contextmanager
+def torch_threads(count: int):
+    """torch's intra-op threads set to ``count`` inside the block, as they were after it. Set here, before
+    fits start in other threads: each new thread takes the count torch has when it first runs an op."""
+    before = torch.get_num_threads()
+    torch.set_num_threads(int(count))
+    try:
+        yield
+    finally:
+        torch.set_num_threads(before)
 
 
 def run_fits(fit, jobs) -> list:

@@ -3,7 +3,8 @@
 DDP fits one network per image, so a sequence's views are independent jobs. Where they run is
 one choice:
 
-* **in-process** (``client=None``): one after another, here; nothing to install or start;
+* **in-process** (``client=None``): here, nothing to install or start; ``workers`` jobs at once in
+  threads (each fit sets its own torch threads: one, so two fill a 2-core CPU), else one after another;
 * **a Dask ``LocalCluster``** (:func:`open_client` with ``workers=N``): N worker *processes* with
   one thread each. On a 2-core CPU, two single-thread fits finish sooner than one two-thread fit,
   because a small CNN does not keep two threads busy;
@@ -20,6 +21,7 @@ from __future__ import annotations
 
 import contextlib
 from collections.abc import Callable, Iterator, Mapping
+from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 
 __all__ = ["open_client", "run_jobs"]
 
@@ -61,13 +63,17 @@ def open_client(workers: int = 0, scheduler: str | None = None, threads_per_work
         yield client
 
 
-def run_jobs(fn: Callable, jobs: Mapping[str, tuple], client=None, retries: int = 2) -> Iterator[tuple[str, object]]:
+def run_jobs(fn: Callable, jobs: Mapping[str, tuple], client=None, retries: int = 2,
+             workers: int = 1) -> Iterator[tuple[str, object]]:
     """Run ``fn(*args)`` for every ``key: args`` of ``jobs``; yield ``(key, outcome)`` as each finishes.
 
     ``outcome`` is the return value, or the exception the job raised (after Dask's ``retries``), so a
-    caller can record a failure and go on. In-process (``client=None``) the jobs run in order; on
-    Dask in whatever order they finish, each key exactly once. ``fn`` must be importable by the
-    workers (a module-level function), and ``args`` picklable.
+    caller can record a failure and go on. In-process (``client=None``) ``workers`` jobs run at once
+    in threads of this process (1: in order, in this thread); with a client, on Dask. Either way in
+    whatever order they finish, each key exactly once, and only the caller's thread sees the results
+    (it does the writing). On Dask ``fn`` must be importable by the workers (a module-level
+    function), and ``args`` picklable. An interrupted caller starts no further job; in-process the
+    jobs already running finish first (a thread cannot be stopped), on Dask they are cancelled.
 
     Example:
         >>> sorted(run_jobs(pow, {"a": (2, 3), "b": (3, 2)}))
@@ -75,13 +81,14 @@ def run_jobs(fn: Callable, jobs: Mapping[str, tuple], client=None, retries: int 
     """
     if not callable(fn):
         raise TypeError(f"fn must be callable, got {type(fn).__name__}")
-    if client is None:
+    if isinstance(workers, bool) or int(workers) != workers or workers < 1:
+        raise ValueError(f"workers must be a positive integer, got {workers!r}")
+    if client is None and workers == 1:
         for key, args in jobs.items():
-            try:
-                outcome = fn(*args)
-            except Exception as error:  # recorded by the caller; KeyboardInterrupt still stops the run
-                outcome = error
-            yield key, outcome
+            yield key, _outcome(fn, args)
+        return
+    if client is None:
+        yield from _in_threads(fn, jobs, int(workers))
         return
     from distributed import as_completed
 
@@ -98,3 +105,24 @@ def run_jobs(fn: Callable, jobs: Mapping[str, tuple], client=None, retries: int 
             future.release()  # the result is with the caller now; free the worker's copy
     finally:
         client.cancel([f for f in futures if not f.done()])  # an interrupted caller leaves nothing running
+
+
+def _outcome(fn: Callable, args: tuple):
+    """``fn(*args)``, or the exception it raised: recorded by the caller; KeyboardInterrupt still stops the run."""
+    try:
+        return fn(*args)
+    except Exception as error:
+        return error
+
+
+def _in_threads(fn: Callable, jobs: Mapping[str, tuple], workers: int) -> Iterator[tuple[str, object]]:
+    """The in-process jobs, ``workers`` at a time in threads, yielded as each finishes."""
+    pool = ThreadPoolExecutor(max_workers=workers, thread_name_prefix="ddp-job")
+    running = {pool.submit(_outcome, fn, args): key for key, args in jobs.items()}
+    try:
+        while running:
+            done, _ = wait(running, return_when=FIRST_COMPLETED)
+            for future in done:
+                yield running.pop(future), future.result()
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)  # an interrupted caller starts nothing more

@@ -12,7 +12,8 @@ and the views are fused into one point cloud (Fusibile; here ``fusion.fuse_depth
    are checked here, before any fit starts;
 2. **skip** the views the manifest records as done under the same key whose files are all there;
    everything else (never started, started but not finished, inputs or config changed) is redone;
-3. **fit** the rest through :func:`runner.run_jobs`: in-process, or on Dask workers;
+3. **fit** the rest through :func:`runner.run_jobs`: in-process (one-thread fits side by side, as
+   many as torch has threads: ``method.side_by_side``), or on Dask workers;
 4. **write**, per finished view, ``depth/<view>.npy`` (float32 metres, NaN where nothing is
    known), ``depth/<view>.png`` (16-bit millimetres, 0 = none; beyond 65.535 m → 0, counted in
    the manifest) and ``preview/<view>.png`` (colour, input, completed), each atomically, and only
@@ -29,12 +30,14 @@ per-view fit in ``sequence_jobs``, the output folder (manifest, files, fusion) i
 """
 from __future__ import annotations
 
+import contextlib
 import json
 import time
 
 import numpy as np
 
 from ..method.config import FitConfig
+from ..method.side_by_side import side_by_side_workers, torch_threads
 from ..core.progress import CommandClock
 from .runner import run_jobs
 from .sequence_cost import estimate_sequence, format_estimate, measure_fit_cost
@@ -57,7 +60,9 @@ def run_sequence(scene: Scene, out, config: FitConfig | None = None, views=None,
             It must not be, contain or lie inside an input (``scene.sources``, ``source["path"]``):
             ``ValueError`` before any fit.
         config: the fit's config; None → ``FitConfig.for_profile()`` (``DDP_PROFILE``).
-        client: a ``distributed.Client`` (``runner.open_client``) or None for in-process.
+        client: a ``distributed.Client`` (``runner.open_client``) or None for in-process: there, with
+            ``threads`` = 1, as many views at once as torch has threads (memory permitting), each on
+            one thread, so the numbers are those of one view alone on one thread.
         threads: torch threads per fit. retries: Dask retries of a fit that raised.
         source: what to record as the input (path, format, options) in the manifest.
     Returns:
@@ -85,30 +90,37 @@ def run_sequence(scene: Scene, out, config: FitConfig | None = None, views=None,
         todo[f"ddp-view-{job.stem}-{job.key}"] = job
     out.mkdir(parents=True, exist_ok=True)
     write_manifest(out, manifest)
+    at_once = 1
+    if client is None and int(threads) == 1 and todo:
+        first = next(iter(todo.values()))
+        at_once = side_by_side_workers(config, VARIANT, first.depth.shape, len(first.neighbors), len(todo))
     log(f"{len(jobs)} views: {len(skipped)} already done, {len(todo)} to fit"
-        + (f" on {len(client.scheduler_info()['workers'])} Dask workers" if client is not None and todo else ""))
+        + (f" on {len(client.scheduler_info()['workers'])} Dask workers" if client is not None and todo else "")
+        + (f", {at_once} at a time in this process" if at_once > 1 else ""))
     computed, failed = [], {}
     clock = CommandClock(max(len(todo), 1))  # the whole run's share and time left, on every view's line
     clock.begin()  # a view's line comes when it ends: the rate counts the first view from here
-    for key, outcome in run_jobs(fit_view, {k: (job,) for k, job in todo.items()}, client=client, retries=retries):
-        job = todo[key]
-        entry = manifest["views"][job.name]
-        clock.advance()
-        whole = f" ({clock.done}/{len(todo)} views; {clock.summary()})"
-        if isinstance(outcome, BaseException):
-            entry.update(status="failed", error=f"{type(outcome).__name__}: {outcome}")
-            failed[job.name] = entry["error"]
-            log(f"  view {job.name}: FAILED ({entry['error']}){whole}")
-        else:
-            overflow = write_view(out, job, outcome)
-            entry.update(status="done", iterations=outcome["iterations"], seconds=round(outcome["seconds"], 3),
-                         png_overflow_pixels=overflow, finished=time.strftime("%Y-%m-%dT%H:%M:%S"))
-            entry.pop("error", None)
-            computed.append(job.name)
-            log(f"  view {job.name}: {outcome['iterations']} iterations, {outcome['seconds']:.1f} s{whole}"
-                + (f"; {overflow} pixel(s) beyond 65.535 m written as 0 in its 16-bit PNG (the .npy has them)"
-                   if overflow else ""))
-        write_manifest(out, manifest)
+    with torch_threads(1) if at_once > 1 else contextlib.nullcontext():  # side by side: one thread each, set once
+        for key, outcome in run_jobs(fit_view, {k: (job,) for k, job in todo.items()}, client=client,
+                                     retries=retries, workers=at_once):
+            job = todo[key]
+            entry = manifest["views"][job.name]
+            clock.advance()
+            whole = f" ({clock.done}/{len(todo)} views; {clock.summary()})"
+            if isinstance(outcome, BaseException):
+                entry.update(status="failed", error=f"{type(outcome).__name__}: {outcome}")
+                failed[job.name] = entry["error"]
+                log(f"  view {job.name}: FAILED ({entry['error']}){whole}")
+            else:
+                overflow = write_view(out, job, outcome)
+                entry.update(status="done", iterations=outcome["iterations"], seconds=round(outcome["seconds"], 3),
+                             png_overflow_pixels=overflow, finished=time.strftime("%Y-%m-%dT%H:%M:%S"))
+                entry.pop("error", None)
+                computed.append(job.name)
+                log(f"  view {job.name}: {outcome['iterations']} iterations, {outcome['seconds']:.1f} s{whole}"
+                    + (f"; {overflow} pixel(s) beyond 65.535 m written as 0 in its 16-bit PNG (the .npy has them)"
+                       if overflow else ""))
+            write_manifest(out, manifest)
     fused, points = None, 0
     if fuse:
         fused, points, used = fuse_views(out, scene, manifest)

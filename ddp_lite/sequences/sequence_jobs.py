@@ -119,12 +119,18 @@ def fit_view(job: ViewJob) -> dict:
     ``depth`` (H, W) float32 metres is SGM+DDP: the input where valid, DDP in the holes; ``ddp`` is
     DDP's own output everywhere. ``job.threads`` torch threads (1 by default, so a run gives the
     same numbers in-process and on any worker)."""
+    def fit():
+        return complete_depth(job.rgb, job.depth, job.camera, job.neighbors, variant=VARIANT,
+                              config=job.config.replace(progress=False), transform=job.transform)
+
     threads = torch.get_num_threads()
-    torch.set_num_threads(int(job.threads))
-    try:
-        result = complete_depth(job.rgb, job.depth, job.camera, job.neighbors, variant=VARIANT,
-                                config=job.config.replace(progress=False), transform=job.transform)
-    finally:
-        torch.set_num_threads(threads)
+    if threads == int(job.threads):  # as run side by side in this process: the caller set them for every thread
+        result = fit()
+    else:
+        torch.set_num_threads(int(job.threads))
+        try:
+            result = fit()
+        finally:
+            torch.set_num_threads(threads)
     return {"depth": result.merged(job.depth).astype(np.float32), "ddp": result.depth.astype(np.float32),
             "iterations": int(result.iterations), "seconds": float(result.seconds)}

@@ -84,8 +84,8 @@ def _best_fill_px(case: Case) -> tuple[str, float]:
 
 
 def run_additions(cases: dict[str, Case], profile=None, seeds=(0, 1, 2), variant: str = "rgbd", log=print) -> dict:
-    """Fit every step of :func:`addition_steps` on every case and seed: the fits of a case side by side,
-    one torch thread each, as many at once as torch has threads (``side_by_side.run_side_by_side``).
+    """Fit every step of :func:`addition_steps` on every case and seed: all the fits side by side, one
+    torch thread each, as many at once as torch has threads (``side_by_side.run_side_by_side``).
 
     Returns ``{"steps": [names], "best_fill": {case: (name, px)}, "px": {case: {step: [px per seed]}},
     "ratio": {case: {step: [DDP px / best fill px, per seed]}}, "example": {case: {step: depth}}}``
@@ -97,20 +97,22 @@ def run_additions(cases: dict[str, Case], profile=None, seeds=(0, 1, 2), variant
     mixes_fill = {name: i > 0 and not steps[names[i - 1]].get("blend_fill")
                   and steps[name] == {**steps[names[i - 1]], "blend_fill": steps[name].get("blend_fill")}
                   for i, name in enumerate(names)}
-    jobs = [(step, seed) for step in names if not mixes_fill[step] for seed in seeds]
+    jobs = [(case_name, step, seed) for case_name in cases for step in names if not mixes_fill[step] for seed in seeds]
+
+    def fit(k: int):
+        case_name, step, seed = jobs[k]
+        case = cases[case_name]
+        config = FitConfig.for_profile(profile, variant=variant, recipe="paper", seed=seed, progress=False,
+                                       **steps[step])
+        neighbors = case.neighbors if variant == "rgbd+warp" else ()
+        return complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant, config=config)
     workers = max(1, min(len(jobs), torch.get_num_threads()))  # independent fits side by side, a thread each
+    fitted = dict(zip(jobs, run_side_by_side(fit, len(jobs), workers)))  # one pool: no core idles between cases
     out = {"steps": names, "best_fill": {}, "px": {}, "ratio": {}, "example": {}}
     for case_name, case in cases.items():
         out["best_fill"][case_name] = best = _best_fill_px(case)
         out["px"][case_name], out["ratio"][case_name], out["example"][case_name] = {}, {}, {}
-        neighbors = case.neighbors if variant == "rgbd+warp" else ()
-
-        def fit(k: int, case=case, neighbors=neighbors):
-            step, seed = jobs[k]
-            config = FitConfig.for_profile(profile, variant=variant, recipe="paper", seed=seed, progress=False,
-                                           **steps[step])
-            return complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant, config=config)
-        fits = dict(zip(jobs, run_side_by_side(fit, len(jobs), workers)))
+        fits = {(step, seed): fitted[name, step, seed] for name, step, seed in fitted if name == case_name}
         for i, step in enumerate(names):
             if mixes_fill[step]:
                 share = FitConfig.for_profile(profile, variant=variant, recipe="paper", **steps[step]).blend_fill
