@@ -127,4 +127,8 @@ STUDY.update({
     "g96": dict(gammas=(0.96, 0.02)),  # ... rgbd at rgbd+warp's γ (run with rgbd: the warp share is dropped)
     "warp-holes3": dict(warp_reach=3.0),  # the warp term only in the holes and 3 px around them, not on the valid input
     "warp-holes3-conf": dict(warp_reach=3.0, warp_confidence=True),  # ... and there only where the images single out one depth
+    # other photometric costs for the warp term, and a per-pixel weight on it (method.warp_cost) ...
+    "warp-census": dict(warp_cost="census"),  # ... a soft census of 7×7 patches in place of L1 + SSIM on intensities,
+    "warp-gradient": dict(warp_cost="gradient"),  # ... L1 on the images' differences beside SSIM,
+    "warp-texture": dict(warp_texture=True),  # ... the paper's cost, each pixel weighted by the image's change along its epipolar line
 })

@@ -46,7 +46,7 @@ _PACKAGES = {  # sub-package → its modules, each one concern (the sub-package'
     "world": ('scenes', 'render', 'textures', 'photo_texture', 'solids', 'terrain', 'organic', 'neighbors'),
     "classical": ('baselines', 'depth_fills', 'guided_fills', 'stereo', 'holes', 'kinect'),
     "method": ('config', 'variants', 'disparity', 'losses', 'paper_method', 'hole_losses', 'hole_terms', 'nets', 'warp', 'loop',
-               'device', 'fit', 'fit_inputs', 'combine', 'ensemble', 'side_by_side', 'blend', 'visibility', 'warp_confidence', 'equation', 'coarse_to_fine', 'dip',
+               'device', 'fit', 'fit_inputs', 'combine', 'ensemble', 'side_by_side', 'blend', 'visibility', 'warp_confidence', 'warp_cost', 'equation', 'coarse_to_fine', 'dip',
                'profiles', 'recipes', 'cache', 'cache_entry'),
     "data": ('datasets', 'fileio', 'file_writers', 'formats', 'colmap', 'tum', 'middlebury', 'textparse', 'resample'),
     "evaluation": ('metrics', 'fusion', 'experiments', 'viz', 'plane_sweep'),

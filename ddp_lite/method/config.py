@@ -29,6 +29,7 @@ from .hole_losses import EDGE_GUIDES
 from .nets import DOWNSAMPLINGS, NET_INPUTS, NETS, PADDINGS, UPSAMPLINGS
 from .profiles import Profile, get_profile
 from .recipes import get_recipe
+from .warp_cost import WARP_COSTS
 from .variants import get_variant
 
 __all__ = ["FitConfig", "HOLDOUTS", "NetworkConfig", "OptimisationConfig", "LossConfig", "HolesConfig",
@@ -95,6 +96,10 @@ class LossConfig(_Section):
     warp_confidence: bool = False  # L_warp only where the images single out one depth (method.warp_confidence; not in the paper)
     warp_reach: float | None = None  # L_warp only on the unfitted pixels (holes, held-out) and within this many px of
     # them, off the valid input L_disp pins (paper_method.warp_region; None: every pixel, the paper)
+    warp_cost: str = "intensity"  # what L_warp compares: "intensity" (L1 + SSIM on colour, the paper), "census" (a
+    # soft census, no L1/SSIM) or "gradient" (L1 on the images' differences + SSIM) (method.warp_cost; not in the paper)
+    warp_texture: bool = False  # L_warp weighted per pixel by the reference's change along the epipolar line
+    # (method.warp_cost.texture_weights: flat colour little; not in the paper)
     disparity_margin: float = 1.25  # transform=None: d_min / margin … d_max × margin around the valid depth
 
 
@@ -155,7 +160,8 @@ SECTION_OF = {f.name: section for section, cls in SECTIONS.items() for f in data
 # sequence's manifest): the order of the fields when FitConfig had no sections, so a config hashes as it did.
 FIELDS = ("net", "channels", "down", "up", "pad", "noise_channels", "net_input", "image_input", "image_blur",
           "fill_input", "lr", "schedule", "iterations", "lr_milestones", "lr_gamma", "lambda_z", "lambda_i",
-          "lambda_w", "gammas", "warp_occlusion", "warp_confidence", "warp_reach", "reg_noise_std", "average_outputs", "ensemble", "blend_paper",
+          "lambda_w", "gammas", "warp_occlusion", "warp_confidence", "warp_reach",
+          "warp_cost", "warp_texture", "reg_noise_std", "average_outputs", "ensemble", "blend_paper",
           "blend_weight", "blend_fill", "smoothness", "smoothness_edge", "edge_guide", "flatness", "affinity",
           "flatness_reach", "step_reach", "disparity_margin", "auto_stop", "holdout_fraction", "holdout", "patience",
           "plateau_decays", "eval_every", "seed", "device", "bf16", "channels_last", "progress", "callback_every",
@@ -270,7 +276,7 @@ class FitConfig:
             check_int_tuple(self.channels, "config.channels", minimum=1, min_length=2 if self.net == "unet" else 1)
         for name, choices in (("down", DOWNSAMPLINGS), ("up", UPSAMPLINGS), ("pad", PADDINGS),
                               ("schedule", ("step", "cosine")), ("holdout", HOLDOUTS), ("net_input", NET_INPUTS),
-                              ("edge_guide", EDGE_GUIDES)):
+                              ("edge_guide", EDGE_GUIDES), ("warp_cost", WARP_COSTS)):
             check_choice(getattr(self, name), f"config.{name}", choices)
         for name, minimum in (("noise_channels", 1), ("ensemble", 1), ("patience", 1), ("plateau_decays", 0),
                               ("eval_every", 1), ("callback_every", 0)):
@@ -292,7 +298,8 @@ class FitConfig:
                 ("smoothness_edge", 0.0, None, False, False), ("disparity_margin", 1.0, None, False, False),
                 ("holdout_fraction", 0.0, 0.5, True, True)):
             check_real(getattr(self, name), f"config.{name}", low, high, low_open, high_open)
-        for name in ("auto_stop", "blend_paper", "channels_last", "progress", "warp_occlusion", "warp_confidence"):
+        for name in ("auto_stop", "blend_paper", "channels_last", "progress", "warp_occlusion", "warp_confidence",
+                     "warp_texture"):
             check_bool(getattr(self, name), f"config.{name}")
         if self.bf16 is not None:  # None: decided by the hardware (use_bf16)
             check_bool(self.bf16, "config.bf16")

@@ -35,9 +35,12 @@ def loss_equation(config, variant: str) -> str:
         warp = "L^{\\mathrm{warp}}"
         where = [name for name, on in (("visible", getattr(config, "warp_occlusion", False)),  # method.visibility
                                        ("confident", getattr(config, "warp_confidence", False)),  # method.warp_confidence
-                                       ("holes", getattr(config, "warp_reach", None) is not None))  # paper_method.warp_region
+                                       ("holes", getattr(config, "warp_reach", None) is not None),  # paper_method.warp_region
+                                       ("census", getattr(config, "warp_cost", "intensity") == "census"),  # method.warp_cost
+                                       ("gradient", getattr(config, "warp_cost", "intensity") == "gradient"),
+                                       ("textured", getattr(config, "warp_texture", False)))
                  if on]
-        if where:  # the kit's masks on the warp term
+        if where:  # the kit's masks, costs and weights on the warp term
             warp = f"\\underbrace{{L^{{\\mathrm{{warp}}}}_{{\\mathrm{{{', '.join(where)}}}}}}}_{{\\text{{not in the paper}}}}"
         paper.append(_weight(w_warp) + warp)
     kit = []

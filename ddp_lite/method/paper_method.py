@@ -18,7 +18,8 @@ The kit's additions sit beside this, each in its own module: terms in the holes
 (:mod:`ddp_lite.method.hole_terms`) and other net inputs (:mod:`ddp_lite.method.nets`), both off in
 the ``paper`` recipe; the warp term's occlusion test (:mod:`ddp_lite.method.visibility`, off unless
 asked for), its confidence mask (:mod:`ddp_lite.method.warp_confidence`, off unless asked for) and its
-restriction to the holes (:func:`warp_region`, off unless asked for); auto-stop (:mod:`ddp_lite.method.loop`, a profile's budget), ensembles
+restriction to the holes (:func:`warp_region`, off unless asked for), its census or gradient cost and
+per-pixel texture weights (:mod:`ddp_lite.method.warp_cost`, off unless asked for); auto-stop (:mod:`ddp_lite.method.loop`, a profile's budget), ensembles
 (:mod:`ddp_lite.method.ensemble`, off unless asked for), bfloat16 (:func:`ddp_lite.method.device.use_bf16`).
 """
 from __future__ import annotations
@@ -33,6 +34,7 @@ from .losses import ConstantTarget, disparity_loss, rgb_loss, warp_loss
 from .variants import get_variant
 from .warp import Warper
 from .warp_confidence import warp_confidence
+from .warp_cost import WarpCost, epipolar_directions, texture_weights
 
 __all__ = ["PaperLoss", "warp_region"]
 
@@ -87,6 +89,12 @@ class PaperLoss:
         if self.region is not None:
             self.warp_keep = ([self.region & c for c in self.confident] if self.confident
                               else [self.region] * len(self.warpers))
+        # the kit's: another photometric cost, or per-pixel weights from the reference's change along each
+        # neighbour's epipolar line (method.warp_cost); None: the paper's intensity cost, unweighted
+        self.warp_cost = (WarpCost(self.rgb_target, config.warp_cost, config.lambda_w)
+                          if use_warp and (config.warp_cost != "intensity" or config.warp_texture) else None)
+        self.warp_weights = ([texture_weights(rgb, epipolar_directions(camera, cam).to(device)) for _, cam in neighbors]
+                             if use_warp and config.warp_texture else None)
 
     def __call__(self, disparity: torch.Tensor, colour: torch.Tensor | None = None):
         """``disparity`` (1, 1, H, W) is Z_out, ``colour`` (1, 3, H, W) I_out (the RGBD variants)."""
@@ -102,7 +110,11 @@ class PaperLoss:
             valid = [p[1] for p in pairs]
             if self.warp_keep is not None:  # the kit's masks
                 valid = [v & keep for v, keep in zip(valid, self.warp_keep)]
-            terms["warp"] = warp_loss(self.rgb_target, [p[0] for p in pairs], valid,
-                                      config.lambda_w)  # Eq. 5, mean over the N neighbours
+            if self.warp_cost is None:
+                terms["warp"] = warp_loss(self.rgb_target, [p[0] for p in pairs], valid,
+                                          config.lambda_w)  # Eq. 5, mean over the N neighbours
+            else:  # the kit's cost or weights, also a mean over the N neighbours
+                weights = self.warp_weights or [None] * len(pairs)
+                terms["warp"] = torch.stack([self.warp_cost(p[0], v, w) for p, v, w in zip(pairs, valid, weights)]).mean()
             total = total + self.w_warp * terms["warp"]  # Eq. 2, + (1 - γ1 - γ2) L_warp
         return total, terms

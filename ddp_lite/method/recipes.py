@@ -134,6 +134,11 @@ def describe_method(settings: dict) -> str:
             + (", the warp term only where the images single out one depth" if settings.get("warp_confidence") else "")
             + (f", the warp term only in the holes and within {settings['warp_reach']:g} px of them"
                if settings.get("warp_reach") is not None else "")
+            + ({"census": ", the warp term on a soft census of 7×7 patches (not L1 + SSIM on intensities)",
+                "gradient": ", the warp term's L1 on the images' differences (not on intensities)"}.get(
+                settings.get("warp_cost", "intensity"), ""))
+            + (", the warp term weighted by the image's change along each pixel's epipolar line"
+               if settings.get("warp_texture") else "")
             + (f", mean of {ensemble} fits" if ensemble > 1 else "")
             + ((", blended with the paper recipe's fit, " + ("weight from a held-out ring" if settings.get("blend_weight", 0.5) is None
                else f"weight {settings.get('blend_weight', 0.5):g}")) if settings.get("blend_paper") else "")
