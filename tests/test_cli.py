@@ -370,6 +370,15 @@ def test_time_left_over_units_that_report_their_end_counts_the_first_from_the_st
     now[0] += 30.0  # the second view took 30 s: 45 s a view so far
     clock.advance()
     assert clock.summary() == "all 33%, 3:00 left"
+    # two views side by side: the first ends after 60 s with the second nearly done beside it
+    clock = CommandClock(6)
+    clock.begin(at_once=2)
+    now[0] += 60.0
+    clock.advance()
+    assert clock.summary() == "all 17%, 2:30 left"  # 60 s for a round of two: 30 s a view, five left
+    now[0] += 6.0
+    clock.advance()
+    assert clock.summary() == "all 33%, 2:12 left"  # 66 s for two views, four left
 
 
 def test_complete_with_intrinsics_writes_the_frame_as_a_point_cloud(tmp_path, capsys):

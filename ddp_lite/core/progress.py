@@ -48,6 +48,7 @@ class CommandClock:
         self.ran = self.skipped = 0  # iterations run; iterations handed back unrun by fits that stopped early
         self.first = self.last = None  # when the first and the latest iteration started: the rate's span
         self.from_start = False  # True after begin(): ``first`` is when the first unit began, not ended
+        self.at_once = 1  # after begin(): units that run side by side, started together
         self.bar_left = None  # (planned, expected, earliest) iterations left of the open bar, when it has said so
 
     @property
@@ -55,10 +56,14 @@ class CommandClock:
         """Iterations run or handed back, of ``total``."""
         return min(self.total, self.ran + self.skipped)
 
-    def begin(self) -> None:
+    def begin(self, at_once: int = 1) -> None:
         """The first unit starts now. For units that report when they end, not when they begin (the views
-        of a sequence): the rate is then the time since this call over the units done, the first included."""
-        self.first, self.from_start = time.perf_counter(), True
+        of a sequence): the rate is then the time since this call over the units done, the first included.
+        ``at_once`` units run side by side: the first to end had ``at_once - 1`` others running beside it,
+        so the time so far is counted over whole rounds of ``at_once`` units."""
+        if not (isinstance(at_once, int) and at_once >= 1):
+            raise ValueError(f"at_once must be a positive number of units, got {at_once!r}")
+        self.first, self.from_start, self.at_once = time.perf_counter(), True, at_once
 
     def advance(self, n: int = 1) -> None:
         """``n`` iterations were run."""
@@ -84,7 +89,8 @@ class CommandClock:
         if self.first is None:
             return None
         if self.from_start:
-            rate = (self.last - self.first) / self.ran if self.ran else None
+            rounds = -(-self.ran // self.at_once)  # rounds begun so far: the units done, and those beside them
+            rate = (self.last - self.first) / (rounds * self.at_once) if self.ran else None
             return rate if rate else None
         if self.ran >= 2:
             rate = (self.last - self.first) / (self.ran - 1)

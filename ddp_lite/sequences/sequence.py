@@ -99,7 +99,7 @@ def run_sequence(scene: Scene, out, config: FitConfig | None = None, views=None,
         + (f", {at_once} at a time in this process" if at_once > 1 else ""))
     computed, failed = [], {}
     clock = CommandClock(max(len(todo), 1))  # the whole run's share and time left, on every view's line
-    clock.begin()  # a view's line comes when it ends: the rate counts the first view from here
+    clock.begin(at_once)  # a view's line comes when it ends: the rate counts the first views from here
     with torch_threads(1) if at_once > 1 else contextlib.nullcontext():  # side by side: one thread each, set once
         for key, outcome in run_jobs(fit_view, {k: (job,) for k, job in todo.items()}, client=client,
                                      retries=retries, workers=at_once):
