@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 import os
+import sys
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
@@ -23,14 +24,16 @@ import torch  # noqa: E402
 import torch.nn.functional as F  # noqa: E402
 from scipy import ndimage  # noqa: E402
 
-from ddp_lite.method.disparity import DisparityTransform  # noqa: E402
 from ddp_lite.method.losses import ssim  # noqa: E402
 from ddp_lite.method.loop import to_tensor  # noqa: E402
 from ddp_lite.method.visibility import Visibility  # noqa: E402
 from ddp_lite.method.warp import Warper  # noqa: E402
-from ddp_lite.method.warp_confidence import CHUNK, photometric_cost, sweep_planes  # noqa: E402
+from ddp_lite.method.warp_confidence import CHUNK, photometric_cost  # noqa: E402
 from ddp_lite.method.warp_cost import forward_differences, census_distance, grey, soft_census  # noqa: E402
-from ddp_lite.studies.real_cases import REAL_HOLES, make_real_case  # noqa: E402
+from ddp_lite.studies.real_cases import REAL_HOLES  # noqa: E402
+
+sys.path.insert(0, os.path.dirname(__file__))
+from study_warp_residual import real_sweep  # noqa: E402  (the same real pair and depth planes)
 
 WRONG_PX = 2.0  # a minimum this far from the truth pulls the fit wrong
 UNFLOW = dict(radius=2, epsilon=0.81 / 255.0 ** 2)  # UnFlow's soft sign (its patch is 7×7; 5×5 here)
@@ -51,11 +54,7 @@ def costs(reference: torch.Tensor, warped: torch.Tensor) -> dict:
 
 @torch.no_grad()
 def study(holes: str) -> None:
-    case = make_real_case(holes, 4)
-    nbr = case.neighbors[0]
-    ref, image = to_tensor(case.rgb, "cpu"), to_tensor(nbr.rgb, "cpu")
-    transform = DisparityTransform.from_depth(case.depth)  # the fit's range (the default a user gets)
-    planes = sweep_planes(case.camera, nbr.camera, transform.d_min, transform.d_max)
+    case, nbr, ref, image, _, planes = real_sweep(holes)
     warper, (H, W) = Warper(case.camera, nbr.camera), ref.shape[-2:]
     volumes: dict = {}
     for start in range(0, len(planes), CHUNK):

@@ -31,12 +31,19 @@ from ddp_lite.studies.real_cases import REAL_HOLES, make_real_case  # noqa: E402
 WRONG_PX = 2.0  # a minimum this far from the truth pulls the fit wrong
 
 
-def study(holes: str) -> None:
+def real_sweep(holes: str):
+    """The real pair at 1/4 with ``holes``, its right view, both images as tensors (1, 3, H, W), the fit's
+    disparity range and the sweep's depth planes over it: ``(case, nbr, ref, image, transform, planes)``."""
     case = make_real_case(holes, 4)
     nbr = case.neighbors[0]
     ref, image = to_tensor(case.rgb, "cpu"), to_tensor(nbr.rgb, "cpu")
     transform = DisparityTransform.from_depth(case.depth)  # the fit's range (the default a user gets)
     planes = sweep_planes(case.camera, nbr.camera, transform.d_min, transform.d_max)
+    return case, nbr, ref, image, transform, planes
+
+
+def study(holes: str) -> None:
+    case, nbr, ref, image, transform, planes = real_sweep(holes)
     cost = cost_volume(ref, image, case.camera, nbr.camera, planes).numpy()  # (D, H, W)
     at_min = cost.min(axis=0)
     seen = np.isfinite(at_min)  # some plane lands inside the neighbour (not so at the left border: no minimum)
