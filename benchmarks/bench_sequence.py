@@ -1,12 +1,14 @@
-"""Sequences: views per minute in-process vs on a 2-worker Dask LocalCluster, the dry run's estimate
-for a 150-view Tanks and Temples scene at paper size, and the fused cloud's P/R/F (SGM vs SGM+DDP).
+"""Sequences: views per minute in-process (one view at a time, and side by side) vs on a 2-worker Dask
+LocalCluster, the dry run's estimate for a 150-view Tanks and Temples scene at paper size, and the fused
+cloud's P/R/F (SGM vs SGM+DDP).
 
-    OMP_NUM_THREADS=1 python benchmarks/bench_sequence.py [--profile ci] [--views 6]
+    python benchmarks/bench_sequence.py [--profile ci] [--views 6] [--threads 2]
 
 The sequence: the 'desk' scene at the profile's size, every view's depth from OpenCV SGM (as
-notebooks 07 and 10), written as a TUM folder and read back. Each fit runs on one thread; the
-2-worker run must give the same depths (checked). Prints figures only. Cluster start-up is
-timed apart from the fits.
+notebooks 07 and 11), written as a TUM folder and read back. Each fit runs on one thread: in-process
+with torch at one thread the views run one after another, at ``--threads`` that many side by side; the
+other runs must give the serial depths (checked). Prints figures only. Cluster start-up is timed apart
+from the fits.
 """
 from __future__ import annotations
 
@@ -22,6 +24,7 @@ from ddp_lite import FitConfig, get_profile, make_scene
 from ddp_lite.evaluation.experiments import cloud_scores, sgm_depth_at_scale
 from ddp_lite.data.formats import load_sequence
 from ddp_lite.evaluation.fusion import fuse_depths, points_from_depth
+from ddp_lite.method.side_by_side import torch_threads
 from ddp_lite.sequences.runner import open_client
 from ddp_lite.sequences.sequence import run_sequence
 from ddp_lite.sequences.sequence_cost import estimate_sequence, format_estimate
@@ -38,6 +41,7 @@ def main() -> None:
     parser.add_argument("--profile", default="ci")
     parser.add_argument("--views", type=int, default=6)
     parser.add_argument("--gpu-tflops", type=float, default=5.0)
+    parser.add_argument("--threads", type=int, default=2, help="torch threads in-process: views side by side")
     args = parser.parse_args()
     profile = get_profile(args.profile)
     root = Path(tempfile.mkdtemp())
@@ -50,22 +54,30 @@ def main() -> None:
     print(f"{platform.processor() or platform.machine()}; {sequence}; profile '{profile.name}', "
           f"{config.iterations} iterations per view, one thread per fit")
 
-    start = time.perf_counter()
-    run_sequence(sequence, root / "serial", config, fuse=False, log=quiet)
-    serial = time.perf_counter() - start
+    with torch_threads(1):  # one view at a time
+        start = time.perf_counter()
+        run_sequence(sequence, root / "serial", config, fuse=False, log=quiet)
+        serial = time.perf_counter() - start
+    with torch_threads(args.threads):  # as many views at once as threads
+        start = time.perf_counter()
+        run_sequence(sequence, root / "side", config, fuse=False, log=quiet)
+        side = time.perf_counter() - start
     start = time.perf_counter()
     with open_client(workers=2) as client:
         started = time.perf_counter() - start
         start = time.perf_counter()
         run_sequence(sequence, root / "dask", config, client=client, fuse=False, log=quiet)
         parallel = time.perf_counter() - start
-    reference, other = _depths(root / "serial"), _depths(root / "dask")
-    same = all(np.array_equal(reference[n], other[n], equal_nan=True) for n in reference)
+    reference = _depths(root / "serial")
+    same = {name: all(np.array_equal(reference[n], other[n], equal_nan=True) for n in reference)
+            for name, other in (("side", _depths(root / "side")), ("dask", _depths(root / "dask")))}
     n = len(sequence)
     print(f"\nviews per minute ({n} views)")
     print(f"  in-process, serial        {60 * n / serial:6.1f}   ({serial:.1f} s)")
+    print(f"  in-process, side by side  {60 * n / side:6.1f}   ({side:.1f} s; {args.threads} threads; depths identical "
+          f"to serial: {same['side']})")
     print(f"  Dask LocalCluster, 2 × 1  {60 * n / parallel:6.1f}   ({parallel:.1f} s; cluster start-up {started:.1f} s "
-          f"more; depths identical to serial: {same})")
+          f"more; depths identical to serial: {same['dask']})")
 
     print("\ndry run: a 150-view Tanks and Temples scene at paper size")
     print(format_estimate(estimate_sequence(150, get_profile("paper").size, "paper", gpu_tflops=args.gpu_tflops)))
