@@ -16,12 +16,12 @@ import re
 from dataclasses import dataclass, field
 
 import numpy as np
-import torch
 
 from ..core.camera import Camera
 from ..method.disparity import DisparityTransform
 from ..method.config import FitConfig
 from ..method.combine import complete_depth
+from ..method.side_by_side import torch_threads
 from ..method.fit_inputs import check_fit_inputs
 from ..world.neighbors import select_neighbors
 from ..core.views import Scene
@@ -119,18 +119,8 @@ def fit_view(job: ViewJob) -> dict:
     ``depth`` (H, W) float32 metres is SGM+DDP: the input where valid, DDP in the holes; ``ddp`` is
     DDP's own output everywhere. ``job.threads`` torch threads (1 by default, so a run gives the
     same numbers in-process and on any worker)."""
-    def fit():
-        return complete_depth(job.rgb, job.depth, job.camera, job.neighbors, variant=VARIANT,
-                              config=job.config.replace(progress=False), transform=job.transform)
-
-    threads = torch.get_num_threads()
-    if threads == int(job.threads):  # as run side by side in this process: the caller set them for every thread
-        result = fit()
-    else:
-        torch.set_num_threads(int(job.threads))
-        try:
-            result = fit()
-        finally:
-            torch.set_num_threads(threads)
+    with torch_threads(job.threads):  # side by side in this process the caller has set them already: no change
+        result = complete_depth(job.rgb, job.depth, job.camera, job.neighbors, variant=VARIANT,
+                                config=job.config.replace(progress=False), transform=job.transform)
     return {"depth": result.merged(job.depth).astype(np.float32), "ddp": result.depth.astype(np.float32),
             "iterations": int(result.iterations), "seconds": float(result.seconds)}
