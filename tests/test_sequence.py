@@ -74,9 +74,18 @@ def test_serial_run_writes_every_output(serial, tum):
     assert not list(out.rglob(".tmp-*"))  # atomic writes leave no temporary files
 
 
-def test_two_dask_workers_give_the_serial_depths(serial, tum, tmp_path):
+@pytest.fixture(scope="module")
+def cluster():
+    """One local Dask cluster of two one-thread worker processes (``--workers 2``'s), for the module's Dask
+    tests: starting and closing one costs ~12 s, most of it waiting."""
+    with open_client(workers=2) as client:
+        yield client
+
+
+def test_two_dask_workers_joined_by_address_give_the_serial_depths(serial, tum, cluster, tmp_path):
     _, reference = serial
-    assert main(_cli(tum, tmp_path, "--workers", "2")) == 0
+    # as on a researcher's cluster: the CLI joins a running scheduler (`--workers` starts one: `cluster` above)
+    assert main(_cli(tum, tmp_path, "--scheduler", cluster.scheduler.address)) == 0
     depths = _depths(tmp_path)
     assert depths.keys() == reference.keys()
     for name in reference:
@@ -138,25 +147,25 @@ def test_an_interrupted_run_resumes_with_only_the_missing_views(serial, tum, tmp
     assert again["computed"] == [scene[0].name]
 
 
-def test_a_worker_killed_mid_run_loses_and_duplicates_nothing(serial, tum, tmp_path):
+def test_a_worker_killed_mid_run_loses_and_duplicates_nothing(serial, tum, cluster, tmp_path):
     _, reference = serial
     scene = read_tum(tum)
     config = FitConfig.for_profile("ci", variant=VARIANT, seed=0, progress=False, iterations=ITERATIONS)
-    with open_client(workers=2) as client:
-        killed = []
+    client = cluster  # its nanny starts a new worker in place of the killed one
+    killed = []
 
-        def kill_a_busy_worker():
-            while not killed:
-                busy = [w for w, keys in client.processing().items() if keys]
-                if busy:
-                    pid = client.run(os.getpid, workers=[busy[0]])[busy[0]]
-                    os.kill(pid, signal.SIGKILL)
-                    killed.append(pid)
-                time.sleep(0.02)
-        killer = threading.Thread(target=kill_a_busy_worker, daemon=True)
-        killer.start()
-        summary = run_sequence(scene, tmp_path, config, client=client, log=lambda *_: None)
-        killer.join(timeout=60)
+    def kill_a_busy_worker():
+        while not killed:
+            busy = [w for w, keys in client.processing().items() if keys]
+            if busy:
+                pid = client.run(os.getpid, workers=[busy[0]])[busy[0]]
+                os.kill(pid, signal.SIGKILL)
+                killed.append(pid)
+            time.sleep(0.02)
+    killer = threading.Thread(target=kill_a_busy_worker, daemon=True)
+    killer.start()
+    summary = run_sequence(scene, tmp_path, config, client=client, log=lambda *_: None)
+    killer.join(timeout=60)
     assert killed, "a worker must have been killed while it was fitting"
     assert sorted(summary["computed"]) == sorted(reference) and not summary["failed"]
     assert len(summary["computed"]) == len(set(summary["computed"]))  # each view's result arrived once
