@@ -40,15 +40,13 @@ def side_by_side_workers(config, variant: str, shape, n_neighbors: int, jobs: in
 
 
 def run_side_by_side(fit, count: int, workers: int) -> list:
-    """``[fit(k) for k in range(count)]``: in rounds of ``workers`` side by side in threads, each on one
-    torch thread; what is left over (fewer than ``workers``) in turn on all threads, since one
-    one-thread fit alone would leave a core idle."""
-    side_by_side = count - count % workers if workers > 1 else 0
-    results = []
-    if side_by_side:
-        with torch_threads(1), ThreadPoolExecutor(max_workers=workers) as pool:
-            results = list(pool.map(fit, range(side_by_side)))
-    return results + [fit(k) for k in range(side_by_side, count)]
+    """``[fit(k) for k in range(count)]``: ``workers`` at a time in threads, each on one torch thread, the
+    last round too when fewer are left than ``workers`` (a core then idles, but a fit's numbers do not
+    depend on how many cores the machine has); with ``workers`` 1, in turn on all threads."""
+    if workers <= 1 or count <= 1:
+        return [fit(k) for k in range(count)]
+    with torch_threads(1), ThreadPoolExecutor(max_workers=workers) as pool:
+        return list(pool.map(fit, range(count)))
 
 
 @contextlib.contextmanager
