@@ -138,4 +138,5 @@ STUDY.update({
     # whether the warp term's cost on the SGBM and occlusion holes is the auto-stop ending elsewhere: both variants
     # on one fixed schedule, the last iterate kept (class's cap of 600, its lr cut ×0.3 at 300 instead of a plateau's)
     "fixed600": dict(auto_stop=False, iterations=600, lr_milestones=(300,)),
+    "fixed600-census": dict(warp_cost="census", auto_stop=False, iterations=600, lr_milestones=(300,)),  # ... the census on it
 })
