@@ -131,4 +131,12 @@ STUDY.update({
     "warp-census": dict(warp_cost="census"),  # ... a soft census of 7×7 patches in place of L1 + SSIM on intensities,
     "warp-gradient": dict(warp_cost="gradient"),  # ... L1 on the images' differences beside SSIM,
     "warp-texture": dict(warp_texture=True),  # ... the paper's cost, each pixel weighted by the image's change along its epipolar line
+    "warp-census-conf": dict(warp_cost="census", warp_confidence=True),  # ... the census, only where the images single out one depth
+    # ... the census at the paper's cost's size: the census's mean per pixel at the true depth on the real pair's valid
+    # input is 1/0.59 of L1 + SSIM's (study_warp_costs.py --scale), so its share 0.02 × 0.59 (γ1 takes the rest)
+    "warp-census-matched": dict(warp_cost="census", gammas=(0.9682, 0.02)),
+    # whether the warp term's cost on the SGBM and occlusion holes is the auto-stop ending elsewhere: both variants
+    # on one fixed schedule, the last iterate kept (class's cap of 600, its lr cut ×0.3 at 300 instead of a plateau's)
+    "fixed600": dict(auto_stop=False, iterations=600, lr_milestones=(300,)),
+    "fixed600-census": dict(warp_cost="census", auto_stop=False, iterations=600, lr_milestones=(300,)),  # ... the census on it
 })

@@ -1,6 +1,7 @@
 """Where does each warp cost point? The per-pixel minimum of the intensity, census and gradient costs on the real pair.
 
     python benchmarks/study_warp_costs.py            # the five real hole kinds at 125×185, ~15 s
+    python benchmarks/study_warp_costs.py --scale    # each cost's mean at the true depth, on the valid input
 
 As ``study_warp_residual.py`` does for the paper's cost: for each real case (the right view as the
 neighbour), a plane sweep over the fit's depth range, 0.25 px of disparity apart, of each cost of
@@ -80,7 +81,25 @@ def study(holes: str) -> None:
         print(f"  {name:26s} " + " ".join(f"{s:{w}.2f}" for s, w in zip(shares, (6, 8, 9, 7, 6))))
 
 
+@torch.no_grad()
+def scale_at_truth(holes: str) -> dict:
+    """Each cost's mean per pixel at the true depth over the valid input (known truth, landing inside the
+    neighbour): the size of the warp term each cost gives where the depth is right, to weight one like another."""
+    case, nbr, ref, image, _, _ = real_sweep(holes)
+    truth = np.where(np.isfinite(case.gt), case.gt, np.nanmedian(case.gt)).astype(np.float32)
+    warped, seen = Warper(case.camera, nbr.camera)(image, to_tensor(truth, "cpu"))
+    valid = np.isfinite(case.depth) & np.isfinite(case.gt) & seen[0, 0].numpy()
+    return {name: float(cost[0, 0].numpy()[valid].mean()) for name, cost in costs(ref, warped).items()}
+
+
 if __name__ == "__main__":
     torch.set_num_threads(1)
-    for kind in REAL_HOLES:
-        study(kind)
+    if "--scale" in sys.argv[1:]:
+        print(f"mean cost per pixel at the true depth, valid input: {'holes':10s} intensity  census  ratio")
+        for kind in REAL_HOLES:
+            means = scale_at_truth(kind)
+            print(f"{'':52s}{kind:10s} {means['intensity']:9.4f} {means['census']:7.4f} "
+                  f"{means['intensity'] / means['census']:6.3f}")
+    else:
+        for kind in REAL_HOLES:
+            study(kind)
