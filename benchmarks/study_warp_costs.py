@@ -22,19 +22,16 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
 import torch  # noqa: E402
-import torch.nn.functional as F  # noqa: E402
-from scipy import ndimage  # noqa: E402
 
-from ddp_lite.method.losses import ssim  # noqa: E402
 from ddp_lite.method.loop import to_tensor  # noqa: E402
 from ddp_lite.method.visibility import Visibility  # noqa: E402
 from ddp_lite.method.warp import Warper  # noqa: E402
-from ddp_lite.method.warp_confidence import CHUNK, photometric_cost  # noqa: E402
+from ddp_lite.method.warp_confidence import CHUNK, photometric_cost, structure_per_pixel  # noqa: E402
 from ddp_lite.method.warp_cost import forward_differences, census_distance, grey, soft_census  # noqa: E402
 from ddp_lite.studies.real_cases import REAL_HOLES  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(__file__))
-from study_warp_residual import real_sweep  # noqa: E402  (the same real pair and depth planes)
+from study_warp_residual import filled_truth, real_sweep, textured_pixels  # noqa: E402  (the same pair, planes, truth)
 
 WRONG_PX = 2.0  # a minimum this far from the truth pulls the fit wrong
 UNFLOW = dict(radius=2, epsilon=0.81 / 255.0 ** 2)  # UnFlow's soft sign (its patch is 7×7; 5×5 here)
@@ -42,9 +39,7 @@ UNFLOW = dict(radius=2, epsilon=0.81 / 255.0 ** 2)  # UnFlow's soft sign (its pa
 
 def costs(reference: torch.Tensor, warped: torch.Tensor) -> dict:
     """Each cost per pixel, (D, 1, H, W), of ``warped`` (D, 3, H, W) against ``reference`` (1, 3, H, W)."""
-    structure = ssim(warped, reference.expand_as(warped), reduction="none").mean(dim=1, keepdim=True)
-    half = (reference.shape[-1] - structure.shape[-1]) // 2
-    structure = F.pad(structure, (half, half, half, half), mode="replicate")
+    structure = structure_per_pixel(reference, warped)
     gradient = (forward_differences(warped) - forward_differences(reference)).abs().mean(dim=1, keepdim=True)
     return {"intensity": photometric_cost(reference, warped),
             "census": census_distance(soft_census(grey(warped)), soft_census(grey(reference))),
@@ -63,11 +58,9 @@ def study(holes: str) -> None:
         warped, valid = warper(image.expand(len(depths), -1, -1, -1), depths)
         for name, cost in costs(ref, warped).items():
             volumes.setdefault(name, []).append(torch.where(valid, cost, torch.full_like(cost, math.inf))[:, 0])
-    truth = np.where(np.isfinite(case.gt), case.gt, np.nanmedian(case.gt)).astype(np.float32)
+    truth = filled_truth(case)
     hidden = Visibility(case.camera, nbr.camera)(to_tensor(truth, "cpu"))[0, 0].numpy()
-    grey_image = case.rgb.mean(axis=2)
-    std = np.sqrt(np.maximum(ndimage.uniform_filter(grey_image ** 2, 5) - ndimage.uniform_filter(grey_image, 5) ** 2, 0))
-    textured = std > 0.03
+    textured = textured_pixels(case)
     print(f"{holes}: share of pixels whose minimum is > {WRONG_PX:g} px from the truth")
     print(f"  {'cost':26s} {'holes':>6s} {'vis tex':>8s} {'vis flat':>9s} {'hidden':>7s} {'valid':>6s}")
     for name, slices in volumes.items():
@@ -86,7 +79,7 @@ def scale_at_truth(holes: str) -> dict:
     """Each cost's mean per pixel at the true depth over the valid input (known truth, landing inside the
     neighbour): the size of the warp term each cost gives where the depth is right, to weight one like another."""
     case, nbr, ref, image, _, _ = real_sweep(holes)
-    truth = np.where(np.isfinite(case.gt), case.gt, np.nanmedian(case.gt)).astype(np.float32)
+    truth = filled_truth(case)
     warped, seen = Warper(case.camera, nbr.camera)(image, to_tensor(truth, "cpu"))
     valid = np.isfinite(case.depth) & np.isfinite(case.gt) & seen[0, 0].numpy()
     return {name: float(cost[0, 0].numpy()[valid].mean()) for name, cost in costs(ref, warped).items()}

@@ -42,22 +42,32 @@ def real_sweep(holes: str):
     return case, nbr, ref, image, transform, planes
 
 
+def filled_truth(case) -> np.ndarray:
+    """(H, W) float32 metres: the true depth, its unknown pixels at its median (so every pixel warps somewhere)."""
+    return np.where(np.isfinite(case.gt), case.gt, np.nanmedian(case.gt)).astype(np.float32)
+
+
+def textured_pixels(case) -> np.ndarray:
+    """(H, W) bool: the grey level's standard deviation over 5×5 above 0.03 (else "flat")."""
+    grey = case.rgb.mean(axis=2)
+    std = np.sqrt(np.maximum(ndimage.uniform_filter(grey ** 2, 5) - ndimage.uniform_filter(grey, 5) ** 2, 0))
+    return std > 0.03
+
+
 def study(holes: str) -> None:
     case, nbr, ref, image, transform, planes = real_sweep(holes)
     cost = cost_volume(ref, image, case.camera, nbr.camera, planes).numpy()  # (D, H, W)
     at_min = cost.min(axis=0)
     seen = np.isfinite(at_min)  # some plane lands inside the neighbour (not so at the left border: no minimum)
     disparity_min = case.fb / planes[cost.argmin(axis=0)]
-    truth = np.where(np.isfinite(case.gt), case.gt, np.nanmedian(case.gt)).astype(np.float32)
+    truth = filled_truth(case)
     with torch.no_grad():
         warped, _ = Warper(case.camera, nbr.camera)(image, to_tensor(truth, "cpu"))
         at_truth = photometric_cost(ref, warped)[0, 0].numpy()
         hidden = Visibility(case.camera, nbr.camera)(to_tensor(truth, "cpu"))[0, 0].numpy()
         confident = warp_confidence(ref, image, case.camera, nbr.camera, transform.d_min, transform.d_max)[0, 0].numpy()
     wrong = np.abs(disparity_min - case.fb / truth) > WRONG_PX
-    grey = case.rgb.mean(axis=2)
-    std = np.sqrt(np.maximum(ndimage.uniform_filter(grey ** 2, 5) - ndimage.uniform_filter(grey, 5) ** 2, 0))
-    textured, scored = std > 0.03, case.scored_holes & seen
+    textured, scored = textured_pixels(case), case.scored_holes & seen
     valid = np.isfinite(case.depth) & np.isfinite(case.gt) & seen
     print(f"{holes}: {scored.sum()} hole px with a minimum (of {case.scored_holes.sum()}), {len(planes)} planes; hidden {hidden[scored].mean():.2f}, "
           f"textured {textured[scored].mean():.2f}")

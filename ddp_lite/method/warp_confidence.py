@@ -34,7 +34,7 @@ from ..core.camera import Camera
 from .losses import ssim
 from .warp import Warper
 
-__all__ = ["photometric_cost", "sweep_planes", "cost_volume", "warp_confidence",
+__all__ = ["photometric_cost", "structure_per_pixel", "sweep_planes", "cost_volume", "warp_confidence",
            "UNIQUENESS", "EXCLUSION_PX", "LR_TOLERANCE_PX", "ERODE_PX", "STEP_PX"]
 
 UNIQUENESS = 0.3  # 1 - c_best / c_second at least this (SGBM's uniquenessRatio in percent would be 30)
@@ -53,10 +53,15 @@ def photometric_cost(reference: torch.Tensor, warped: torch.Tensor, lambda_w: fl
     (one value per window centre), padded to H×W by repeating the border's windows; H, W ≥ 11.
     """
     l1 = (warped - reference).abs().mean(dim=1, keepdim=True)
+    return lambda_w * (1.0 - structure_per_pixel(reference, warped)) + (1.0 - lambda_w) * l1
+
+
+def structure_per_pixel(reference: torch.Tensor, warped: torch.Tensor) -> torch.Tensor:
+    """SSIM per pixel, channel-averaged: ``reference`` (1, C, H, W), ``warped`` (D, C, H, W) → (D, 1, H, W),
+    the loss's 11×11 map (one value per window centre) padded to H×W by repeating the border's windows."""
     structure = ssim(warped, reference.expand_as(warped), reduction="none").mean(dim=1, keepdim=True)
     half = (reference.shape[-1] - structure.shape[-1]) // 2
-    structure = F.pad(structure, (half, half, half, half), mode="replicate")
-    return lambda_w * (1.0 - structure) + (1.0 - lambda_w) * l1
+    return F.pad(structure, (half, half, half, half), mode="replicate")
 
 
 def _parallax_px(ref_cam: Camera, nbr_cam: Camera, near: float, far: float) -> float:
