@@ -7,7 +7,10 @@
 Prints a table; asserts nothing. Each configuration runs in a fresh subprocess so that its
 peak resident memory (ru_maxrss) is its own. "bound" is the iteration's floating-point work
 (torch.utils.flop_counter, forward + backward) divided by this machine's dense matrix-multiply
-rate measured in the same run with the same thread count; "ratio" = time / bound.
+rate measured in the same run with the same thread count; "ratio" = time / bound. "conv" is the
+floor below the loop: the iteration's convolution calls (forward and backward, as recorded in one
+iteration) replayed one by one on fresh tensors of the same shapes, nothing else; "conv ratio" =
+conv / bound. A loop can get no nearer its bound than its convolutions do.
 """
 from __future__ import annotations
 
@@ -61,6 +64,42 @@ def matmul_rate(n: int = 2048, repeats: int = 5) -> float:
     return 2 * n ** 3 * repeats / (time.perf_counter() - start)
 
 
+def convolution_seconds(run, repeats: int = 10) -> float:
+    """Seconds the convolutions of ``run()`` (one fit iteration) take replayed alone: every
+    ``aten.convolution`` and ``aten.convolution_backward`` call is recorded with its arguments' shapes,
+    strides and dtypes, then each is called ``repeats`` times (after two warm-up calls) on fresh random
+    tensors of that layout; the sum of the per-call means."""
+    from torch.utils._python_dispatch import TorchDispatchMode
+    wanted = (torch.ops.aten.convolution.default, torch.ops.aten.convolution_backward.default)
+    calls = []
+
+    class Recorder(TorchDispatchMode):
+        def __torch_dispatch__(self, func, types, args=(), kwargs=None):
+            if func in wanted:
+                calls.append((func, [(a.shape, a.stride(), a.dtype) if isinstance(a, torch.Tensor) else a for a in args]))
+            return func(*args, **(kwargs or {}))
+
+    def fresh(arg):  # a tensor of the recorded layout (strides of 0 included), else the argument itself
+        if not (isinstance(arg, tuple) and len(arg) == 3 and isinstance(arg[0], torch.Size)):
+            return arg
+        shape, stride, dtype = arg
+        extent = 1 + sum((n - 1) * step for n, step in zip(shape, stride))
+        return torch.randn(max(extent, 1), dtype=dtype).as_strided(shape, stride)
+
+    with Recorder():
+        run()
+    total = 0.0
+    for func, recorded in calls:
+        args = [fresh(arg) for arg in recorded]
+        for _ in range(2):
+            func(*args)
+        start = time.perf_counter()
+        for _ in range(repeats):
+            func(*args)
+        total += (time.perf_counter() - start) / repeats
+    return total
+
+
 def case(height: int, width: int, seed: int = 0):
     """A slanted plane with a textured image, 20 % holes and two shifted neighbours."""
     from ddp_lite import Camera, look_at
@@ -90,8 +129,10 @@ def run_one(variant: str, height: int, width: int, channels, iterations: int, ov
     per_iteration = (long.seconds - short.seconds) / iterations
     peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     rate = matmul_rate()
+    conv = convolution_seconds(lambda: complete_depth(rgb, depth, variant=variant, config=config.replace(iterations=1),
+                                                      **kwargs))
     return dict(variant=variant, size=f"{height}x{width}", channels="-".join(map(str, channels)),
-                s_per_it=per_iteration, gflop=flops / 1e9, bound=flops / rate, mm_gflops=rate / 1e9,
+                s_per_it=per_iteration, gflop=flops / 1e9, bound=flops / rate, mm_gflops=rate / 1e9, conv_s=conv,
                 peak_mb=peak_mb, rss_before_mb=rss_before / 1024)
 
 
@@ -113,7 +154,8 @@ def main() -> None:
     print(cpu_summary())
     print(f"torch {torch.__version__}, {torch.get_num_threads()} threads, {args.iterations} timed iterations"
           + (f", overrides {overrides}" if overrides else ""))
-    print(f"{'variant':<10} {'size':>7} {'net':>18} {'s/it':>7} {'GFLOP':>6} {'bound s':>8} {'ratio':>6} {'peak MB':>8}")
+    print(f"{'variant':<10} {'size':>7} {'net':>18} {'s/it':>7} {'GFLOP':>6} {'bound s':>8} {'ratio':>6} {'conv s':>7} "
+          f"{'conv ratio':>10} {'peak MB':>8}")
     for channels in widths:
         for height, width in ((48, 64), (96, 128)):
             for variant in VARIANTS:
@@ -123,7 +165,8 @@ def main() -> None:
                                      capture_output=True, text=True, check=True)
                 r = json.loads(out.stdout.strip().splitlines()[-1])
                 print(f"{r['variant']:<10} {r['size']:>7} {r['channels']:>18} {r['s_per_it']:7.3f} {r['gflop']:6.2f} "
-                      f"{r['bound']:8.3f} {r['s_per_it'] / r['bound']:6.2f} {r['peak_mb']:8.0f}", flush=True)
+                      f"{r['bound']:8.3f} {r['s_per_it'] / r['bound']:6.2f} {r['conv_s']:7.3f} {r['conv_s'] / r['bound']:10.2f} "
+                      f"{r['peak_mb']:8.0f}", flush=True)
 
 
 if __name__ == "__main__":

@@ -147,7 +147,8 @@ def main() -> None:
             for channels in ("32-64-128-256-512", "16-32-64-128-256"):
                 r = loop_ratio(isa, args.threads, channels)
                 print(f"fit loop rgbd+warp 96×128 UNet {channels}: {r['s_per_it']:.3f} s/it, bound {r['bound']:.3f} s "
-                      f"({r['mm_gflops']:.0f} GFLOP/s matmul), ratio {r['s_per_it'] / r['bound']:.2f}", flush=True)
+                      f"({r['mm_gflops']:.0f} GFLOP/s matmul), ratio {r['s_per_it'] / r['bound']:.2f}; its convolutions "
+                      f"alone {r['conv_s']:.3f} s, ratio {r['conv_s'] / r['bound']:.2f}", flush=True)
         if "fit" not in args.skip:
             r = class_fit(isa, args.threads)
             print(f"one class kit fit (rgbd, real SGBM holes, {r['shape'][0]}×{r['shape'][1]}): {r['seconds']:.1f} s, "
