@@ -135,6 +135,7 @@ STUDY.update({
     # ... the census at the paper's cost's size: the census's mean per pixel at the true depth on the real pair's valid
     # input is 1/0.59 of L1 + SSIM's (study_warp_costs.py --scale), so its share 0.02 × 0.59 (γ1 takes the rest)
     "warp-census-matched": dict(warp_cost="census", gammas=(0.9682, 0.02)),
+    "warp-census-intensity": dict(warp_cost="census+intensity"),  # ... half L1 + SSIM, half the census at its size (×0.59)
     # whether the warp term's cost on the SGBM and occlusion holes is the auto-stop ending elsewhere: both variants
     # on one fixed schedule, the last iterate kept (class's cap of 600, its lr cut ×0.3 at 300 instead of a plateau's)
     "fixed600": dict(auto_stop=False, iterations=600, lr_milestones=(300,)),

@@ -14,8 +14,8 @@ from ddp_lite.method.losses import ConstantTarget, warp_loss
 from ddp_lite.method.paper_method import PaperLoss
 from ddp_lite.method.recipes import describe_method
 from ddp_lite.method.warp import Warper
-from ddp_lite.method.warp_cost import (WARP_COSTS, WarpCost, census_distance, epipolar_directions, soft_census,
-                                       texture_weights)
+from ddp_lite.method.warp_cost import (CENSUS_SCALE, WARP_COSTS, WarpCost, census_distance, epipolar_directions,
+                                       soft_census, texture_weights)
 from conftest import rectified_pair
 
 FOCAL, BASELINE, WIDTH, HEIGHT, SHIFT = 60.0, 0.1, 64, 32, 6  # the pair's true disparity: 6 px
@@ -117,7 +117,8 @@ def test_paper_loss_with_another_cost_or_the_weights_pulls_the_depth_and_the_def
     mask[..., 10:18, 20:28] = False
     target = torch.full((1, 1, HEIGHT, WIDTH), 0.4)
     assert PaperLoss("rgbd+warp", FitConfig(), transform, target, mask, reference, left, [(neighbour, right)]).warp_cost is None
-    for settings in (dict(warp_cost="census"), dict(warp_cost="gradient"), dict(warp_texture=True)):
+    for settings in (dict(warp_cost="census"), dict(warp_cost="gradient"), dict(warp_cost="census+intensity"),
+                     dict(warp_texture=True)):
         loss = PaperLoss("rgbd+warp", FitConfig(**settings), transform, target, mask, reference, left, [(neighbour, right)])
         disparity = torch.full((1, 1, HEIGHT, WIDTH), 0.4, requires_grad=True)
         _, terms = loss(disparity, reference.clone())
@@ -135,3 +136,26 @@ def test_the_options_are_checked_off_by_default_and_named_as_the_kits():
         FitConfig(warp_texture=1).validate()
     assert "census" in describe_method({"warp_cost": "census"})
     assert "epipolar" in describe_method({"warp_texture": True})
+
+
+def test_census_plus_intensity_is_half_the_papers_cost_and_half_the_census_at_its_size():
+    generator = torch.Generator().manual_seed(4)
+    reference, warped = torch.rand(1, 3, 24, 40, generator=generator), torch.rand(1, 3, 24, 40, generator=generator)
+    valid = torch.rand(1, 1, 24, 40, generator=generator) > 0.2
+    weights = torch.rand(1, 1, 24, 40, generator=generator) * 2
+    mixed, intensity, census = (WarpCost(reference, kind) for kind in ("census+intensity", "intensity", "census"))
+    assert CENSUS_SCALE == 0.59
+    for w in (None, weights):  # each half through the single costs' own code, with and without the weights
+        expected = 0.5 * float(intensity(warped, valid, w)) + 0.5 * 0.59 * float(census(warped, valid, w))
+        assert float(mixed(warped, valid, w)) == pytest.approx(expected, rel=1e-6), w is None
+    # the halves differ on random images, so a wrong mix (e.g. the census unscaled, or one half only) shows
+    assert abs(float(intensity(warped, valid)) - 0.59 * float(census(warped, valid))) > 0.01
+    # without weights the intensity half is the paper's term, bit for bit
+    paper = warp_loss(ConstantTarget(reference), [warped], [valid], 0.5)
+    assert float(mixed(warped, valid)) == pytest.approx(0.5 * float(paper) + 0.5 * 0.59 * float(census(warped, valid)), rel=1e-6)
+    # identical images (and whatever the invalid pixels hold): 0
+    scrambled = torch.where(valid, reference, warped)
+    assert float(mixed(scrambled, valid)) == pytest.approx(0.0, abs=1e-7)
+    assert float(mixed(scrambled, valid, weights)) == pytest.approx(0.0, abs=1e-7)
+    FitConfig(warp_cost="census+intensity").validate()
+    assert "census" in describe_method({"warp_cost": "census+intensity"})

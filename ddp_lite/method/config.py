@@ -97,7 +97,8 @@ class LossConfig(_Section):
     warp_reach: float | None = None  # L_warp only on the unfitted pixels (holes, held-out) and within this many px of
     # them, off the valid input L_disp pins (paper_method.warp_region; None: every pixel, the paper)
     warp_cost: str = "intensity"  # what L_warp compares: "intensity" (L1 + SSIM on colour, the paper), "census" (a
-    # soft census, no L1/SSIM) or "gradient" (L1 on the images' differences + SSIM) (method.warp_cost; not in the paper)
+    # soft census, no L1/SSIM), "gradient" (L1 on the images' differences + SSIM) or "census+intensity" (half each,
+    # the census at L1 + SSIM's size) (method.warp_cost; not in the paper)
     warp_texture: bool = False  # L_warp weighted per pixel by the reference's change along the epipolar line
     # (method.warp_cost.texture_weights: flat colour little; not in the paper)
     disparity_margin: float = 1.25  # transform=None: d_min / margin … d_max × margin around the valid depth

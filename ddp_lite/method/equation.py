@@ -38,6 +38,7 @@ def loss_equation(config, variant: str) -> str:
                                        ("holes", getattr(config, "warp_reach", None) is not None),  # paper_method.warp_region
                                        ("census", getattr(config, "warp_cost", "intensity") == "census"),  # method.warp_cost
                                        ("gradient", getattr(config, "warp_cost", "intensity") == "gradient"),
+                                       ("census+intensity", getattr(config, "warp_cost", "intensity") == "census+intensity"),
                                        ("textured", getattr(config, "warp_texture", False)))
                  if on]
         if where:  # the kit's masks, costs and weights on the warp term

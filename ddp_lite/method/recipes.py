@@ -135,7 +135,8 @@ def describe_method(settings: dict) -> str:
             + (f", the warp term only in the holes and within {settings['warp_reach']:g} px of them"
                if settings.get("warp_reach") is not None else "")
             + ({"census": ", the warp term on a soft census of 7×7 patches (not L1 + SSIM on intensities)",
-                "gradient": ", the warp term's L1 on the images' differences (not on intensities)"}.get(
+                "gradient": ", the warp term's L1 on the images' differences (not on intensities)",
+                "census+intensity": ", the warp term half L1 + SSIM on intensities, half a soft census of 7×7 patches at its size"}.get(
                 settings.get("warp_cost", "intensity"), ""))
             + (", the warp term weighted by the image's change along each pixel's epipolar line"
                if settings.get("warp_texture") else "")

@@ -4,7 +4,7 @@ The paper's L_warp compares intensities, ``λw (1 − SSIM) + (1 − λw) L1`` o
 two views differ by more than the depth explains (exposure, shading, specular light, a pooled image's
 blur) or where the colour is flat, the intensity cost's minimum can sit at a wrong depth: on the real
 Motorcycle pair it does for most pixels of the SGBM holes (docs/real_data.md, "Where the warp term can
-be trusted"). Two other costs are offered by ``FitConfig.warp_cost``:
+be trusted"). Three other costs are offered by ``FitConfig.warp_cost``:
 
 - ``"census"``: a soft census (ternary) transform, as in UnFlow's ternary loss (Meister et al., AAAI
   2018): each pixel is described by the soft signs ``t = d / sqrt(ε + d²)`` of the grey-level
@@ -17,6 +17,10 @@ be trusted"). Two other costs are offered by ``FitConfig.warp_cost``:
   way. It replaces L1 and SSIM (λw is not used).
 - ``"gradient"``: the L1 on the images' forward differences along x and y (per colour channel) in
   place of the L1 on intensities, beside the same SSIM: blind to a constant offset between the views.
+- ``"census+intensity"``: half each, ``0.5 (λw (1 − SSIM) + (1 − λw) L1) + 0.5 · 0.59 · census``
+  (:data:`CENSUS_SCALE`: the census at the paper's cost's size, so the sum keeps the term's size). The
+  census sees the order of the grey levels, blind to offsets and with little pull in flat colour; the
+  intensity half keeps the paper's pull where the census is weak.
 
 ``FitConfig.warp_texture`` weights each pixel's cost by how well the neighbour can constrain its depth:
 a change of depth moves the pixel's match along its epipolar line, so the cost can tell depths apart
@@ -41,10 +45,10 @@ import torch.nn.functional as F
 from ..core.camera import Camera, pixel_grid, relative_pose
 from .losses import ConstantTarget, ssim, warp_loss
 
-__all__ = ["WARP_COSTS", "CENSUS_RADIUS", "grey", "soft_census", "census_distance", "forward_differences",
-           "epipolar_directions", "texture_weights", "WarpCost"]
+__all__ = ["WARP_COSTS", "CENSUS_RADIUS", "CENSUS_SCALE", "grey", "soft_census", "census_distance",
+           "forward_differences", "epipolar_directions", "texture_weights", "WarpCost"]
 
-WARP_COSTS = ("intensity", "census", "gradient")  # "intensity": the paper's
+WARP_COSTS = ("intensity", "census", "gradient", "census+intensity")  # "intensity": the paper's
 CENSUS_RADIUS = 3  # 7×7 patches, UnFlow's
 # UnFlow's soft sign, on grey levels 0-255, is d / sqrt(0.81 + d²): ±0.74 at one grey level, so in a pooled
 # photograph's flat colour the signs are noise. Here ε = (10 grey levels)², on [0, 1]: on the real pair's valid
@@ -52,6 +56,9 @@ CENSUS_RADIUS = 3  # 7×7 patches, UnFlow's
 # the intensity cost's does, to a point (87-95 % within 2 px, 88-96 % for intensities; 82-90 % with UnFlow's ε and 5×5 patches)
 CENSUS_EPSILON = (10.0 / 255.0) ** 2
 HAMMING_ETA = 0.1  # UnFlow's: one flipped sign costs 4 / 4.1, a sign against 0 1 / 1.1
+# the census's mean per pixel at the true depth on the real pair's valid input is 1/0.59 of L1 + SSIM's (0.565-0.616
+# over the five cases; benchmarks/study_warp_costs.py --scale): "census+intensity" scales its census half by this
+CENSUS_SCALE = 0.59
 GREY = (0.299, 0.587, 0.114)  # ITU-R BT.601 luma, as OpenCV's and TensorFlow's rgb → grey
 
 
@@ -135,11 +142,12 @@ class WarpCost:
     (:func:`~ddp_lite.method.losses.warp_loss`'s per-neighbour term). With weights, L1 (or the gradient
     L1) is a weighted mean over the valid pixels and SSIM a weighted mean over the 11×11 windows, each
     weighted by its centre pixel's weight; census is a weighted mean over the valid pixels.
+    ``kind="census+intensity"`` is ``0.5 · intensity + 0.5 · CENSUS_SCALE · census``, each half as above.
 
     Example:
         >>> ref = torch.rand(1, 3, 16, 16); valid = torch.ones(1, 1, 16, 16, dtype=torch.bool)
         >>> [round(float(WarpCost(ref, kind)(ref.clone(), valid)), 6) for kind in WARP_COSTS]
-        [0.0, 0.0, 0.0]
+        [0.0, 0.0, 0.0, 0.0]
     """
 
     def __init__(self, reference: torch.Tensor, kind: str = "intensity", lambda_w: float = 0.5):
@@ -148,19 +156,26 @@ class WarpCost:
         self.kind, self.lambda_w = kind, float(lambda_w)
         self.target = reference if isinstance(reference, ConstantTarget) else ConstantTarget(reference)
         image = self.target.image
-        self.census = soft_census(grey(image)) if kind == "census" else None  # the reference's, once
+        self.census = soft_census(grey(image)) if kind in ("census", "census+intensity") else None  # the reference's, once
         self.differences = forward_differences(image) if kind == "gradient" else None
 
     def __call__(self, warped: torch.Tensor, valid: torch.Tensor, weights: torch.Tensor | None = None) -> torch.Tensor:
+        if self.kind == "census+intensity":  # half the paper's cost, half the census at its size
+            return (0.5 * self._cost("intensity", warped, valid, weights)
+                    + 0.5 * CENSUS_SCALE * self._cost("census", warped, valid, weights))
+        return self._cost(self.kind, warped, valid, weights)
+
+    def _cost(self, kind: str, warped: torch.Tensor, valid: torch.Tensor, weights: torch.Tensor | None) -> torch.Tensor:
+        """One of the single costs ("intensity", "census", "gradient") of ``warped`` against the reference."""
         reference = self.target.image
-        if self.kind == "intensity" and weights is None:  # the paper's term, bit for bit
+        if kind == "intensity" and weights is None:  # the paper's term, bit for bit
             return warp_loss(self.target, [warped], [valid], self.lambda_w)
         warped = torch.where(valid, warped, reference)  # pixels that do not count agree exactly
         share = valid.to(warped.dtype) if weights is None else valid.to(warped.dtype) * weights
-        if self.kind == "census":
+        if kind == "census":
             distance = census_distance(soft_census(grey(warped)), self.census)  # (1, 1, H, W)
             return (distance * share).sum() / share.sum().clamp(min=1e-12)
-        if self.kind == "gradient":
+        if kind == "gradient":
             error = (forward_differences(warped) - self.differences).abs()  # (1, 2C, H, W)
         else:
             error = (warped - reference).abs()
