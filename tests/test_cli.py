@@ -237,6 +237,20 @@ def test_complete_keeps_valid_pixels_exactly_fills_the_holes_and_writes_a_previe
     assert np.isfinite(raw).all() and not np.array_equal(raw[valid], depth[valid])  # the net's own output
 
 
+def test_complete_refuses_a_gt_with_nothing_in_the_holes_before_the_fit(tmp_path, capsys, monkeypatch):
+    depth, gt = _pair(tmp_path)
+    np.save(tmp_path / "gt.npy", np.where(np.isfinite(depth), gt, np.nan))  # known only where the input is
+    fits = []
+    import ddp_lite.method.combine as combine
+    monkeypatch.setattr(combine, "complete_depth", lambda *a, **k: fits.append(1))  # a fit would be the error
+    argv = ["complete", "--rgb", str(tmp_path / "rgb.png"), "--depth", str(tmp_path / "depth.npy"),
+            "--gt", str(tmp_path / "gt.npy"), "--out", str(tmp_path / "filled.npy"), "--profile", "ci"]
+    assert main(argv) == 2
+    captured = capsys.readouterr()
+    assert "--gt has no valid value in the holes" in captured.err and not fits
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["depth.npy", "gt.npy", "rgb.png"]  # nothing written
+
+
 def test_complete_raw_writes_the_nets_output_with_no_fill_mixed_in(tmp_path, monkeypatch):
     import ddp_lite.method.combine as combine
     _pair(tmp_path)

@@ -139,19 +139,29 @@ def _write_preview(path: str, depth: np.ndarray, filled: np.ndarray, summary: st
     save_figure(fig, path)
 
 
-def _comparison(depth, rgb, filled, gt) -> str:
-    """The line that puts DDP's fill beside classical ones at full size."""
+def _classical_fills(depth, gt) -> dict:
+    """The classical fills (H, W) metres the summary line puts DDP beside, computed before the fit (they need
+    only the input) so that the fit's time left is the command's: linear from the holes' rims, and with
+    ``gt`` Navier-Stokes too. A ``gt`` with no value in the holes is refused here, before any work."""
     from ..classical.depth_fills import fill_linear_from_rim, fill_navier_stokes
     holes = ~np.isfinite(depth)
-    linear = fill_linear_from_rim(depth)  # fill_linear's triangulation of every valid pixel takes 13 s at 500×741
+    if gt is not None and not (holes & np.isfinite(gt)).any():
+        raise ValueError("--gt has no valid value in the holes of --depth; nothing to score")
+    fills = {"linear": fill_linear_from_rim(depth)}  # fill_linear's triangulation of every valid pixel takes 13 s at 500×741
+    if gt is not None:
+        fills["navier-stokes"] = fill_navier_stokes(depth)
+    return fills
+
+
+def _comparison(depth, filled, gt, classical: dict) -> str:
+    """The line that puts DDP's fill beside the classical ones (:func:`_classical_fills`) at full size."""
+    holes = ~np.isfinite(depth)
     if gt is None:
-        difference = float(np.mean(np.abs(filled[holes] - linear[holes])))
+        difference = float(np.mean(np.abs(filled[holes] - classical["linear"][holes])))
         return (f"holes at full size: DDP vs a linear fill (computed here) differ by {difference:.3g} m on average "
                 f"(mean |difference| over {holes.sum()} hole pixels; their error is unknown without --gt)")
     scored = holes & np.isfinite(gt)
-    if not scored.any():
-        raise ValueError("--gt has no valid value in the holes of --depth; nothing to score")
-    fills = {"DDP": filled, "linear": linear, "navier-stokes": fill_navier_stokes(depth)}
+    fills = {"DDP": filled, **classical}
     rmse = {name: float(np.sqrt(np.mean((f[scored] - gt[scored]) ** 2))) for name, f in fills.items()}
     return (f"hole RMSE at full size ({scored.sum()} pixels with ground truth): "
             + ", ".join(f"{name} {value:.4g} m" for name, value in rmse.items()))
@@ -211,11 +221,12 @@ def _complete(args, writers, staged, start) -> int:
                      name=f"--depth {args.depth!r} (at the working size, --max-side {max_side})")
     print(f"{depth.shape[0]}×{depth.shape[1]} (H×W), {holes.mean():.1%} holes; fitting at "
           f"{shape[0]}×{shape[1]} (--max-side {max_side}), profile '{profile.name}'", flush=True)
+    classical = _classical_fills(depth, gt)
     planned = config.resolved_iterations(args.variant) * config.fit_count()  # every fit of the command
     with command_progress(planned, expected_share(config), earliest_share(config)):
         result = complete_depth(small_rgb, small_depth, variant=args.variant, config=config)
     filled = fill_holes_at_full_size(depth, result.depth, raw=args.raw)
-    comparison = _comparison(depth, rgb, filled, gt)
+    comparison = _comparison(depth, filled, gt, classical)
     write_bytes_atomic(staged(args.out), writers[os.path.splitext(args.out)[1].lower()](filled))
     _write_preview(staged(_preview_path(args)), depth, filled,
                    f"{os.path.basename(args.out)}: DDP {args.variant} fitted at {shape[0]}×{shape[1]}, "
