@@ -93,9 +93,10 @@ class PlateauStopper:
 # Where `class`'s auto-stopped fits stop, as a share of their cap: of 3,771 fits in
 # benchmarks/results/quality_class*.jsonl the median stopped at 490 of 600, one in twenty before 320,
 # a quarter ran to the cap. After the learning-rate cut a fit goes on improving for a while at the lower
-# rate: of 53 `class` fits (the 22 rendered and 5 real cases of bench_quality.py, rgbd seed 0 and
-# rgbd+warp seed 1, held to AVX2) the stop came 110-360 iterations after the cut (median 220), where the
-# next plateau could have ended it 50 after. Only the time-left estimate uses these.
+# rate: of 54 `class` fits (the 22 rendered and 5 real cases of bench_quality.py, rgbd seed 0 and
+# rgbd+warp seed 1, held to AVX2) the 53 that cut stopped 80-360 iterations after the cut (median 220),
+# where the next plateau could have ended them 50 after (benchmarks/study_time_left.py). Only the
+# time-left estimate uses these.
 EXPECTED_STOP_SHARE = 0.8
 EARLIEST_STOP_SHARE = 0.55
 RUN_AFTER_CUT_SHARE = 0.4  # 240 of 600: the cut's iteration plus this share of the cap, where such fits stopped

@@ -1,0 +1,93 @@
+"""How good is a fit's time left? The auto-stop's expected stop replayed on recorded `class` fits.
+
+    python benchmarks/study_time_left.py                       # replay the stored fits (seconds)
+    python benchmarks/study_time_left.py --record 0/2 rows.jsonl   # fit lane 0 of 2 and append its rows (~15 min a lane, one thread)
+
+Records the held-out error at every evaluation, the learning-rate cut and the stop of `class` fits on the
+22 rendered and 5 real cases of ``bench_quality.py`` (rgbd seed 0, rgbd+warp seed 1), then replays
+:class:`ddp_lite.method.loop.PlateauStopper` on each curve (a fit is deterministic, so the replay is the
+fit's own stopper) and compares, at each progress line (every 10 % of the cap) from 20 % on, the expected
+stop with the real one: the iterations left as estimated against those actually left. "old" is the rule
+before the run after the cut was counted (after the cut: the next plateau). Prints figures; asserts nothing.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import time
+from pathlib import Path
+
+from ddp_lite.method.loop import PlateauStopper
+
+ROWS = Path(__file__).parent / "results" / "time_left_class.jsonl"
+
+
+def record(lane: int, lanes: int, out: str) -> None:
+    import torch
+    import ddp_lite as ddp
+    from bench_quality import build_case, suite  # benchmarks/ is on the path: the scripts run from there
+    from ddp_lite.method.profiles import get_profile
+    torch.set_num_threads(1)
+    profile = get_profile("class")
+    jobs = [(name, variant, seed) for name in suite(False, "synthetic") + suite(False, "real")
+            for variant, seed in (("rgbd", 0), ("rgbd+warp", 1))]
+    with open(out, "a") as rows:
+        for name, variant, seed in jobs[lane::lanes]:
+            case, _ = build_case(name, profile)
+            if variant == "rgbd+warp" and not case.neighbors:
+                continue
+            config = ddp.FitConfig.for_profile(profile, variant=variant, progress=False, seed=seed)
+            start = time.perf_counter()
+            result = ddp.complete_depth(case.rgb, case.depth, case.camera,
+                                        case.neighbors if variant == "rgbd+warp" else (), variant=variant, config=config)
+            history = result.history
+            rows.write(json.dumps(dict(case=name, variant=variant, seed=seed, cap=config.iterations,
+                                       ran=int(result.iterations), cuts=[int(i) for i in history["lr_decay_iteration"]],
+                                       eval_iteration=[int(i) for i in history["eval_iteration"]],
+                                       heldout=[float(e) for e in history["heldout"]], patience=config.patience,
+                                       eval_every=config.eval_every, decays=config.plateau_decays,
+                                       seconds=time.perf_counter() - start)) + "\n")
+            rows.flush()
+
+
+def old_rule(stopper: PlateauStopper, done: int, cap: int) -> int:
+    """The expected stop before the run after the cut was counted: after the cut, the next plateau."""
+    if stopper.since_cut is not None:
+        return stopper.earliest_stop(done, cap)
+    return min(cap, max(stopper.earliest_stop(done, cap), round(0.8 * cap)))
+
+
+def replay(row: dict, rule) -> list:
+    """(estimated − actual) / actual iterations left at each progress line from 20 % of the cap on."""
+    stopper, errors = PlateauStopper(row["patience"], row["eval_every"], row["decays"]), []
+    for done, error in zip(row["eval_iteration"], row["heldout"]):
+        if stopper.update(error) == "stop":
+            break
+        if done % (row["cap"] // 10) == 0 and done >= 0.2 * row["cap"] and done < row["ran"]:
+            errors.append((rule(stopper, done, row["cap"]) - done) / (row["ran"] - done) - 1)
+    return errors
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--record", nargs=2, metavar=("LANE/LANES", "OUT"), help="fit and append rows instead")
+    parser.add_argument("--rows", default=str(ROWS))
+    args = parser.parse_args()
+    if args.record:
+        lane, lanes = (int(v) for v in args.record[0].split("/"))
+        record(lane, lanes, args.record[1])
+        return
+    rows = [json.loads(line) for line in Path(args.rows).read_text().splitlines()]
+    after = sorted(r["ran"] - r["cuts"][0] for r in rows if r["cuts"])
+    print(f"{len(rows)} fits; stopped at {statistics.median(r['ran'] for r in rows):.0f} of 600 (median), "
+          f"{sum(r['ran'] == r['cap'] for r in rows)} at the cap; after the cut ({len(after)} fits) they ran "
+          f"{after[0]}–{after[-1]} more (median {statistics.median(after):.0f})")
+    for name, rule in (("old", old_rule), ("now", lambda s, done, cap: s.expected_stop(done, cap))):
+        errors = [e for row in rows for e in replay(row, rule)]
+        print(f"{name}: {sum(abs(e) <= 0.3 for e in errors)}/{len(errors)} progress lines within 30 % of the iterations "
+              f"left, mean error {statistics.mean(errors):+.2f}, median |error| {statistics.median(abs(e) for e in errors):.2f}")
+
+
+if __name__ == "__main__":
+    main()
