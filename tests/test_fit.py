@@ -146,6 +146,9 @@ def test_the_stoppers_earliest_and_expected_stop_count_the_plateaus_still_to_com
     late = PlateauStopper(patience=50, eval_every=10, decays=1)
     late.update(1.0)  # a best at 400 with no cut yet: the cut at 450 at the earliest, then 240 on: the cap
     assert late.expected_stop(400, 600) == 600
+    plain = PlateauStopper(patience=50, eval_every=10, decays=0)
+    plain.update(1.0)  # no cut to come: the next plateau is the stop, at 450 at the earliest; the usual share, 480
+    assert plain.expected_stop(400, 600) == 480 and plain.expected_stop(500, 600) == 550
 
 
 def test_plateau_decay_continues_the_same_run_and_cuts_the_rate():

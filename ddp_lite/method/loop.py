@@ -81,13 +81,15 @@ class PlateauStopper:
         the run fits usually go on for after it (:data:`RUN_AFTER_CUT_SHARE` of the cap), the last cut's
         once it has come, else the earliest the first can come; before the first cut, at least the share
         auto-stopped fits usually run (:data:`EXPECTED_STOP_SHARE`); never before the plateaus still to
-        come (:meth:`earliest_stop`), never past ``cap``."""
+        come (:meth:`earliest_stop`), never past ``cap``. Without cuts (``decays=0``): at least that share."""
         at_least = self.earliest_stop(done, cap)
         run_on = round(RUN_AFTER_CUT_SHARE * cap)
         if self.since_cut is not None:
             return min(cap, max(at_least, done - self.since_cut + run_on))
-        first_cut = done + max(0, self.patience - self.since_best)
-        return min(cap, max(at_least, round(EXPECTED_STOP_SHARE * cap), first_cut + run_on))
+        expected = max(at_least, round(EXPECTED_STOP_SHARE * cap))
+        if self.decays_left > 0:  # a cut to come (with none, the next plateau is the stop)
+            expected = max(expected, done + max(0, self.patience - self.since_best) + run_on)
+        return min(cap, expected)
 
 
 # Where `class`'s auto-stopped fits stop, as a share of their cap: of 3,771 fits in
