@@ -44,6 +44,11 @@ def _fit_cache_only_where_marked(request, monkeypatch):
 
 # The notebooks that take longest at `ci`, longest first: started first, they do not end the run alone.
 SLOW_NOTEBOOKS = ("10_", "12_", "05_", "06_", "11_", "07_")
+# The test files that take longest (10-30 s each held to AVX2), longest first: they start right after the
+# student copies, so that the run ends on files of a second or less (test_sequence.py, started last in
+# collection order, kept one worker busy 18 s after the other had finished).
+SLOW_TESTS = ("test_classroom.py", "test_sequence.py", "test_cli.py", "test_fit.py", "test_real_cases.py",
+              "test_grader_trust.py", "test_recipe_levers.py")
 
 
 def pytest_xdist_make_scheduler(config, log):
@@ -64,7 +69,8 @@ def pytest_collection_modifyitems(config, items):
     """The workers take the files in collection order (``--no-loadscope-reorder``). The slow files go
     first, so the short ones fill the tails: the notebooks, slowest first, then the student copies in
     the same order (they read the notebooks' fits from the session's cache, so they come after
-    them: a copy started before its notebook has ended would fit again), then the rest."""
+    them: a copy started before its notebook has ended would fit again), then the slow test files,
+    slowest first, then the rest."""
     def notebook_rank(name: str) -> int:
         return next((i for i, prefix in enumerate(SLOW_NOTEBOOKS) if name.startswith(prefix)), len(SLOW_NOTEBOOKS))
 
@@ -74,7 +80,9 @@ def pytest_collection_modifyitems(config, items):
         if item.path.name == "test_student_copies.py":
             source = getattr(item, "callspec", None) and item.callspec.params.get("source")
             return 1, notebook_rank(source.name) if source is not None else -1
-        return 2, 0
+        if item.path.name in SLOW_TESTS:
+            return 2, SLOW_TESTS.index(item.path.name)
+        return 3, 0
 
     items.sort(key=rank)  # stable: a file's tests and a notebook's cells keep their order
 
