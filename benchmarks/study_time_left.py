@@ -18,7 +18,7 @@ import statistics
 import time
 from pathlib import Path
 
-from ddp_lite.method.loop import PlateauStopper
+from ddp_lite.method.loop import EXPECTED_STOP_SHARE, PlateauStopper
 
 ROWS = Path(__file__).parent / "results" / "time_left_class.jsonl"
 
@@ -55,7 +55,7 @@ def old_rule(stopper: PlateauStopper, done: int, cap: int) -> int:
     """The expected stop before the run after the cut was counted: after the cut, the next plateau."""
     if stopper.since_cut is not None:
         return stopper.earliest_stop(done, cap)
-    return min(cap, max(stopper.earliest_stop(done, cap), round(0.8 * cap)))
+    return min(cap, max(stopper.earliest_stop(done, cap), round(EXPECTED_STOP_SHARE * cap)))
 
 
 def replay(row: dict, rule) -> list:

@@ -33,12 +33,11 @@ def loss_equation(config, variant: str) -> str:
         paper.append(_weight(w_rgb) + "L^{\\mathrm{RGB}}")
     if w_warp > 0:
         warp = "L^{\\mathrm{warp}}"
+        cost = getattr(config, "warp_cost", "intensity")  # method.warp_cost; "intensity" is the paper's
         where = [name for name, on in (("visible", getattr(config, "warp_occlusion", False)),  # method.visibility
                                        ("confident", getattr(config, "warp_confidence", False)),  # method.warp_confidence
                                        ("holes", getattr(config, "warp_reach", None) is not None),  # paper_method.warp_region
-                                       ("census", getattr(config, "warp_cost", "intensity") == "census"),  # method.warp_cost
-                                       ("gradient", getattr(config, "warp_cost", "intensity") == "gradient"),
-                                       ("census+intensity", getattr(config, "warp_cost", "intensity") == "census+intensity"),
+                                       (cost, cost != "intensity"),
                                        ("textured", getattr(config, "warp_texture", False)))
                  if on]
         if where:  # the kit's masks, costs and weights on the warp term
