@@ -136,16 +136,19 @@ def stereo_scene(name, rgb0, rgb1, depth0, depth1, calib: MiddleburyCalib, size)
 
 
 def load_middlebury(folder, size=None, name: str | None = None) -> Scene:
-    """A Middlebury 2014 scene folder (im0.png, im1.png, disp0.pfm, calib.txt; disp1.pfm optional) →
+    """A Middlebury 2014 scene folder (im0.png, im1.png, disp0.pfm or MiddEval3's disp0GT.pfm, calib.txt;
+    disp1.pfm optional) →
     one-view stereo ``Scene``: GT depth (metres, NaN where disparity is inf), ``right`` view, and
     ``meta`` (baseline m, doffs px, ndisp, focal px, d_min, d_max). ``size`` (H, W) resamples
     (colour by area, depth by nearest, K accordingly). Note: Z = f·B/(d + doffs), doffs ≠ 0 here."""
     folder = existing_path(folder, "folder")
     calib = read_middlebury_calib(folder / "calib.txt")
-    disparity = read_pfm(folder / "disp0.pfm")
+    truth = folder / "disp0.pfm" if (folder / "disp0.pfm").exists() or not (folder / "disp0GT.pfm").exists() \
+        else folder / "disp0GT.pfm"  # the evaluation set's (MiddEval3) name for the same file
+    disparity = read_pfm(truth)
     if disparity.ndim != 2:
-        raise ValueError(f"folder: {folder / 'disp0.pfm'} must be a 1-channel PFM")
-    depth0 = require_valid_depth(calib.depth(disparity), "folder", folder / "disp0.pfm")
+        raise ValueError(f"folder: {truth} must be a 1-channel PFM")
+    depth0 = require_valid_depth(calib.depth(disparity), "folder", truth)
     depth1 = calib.depth(read_pfm(folder / "disp1.pfm")) if (folder / "disp1.pfm").exists() \
         else np.full_like(depth0, np.nan)
     return stereo_scene(name or folder.name, read_rgb(folder / "im0.png", "folder"),
