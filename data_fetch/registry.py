@@ -159,9 +159,14 @@ _MB0506_NOTES = (
     "view<k>.png; whether view0, view2, view3, view4 and view6 also sit directly in <Scene>/ was not confirmed. "
     "The site also serves each size as <Size>/zip-2views/<Scene>-2views.zip and <Size>/zip-7views/"
     "<Scene>-7views.zip: if a file here 404s, download those by hand and install them with --from.",
-    "Pixel hashes pinned for the HalfSize files only, from offline copies (decoded pixels, so any PNG encoding of "
-    "the same pixels passes); FullSize and ThirdSize files are unverified. dmin.txt is pinned as text.",
 )
+
+
+def _pin_note(pins) -> str:
+    scenes = sorted({name.split("/")[1] for name in pins})
+    return (f"Pixel hashes pinned for the HalfSize files of {', '.join(scenes) or 'no scene'}, from offline copies "
+            f"(decoded pixels, so any PNG encoding of the same pixels passes; dmin.txt as text); every other file "
+            f"is unverified.")
 
 
 def _views(year: int, scenes, pins) -> tuple[RemoteFile, ...]:
@@ -182,7 +187,8 @@ _add(Dataset(
     homepage="https://vision.middlebury.edu/stereo/data/scenes2005/",
     checked=False,
     notes=("Computer, Drumsticks and Dwarves, the other three 2005 scenes, have no public ground truth "
-           "(withheld for evaluation), so they are not registered.",) + _MB0506_NOTES,
+           "(withheld for evaluation), so they are not registered.",) + _MB0506_NOTES
+          + (_pin_note(PINNED.get("middlebury2005", {})),),
 ))
 
 _add(Dataset(
@@ -196,7 +202,7 @@ _add(Dataset(
               "(the offline copies), FullSize about 4 times that; use --only 'HalfSize/Plastic/*'.",
     homepage="https://vision.middlebury.edu/stereo/data/scenes2006/",
     checked=False,
-    notes=_MB0506_NOTES,
+    notes=_MB0506_NOTES + (_pin_note(PINNED.get("middlebury2006", {})),),
 ))
 
 _Q = PINNED.get("middlebury2014q", {})
