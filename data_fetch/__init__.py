@@ -3,20 +3,31 @@
     python -m data_fetch list                                   # what exists, size, licence, use
     python -m data_fetch fetch middlebury2014 --only 'Adirondack-*' --trust-first-download
     python -m data_fetch fetch kitti2015                        # prints what to download by hand
+    python -m data_fetch fetch middlebury2006 --from DIR --only 'HalfSize/Plastic/*'   # from a local copy
 
 Where data goes: ``--dest DIR``, else ``$DDP_DATA``, else platformdirs' ``user_data_dir("ddp-lite")``;
 each dataset in its own folder. Loaders in ``ddp_lite.data.datasets`` read what lands there.
 
-How files are trusted (the honest part). Every file in ``registry.py`` carries a SHA-256, or
-``None`` = *unverified*. The kit was written on machines that cannot reach the dataset servers,
-so no hash could be computed, and none is invented: today **every** entry is unverified. ``fetch``
-therefore refuses an unverified file by default. With ``--trust-first-download`` it accepts what
-arrives (trust on first use): only bytes that fetch itself downloads, or a manual download you
-placed (a file already under the final name of a downloadable file is refused, not trusted). It
-records the SHA-256 in ``<dataset>/registry.json`` next to the data, with whose bytes they were
-(``bytes_from``), and from then on verifies every fetch against that record, so a later change is caught even
-though the first copy was taken on trust. Once somebody has checked a file against its source,
-its hash belongs in ``registry.py`` and the flag is no longer needed for it.
+How files are trusted (the honest part). The kit was written on machines that cannot reach the
+dataset servers, so no byte hash of a downloaded file could be measured and none is invented:
+every ``sha256`` in ``registry.py`` is ``None`` (*unverified*). Two things verify files anyway:
+
+* **Decoded-pixel hashes** (``pixels.py``): for the Middlebury files of which offline copies could be
+  read (the HalfSize files of 6 scenes of 2005 and 6 of 2006, the quarter-size files of 7 MiddEval3
+  training scenes, DepthComp's Plastic holes), ``pixel_sha256`` of the decoded content (PNG pixels,
+  PFM values, calib/dmin text tokens) is pinned (``pinned_pixels.py``, written by ``pin_pixels.py``).
+  It is stable under PNG re-encoding. ``fetch`` checks it after a download (a mismatch is deleted and
+  refused), and for archives checks the pinned files they unpack to; ``fetch NAME --from DIR``
+  (``local.py``) checks it before anything is installed from a local folder. These pins say "same
+  content as the offline copies", whose provenance the project recorded; they were not compared
+  with the official servers.
+* **Trust on first use**, for everything else (all archives, the FullSize/ThirdSize files, KITTI, ...):
+  ``fetch`` refuses an unverified file by default. With ``--trust-first-download`` it accepts what
+  arrives: only bytes that fetch itself downloads, a manual download you placed, or a file copied
+  by ``--from`` (a file already under the final name of a downloadable file is refused, not trusted).
+  It records the SHA-256 in ``<dataset>/registry.json`` next to the data, with whose bytes they were
+  (``bytes_from``), and from then on verifies every fetch against that record. Once somebody has
+  checked a file against its source, its hash belongs in ``registry.py``.
 
 What ``fetch`` guarantees:
 
@@ -52,18 +63,27 @@ def describe() -> str:
     lines = ["ddp-lite datasets (python -m data_fetch fetch NAME [--dest DIR] [--only GLOB] [--trust-first-download])",
              "",
              f"Data root: --dest, else ${ENV_VAR}, else {data_dir()}",
-             "Hashes: no SHA-256 below could be computed (the servers were unreachable when the registry was",
-             "written), so each file is 'unverified'. fetch refuses unverified files unless you pass",
-             "--trust-first-download: it then records the hash of what arrives in <dataset>/registry.json and",
-             "checks every later fetch against it. No size was measured here; where one is given, it is what",
-             "the dataset's own page states.",
+             "Hashes: no byte SHA-256 could be measured (the servers were unreachable when the registry was",
+             "written). 'pixel hash' files are verified by their decoded content (pinned from offline copies;",
+             "stable under PNG re-encoding), after a download or before --from DIR installs them. Everything",
+             "else, archives included, is 'unverified': fetch refuses it unless you pass --trust-first-download,",
+             "then records the SHA-256 of what arrives in <dataset>/registry.json and checks every later fetch",
+             "against it. No size was measured here; where one is given, it is what the dataset's page states.",
              ""]
     for d in DATASETS.values():
-        n_pinned = sum(1 for f in d.files if f.sha256)
+        n_bytes = sum(1 for f in d.files if f.sha256)
+        n_pixels = sum(1 for f in d.files if f.pixel_sha256 and not f.sha256)
+        n_archives = sum(1 for f in d.files if f.unpack)
+        n_members = sum(len(f.members) for f in d.files)
         how = "automatic" if d.automatic else "MANUAL download (fetch prints the steps)"
         lines += [f"{d.name}  —  {d.title}",
-                  f"    files    {len(d.files)} ({how}); SHA-256 pinned for {n_pinned}, unverified for "
-                  f"{len(d.files) - n_pinned}",
+                  f"    files    {len(d.files)} ({how}); pixel hash (from offline copies, decoded pixels, stable "
+                  f"under re-encoding) for {n_pixels}, byte SHA-256 for {n_bytes}, unverified for "
+                  f"{len(d.files) - n_pixels - n_bytes}"]
+        if n_archives:
+            lines.append(f"    archives {n_archives}, trust-on-first-download (no byte hash measured)"
+                         + (f"; {n_members} unpacked file(s) checked by pixel hash" if n_members else ""))
+        lines += [
                   f"    size     {d.size_note}",
                   f"    licence  {d.licence}",
                   f"    use      {d.use}",

@@ -1,10 +1,11 @@
-"""``python -m data_fetch list`` / ``python -m data_fetch fetch NAME [--dest DIR] ...``."""
+"""``python -m data_fetch list`` / ``python -m data_fetch fetch NAME [--dest ROOT] [--from DIR] ...``."""
 from __future__ import annotations
 
 import argparse
 import sys
 
 from . import DATASETS, FetchError, ManualDownloadRequired, describe, fetch
+from .local import install_from
 
 
 def main(argv=None) -> int:
@@ -18,11 +19,27 @@ def main(argv=None) -> int:
     get.add_argument("--only", action="append", metavar="GLOB", help="only files matching GLOB (repeatable)")
     get.add_argument("--trust-first-download", action="store_true",
                      help="accept unverified files once, record their SHA-256 next to the data, verify later fetches")
+    get.add_argument("--from", dest="source", metavar="DIR",
+                     help="install from this local folder instead of downloading (verified first; DIR is only read)")
     get.add_argument("--retries", type=int, default=3, help="retries after a dropped connection (default 3)")
     get.add_argument("--no-progress", action="store_true", help="no progress bar")
     args = parser.parse_args(argv)
     if args.command == "list":
         print(describe())
+        return 0
+    if args.retries < 0:
+        print(f"error: --retries must be 0 or more, got {args.retries}", file=sys.stderr)
+        return 1
+    if args.source is not None:
+        try:
+            result = install_from(args.name, args.source, dest=args.dest, only=args.only,
+                                  trust_first_download=args.trust_first_download)
+        except (FetchError, ValueError, OSError) as error:
+            print(f"error: {error}", file=sys.stderr)
+            return 1
+        if not (result.installed or result.present):
+            print(f"error: {args.source} holds none of the selected {args.name} files", file=sys.stderr)
+            return 1
         return 0
     try:
         paths = fetch(args.name, dest=args.dest, only=args.only, trust_first_download=args.trust_first_download,

@@ -94,12 +94,43 @@ def _record(folder: Path, entry: RemoteFile, sha256: str, how: str, bytes_from: 
 def _known_hash(folder: Path, entry: RemoteFile, trust: bool) -> str | None:
     """The pinned hash, else the recorded one, else None (allowed only with ``trust``)."""
     known = entry.sha256 or _read_records(folder).get(entry.name, {}).get("sha256")
-    if known is None and not trust:
+    if known is None and not trust and not entry.pixel_sha256:  # a pixel pin verifies it after the download
         raise UnpinnedFileError(
             f"{entry.name} has no pinned SHA-256 (the registry marks it unverified: nobody has checked its bytes "
             f"yet) and none is recorded in {folder / REGISTRY_FILE}.\nRe-run with --trust-first-download to accept "
             f"what arrives now, record its SHA-256 there, and verify every later fetch against it.")
     return known
+
+
+def _check_pixels(path: Path, name: str, pinned: str) -> str | None:
+    """None if the decoded content of ``path`` has the pinned pixel hash, else a sentence saying what differs."""
+    from .pixels import pixel_sha256
+
+    try:
+        actual = pixel_sha256(path)
+    except (ValueError, OSError) as error:
+        return f"{name} cannot be decoded ({error}), so its pinned pixel hash {pinned} cannot be checked"
+    return None if actual == pinned else f"{name}: decoded-pixel SHA-256 is {actual}, the registry pins {pinned}"
+
+
+def _verify_members(folder: Path, entry: RemoteFile) -> None:
+    """After unpacking: every member with a pinned pixel hash is there and has it. On a failure the
+    unpack marker and the failing files are removed (the next fetch unpacks afresh) and ChecksumError says why."""
+    problems, bad = [], []
+    for member, pinned in entry.members:
+        path = folder / member
+        problem = (f"{member} is not in {entry.name}" if not path.is_file()
+                   else _check_pixels(path, member, pinned))
+        if problem:
+            problems.append(problem)
+            bad.append(path)
+    if problems:
+        for path in bad:
+            path.unlink(missing_ok=True)
+        (folder / f".{Path(entry.name).name}.unpacked").unlink(missing_ok=True)
+        raise ChecksumError(f"{entry.name}: {len(problems)} unpacked file(s) fail their pinned pixel hash:\n  "
+                            + "\n  ".join(problems[:10]) + ("\n  ..." if len(problems) > 10 else "")
+                            + "\nThose files were removed; if the server's data really changed, update the registry.")
 
 
 def _unpack(folder: Path, entry: RemoteFile, sha256: str, say) -> None:
@@ -202,12 +233,14 @@ def fetch(dataset, dest=None, only=None, trust_first_download: bool = False, ret
     paths = []
     for entry in entries:
         known = _known_hash(folder, entry, trust_first_download)
+        existed = True  # a manual download is the user's file
         if manual:
             regular_file(folder / entry.name, "manual download")  # a FIFO would make the hashing wait forever
             if known is not None:
                 _verify_manual(folder, entry, known)
         else:
-            if known is None and os.path.lexists(folder / entry.name):
+            existed = os.path.lexists(folder / entry.name)
+            if known is None and existed and not entry.pixel_sha256:
                 # trust on first use covers what this fetch downloads, not whatever already sits there
                 raise UnpinnedFileError(
                     f"{folder / entry.name} is already there, but no SHA-256 is pinned or recorded for it, so it "
@@ -215,7 +248,16 @@ def fetch(dataset, dest=None, only=None, trust_first_download: bool = False, ret
                     f"away (or delete it) and fetch again.")
             _download(folder, entry, known, retries, progressbar, backoff)
         path = folder / entry.name
-        if known is None and path.stat().st_size == 0:  # an empty file is no dataset: never its trusted hash
+        if known is None and entry.pixel_sha256:  # verified by its decoded content, not taken on trust
+            problem = _check_pixels(path, entry.name, entry.pixel_sha256)
+            if problem:
+                if manual or existed:
+                    aside = _set_aside(path, path.name + ".rejected")
+                    raise ChecksumError(f"{problem}. The file was moved to {aside} (not deleted: it was yours).")
+                path.unlink(missing_ok=True)
+                raise ChecksumError(f"{problem}. The download was deleted (nothing is kept under its final name).")
+        trusted = known is None and not entry.pixel_sha256
+        if trusted and path.stat().st_size == 0:  # an empty file is no dataset: never its trusted hash
             if not manual:
                 path.unlink(missing_ok=True)
             raise FetchError(f"{path} is empty (0 bytes){' as downloaded' if not manual else ''}; "
@@ -225,11 +267,12 @@ def fetch(dataset, dest=None, only=None, trust_first_download: bool = False, ret
         if entry.unpack:
             try:
                 _unpack(folder, entry, digest, say)
+                _verify_members(folder, entry)
             except FetchError:
                 if known is None and not manual:  # a download taken on trust and unusable: not kept
                     path.unlink(missing_ok=True)
                 raise
-        if known is None:  # trust on first use, recorded only once the file proved usable
+        if trusted:  # trust on first use, recorded only once the file proved usable
             _record(folder, entry, digest, "trust-first-download",
                     "a manual download placed in this folder by the user" if manual
                     else f"downloaded by this fetch from {entry.url}")

@@ -15,7 +15,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-__all__ = ["RemoteFile", "Dataset", "DATASETS", "get_dataset", "MIDDLEBURY2014_SCENES", "MIDDLEBURY2006_SCENES",
+from .pinned_pixels import PINNED
+
+__all__ = ["RemoteFile", "Dataset", "DATASETS", "get_dataset", "MIDDLEBURY2014_SCENES", "MIDDLEBURY2005_SCENES",
+           "MIDDLEBURY2006_SCENES", "MIDDLEBURY_SIZES", "MIDDLEBURY_VIEW_FILES", "MIDDEVAL3_Q_SCENES", "MEMBER_CANDIDATES",
            "TNT_TRAINING_SCENES"]
 
 
@@ -23,13 +26,17 @@ __all__ = ["RemoteFile", "Dataset", "DATASETS", "get_dataset", "MIDDLEBURY2014_S
 class RemoteFile:
     """One file: ``url`` (None for a manual download), local ``name`` (relative path under the
     dataset folder), ``sha256`` (hex, or None = unverified), ``size`` (bytes, or None = unknown),
-    ``unpack`` (True for a .zip/.tar* to extract safely into the dataset folder)."""
+    ``unpack`` (True for a .zip/.tar* to extract safely into the dataset folder), ``pixel_sha256``
+    (``data_fetch.pixels.pixel_sha256`` of its decoded content, or None = not pinned) and, for an
+    archive, ``members``: ``(unpacked name, pixel_sha256)`` pairs checked after unpacking."""
 
     name: str
     url: str | None = None
     sha256: str | None = None
     size: int | None = None
     unpack: bool = False
+    pixel_sha256: str | None = None
+    members: tuple[tuple[str, str], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -69,10 +76,28 @@ MIDDLEBURY2014_SCENES = ("Adirondack", "Backpack", "Bicycle1", "Cable", "Classro
                          "Shelves", "Shopvac", "Sticks", "Storage", "Sword1", "Sword2", "Umbrella", "Vintage")
 _MB14 = "https://vision.middlebury.edu/stereo/data/scenes2014/zip/"
 
-# Middlebury 2006: the three scenes of the paper's Table 6 (Depthcomp's Middlebury comparison).
-MIDDLEBURY2006_SCENES = ("Plastic", "Baby1", "Bowling1")
-_MB06 = "https://vision.middlebury.edu/stereo/data/scenes2006/FullSize/"
-_MB06_FILES = ("view1.png", "view5.png", "disp1.png", "disp5.png", "dmin.txt")
+# Middlebury 2005 and 2006: seven rectified views on one rail, GT disparity of views 1 and 5.
+# Per-file layout on the server: scenes<year>/<Size>/<Scene>/<file> (see the datasets' notes).
+MIDDLEBURY2005_SCENES = ("Art", "Books", "Dolls", "Laundry", "Moebius", "Reindeer")
+MIDDLEBURY2006_SCENES = ("Aloe", "Baby1", "Baby2", "Baby3", "Bowling1", "Bowling2", "Cloth1", "Cloth2", "Cloth3",
+                         "Cloth4", "Flowerpots", "Lampshade1", "Lampshade2", "Midd1", "Midd2", "Monopoly", "Plastic",
+                         "Rocks1", "Rocks2", "Wood1", "Wood2")
+MIDDLEBURY_SIZES = ("FullSize", "HalfSize", "ThirdSize")
+MIDDLEBURY_VIEW_FILES = tuple(f"view{k}.png" for k in range(7)) + ("disp1.png", "disp5.png", "dmin.txt")
+_MB_DATA = "https://vision.middlebury.edu/stereo/data/"
+
+# MiddEval3 (Middlebury 2014 benchmark) quarter-size training scenes: two zips, both unpacking into
+# MiddEval3/trainingQ/<Scene>/ (the data zip also holds MiddEval3/testQ/).
+MIDDEVAL3_Q_SCENES = ("Adirondack", "ArtL", "Jadeplant", "Motorcycle", "MotorcycleE", "Piano", "PianoL", "Pipes",
+                      "Playroom", "Playtable", "PlaytableP", "Recycle", "Shelves", "Teddy", "Vintage")
+_MB_SUBMIT3 = "https://vision.middlebury.edu/stereo/submit3/zip/"
+MIDDEVAL3_Q_DATA_FILES = ("im0.png", "im1.png", "calib.txt")
+MIDDEVAL3_Q_GT_FILES = ("disp0GT.pfm", "mask0nocc.png")
+
+# DepthComp's example input (Atapour-Abarghouei & Breckon 2017): Plastic with the holes of the
+# paper's Table 6, from the authors' repository at a fixed commit.
+_DEPTHCOMP = ("https://raw.githubusercontent.com/atapour/depthComp/adab1821813dee7c54b80db1d4564243c7c38800/"
+              "Examples/plastic-disp-hole.png")
 
 # Tanks and Temples training scenes evaluated in the paper (Sec. 4.1, Table 3).
 TNT_TRAINING_SCENES = ("Barn", "Caterpillar", "Church", "Courthouse", "Ignatius", "Meetingroom", "Truck")
@@ -124,15 +149,111 @@ _add(Dataset(
     homepage="https://vision.middlebury.edu/stereo/data/scenes2014/",
 ))
 
+_MB0506_LICENCE = ("Free to use and publish with citation: D. Scharstein and C. Pal, \"Learning conditional random "
+                   "fields for stereo\", CVPR 2007; H. Hirschmueller and D. Scharstein, \"Evaluation of cost "
+                   "functions for stereo matching\", CVPR 2007.")
+_MB0506_NOTES = (
+    "URL layout scenes<year>/<Size>/<Scene>/<file> not checked against the server (unreachable here). Public "
+    "download scripts fetch disp1.png and dmin.txt from scenes2005/FullSize/<Scene>/ and scenes2006/FullSize/"
+    "<Scene>/, mirror scenes2006/HalfSize/ recursively for png/txt, and take views from <Scene>/Illum<i>/Exp<e>/"
+    "view<k>.png; whether view0, view2, view3, view4 and view6 also sit directly in <Scene>/ was not confirmed. "
+    "The site also serves each size as <Size>/zip-2views/<Scene>-2views.zip and <Size>/zip-7views/"
+    "<Scene>-7views.zip: if a file here 404s, download those by hand and install them with --from.",
+)
+
+
+def _pin_note(pins) -> str:
+    scenes = sorted({name.split("/")[1] for name in pins})
+    return (f"Pixel hashes pinned for the HalfSize files of {', '.join(scenes) or 'no scene'}, from offline copies "
+            f"(decoded pixels, so any PNG encoding of the same pixels passes; dmin.txt as text); every other file "
+            f"is unverified.")
+
+
+def _views(year: int, scenes, pins) -> tuple[RemoteFile, ...]:
+    return tuple(RemoteFile(f"{size}/{scene}/{name}", f"{_MB_DATA}scenes{year}/{size}/{scene}/{name}",
+                            pixel_sha256=pins.get(f"{size}/{scene}/{name}"))
+                 for size in MIDDLEBURY_SIZES for scene in scenes for name in MIDDLEBURY_VIEW_FILES)
+
+
+_add(Dataset(
+    name="middlebury2005",
+    title="Middlebury 2005 stereo, the 6 scenes with ground truth, 7 views, 3 sizes",
+    files=_views(2005, MIDDLEBURY2005_SCENES, PINNED.get("middlebury2005", {})),
+    licence=_MB0506_LICENCE,
+    use="Real multi-view scenes with GT disparity: view1 with neighbours view0/view2 (the paper's N = 2), "
+        "view5 its stereo partner; SGM holes and DDP on real photographs (load_middlebury2006).",
+    size_note="Not measured (server unreachable here): 180 files; a HalfSize scene is about 2 MB "
+              "(the offline copies), FullSize about 4 times that.",
+    homepage="https://vision.middlebury.edu/stereo/data/scenes2005/",
+    checked=False,
+    notes=("Computer, Drumsticks and Dwarves, the other three 2005 scenes, have no public ground truth "
+           "(withheld for evaluation), so they are not registered.",) + _MB0506_NOTES
+          + (_pin_note(PINNED.get("middlebury2005", {})),),
+))
+
 _add(Dataset(
     name="middlebury2006",
-    title="Middlebury 2006 stereo, the paper's Table 6 scenes (Plastic, Baby1, Bowling1), full size",
-    files=tuple(RemoteFile(f"{s}/{f}", f"{_MB06}{s}/{f}") for s in MIDDLEBURY2006_SCENES for f in _MB06_FILES),
-    licence="Free for research; cite Scharstein & Pal, CVPR 2007 / Hirschmueller & Scharstein, CVPR 2007.",
-    use="Table 6 (comparison with Depthcomp's baselines, RMSE in disparity) via load_middlebury2006.",
-    size_note="Not measured (server unreachable here); 15 small files, a few MB per scene.",
+    title="Middlebury 2006 stereo, all 21 scenes (Plastic, Baby1, Bowling1 of Table 6 among them), 7 views, 3 sizes",
+    files=_views(2006, MIDDLEBURY2006_SCENES, PINNED.get("middlebury2006", {})),
+    licence=_MB0506_LICENCE,
+    use="Table 6 (comparison with DepthComp's baselines, RMSE in disparity) and real multi-view scenes with "
+        "GT disparity (load_middlebury2006).",
+    size_note="Not measured (server unreachable here): 630 files; a HalfSize scene is about 2 MB "
+              "(the offline copies), FullSize about 4 times that; use --only 'HalfSize/Plastic/*'.",
     homepage="https://vision.middlebury.edu/stereo/data/scenes2006/",
-    notes=("No 2005 scene appears in Table 6, so only 2006 scenes are registered.",),
+    checked=False,
+    notes=_MB0506_NOTES + (_pin_note(PINNED.get("middlebury2006", {})),),
+))
+
+_Q = PINNED.get("middlebury2014q", {})
+# the unpacked files that may carry a pixel pin (pin_pixels takes its names from here)
+MEMBER_CANDIDATES = {"middlebury2014q": tuple(f"MiddEval3/trainingQ/{scene}/{f}" for scene in MIDDEVAL3_Q_SCENES
+                                              for f in MIDDEVAL3_Q_DATA_FILES + MIDDEVAL3_Q_GT_FILES)}
+
+
+def _q_members(files) -> tuple[tuple[str, str], ...]:
+    names = (n for n in MEMBER_CANDIDATES["middlebury2014q"] if n.rsplit("/", 1)[1] in files)
+    return tuple((name, _Q[name]) for name in names if name in _Q)
+
+
+_add(Dataset(
+    name="middlebury2014q",
+    title="Middlebury 2014 / MiddEval3 training scenes at quarter size (trainingQ: images, calib, GT, masks)",
+    files=(RemoteFile("MiddEval3-data-Q.zip", f"{_MB_SUBMIT3}MiddEval3-data-Q.zip", unpack=True,
+                      members=_q_members(MIDDEVAL3_Q_DATA_FILES)),
+           RemoteFile("MiddEval3-GT0-Q.zip", f"{_MB_SUBMIT3}MiddEval3-GT0-Q.zip", unpack=True,
+                      members=_q_members(MIDDEVAL3_Q_GT_FILES))),
+    licence="Free to use and publish with citation: D. Scharstein et al., \"High-resolution stereo datasets with "
+            "subpixel-accurate ground truth\", GCPR 2014.",
+    use="Small real stereo pairs with float GT disparity (PFM) and occlusion masks: quick real-data checks.",
+    size_note="Not measured (server unreachable here); public scripts describe the two zips as tens of MB "
+              "together (data zip larger: it also holds the 15 test scenes).",
+    homepage="https://vision.middlebury.edu/stereo/submit3/",
+    checked=False,
+    notes=("URLs as used by many public download scripts (submit3/zip/MiddEval3-data-Q.zip, "
+           "MiddEval3-GT0-Q.zip); both unpack under MiddEval3/trainingQ/<Scene>/. Not fetched from here.",
+           "The archives stay trust-on-first-download (no byte hash measured). After unpacking, the members "
+           "of 7 scenes (Adirondack, ArtL, Jadeplant, Piano, Pipes, Playroom, Playtable) are checked against "
+           "pixel hashes from offline copies; calib.txt is compared as text tokens (the offline copy's spacing "
+           "differs from the official files' and its values were not checked against them).",
+           "Ground truth exists for the left view only in GT0 (disp0GT.pfm, +inf = unknown; mask0nocc.png "
+           "255 visible, 128 occluded in the right view)."),
+))
+
+_add(Dataset(
+    name="depthcomp",
+    title="DepthComp's Plastic with holes (the paper's Table 6 input), full size",
+    files=(RemoteFile("plastic-disp-hole.png", _DEPTHCOMP,
+                      pixel_sha256=PINNED.get("depthcomp", {}).get("plastic-disp-hole.png")),),
+    licence="Derived from Middlebury 2006 Plastic (cite Scharstein & Pal, CVPR 2007; Hirschmueller & Scharstein, "
+            "CVPR 2007); shipped in DepthComp's repository (GPL), A. Atapour-Abarghouei and T. Breckon, "
+            "\"DepthComp: real-time depth image completion based on prior semantic scene segmentation\", BMVC 2017.",
+    use="Table 6: the holes DepthComp fills on Plastic (0 = hole or unknown); score where 0 here and known in GT.",
+    size_note="Not measured (server unreachable here); one 8-bit PNG of about 50 kB (the offline copy).",
+    homepage="https://github.com/atapour/depthComp",
+    checked=False,
+    notes=("URL pinned to the commit of atapour/depthComp that holds Examples/plastic-disp-hole.png; not fetched "
+           "from here. Pixel hash from an offline copy.",),
 ))
 
 _add(Dataset(

@@ -255,7 +255,8 @@ def test_registry_is_honest_and_complete():
     assert DATASETS["middlebury2014"].automatic
     names = {f.name for f in DATASETS["middlebury2014"].files}
     assert {"Adirondack-perfect.zip", "Adirondack-imperfect.zip"} <= names
-    assert {"Plastic/disp1.png", "Baby1/view1.png", "Bowling1/dmin.txt"} <= {f.name for f in DATASETS["middlebury2006"].files}
+    assert {"FullSize/Plastic/disp1.png", "HalfSize/Baby1/view1.png", "ThirdSize/Bowling1/dmin.txt"} <= \
+        {f.name for f in DATASETS["middlebury2006"].files}
 
 
 def test_cli_list_and_manual_exit_code(tmp_path, capsys):
