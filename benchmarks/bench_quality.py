@@ -14,6 +14,8 @@ The suite is fixed (cases are never dropped because DDP loses on them):
 - the real Middlebury Motorcycle pair (``ddp_lite.studies.real_cases``) pooled to 125×185 (``motorcycle-4``)
   and 250×370 (``motorcycle-2``): three blob patterns, real SGBM holes, left-right-check (occlusion)
   holes; the right view as the warp loss's neighbour. These keep their own size whatever the profile.
+- with ``--suite middlebury --data DIR``, every Middlebury scene with ground truth under DIR and Motorcycle
+  (``benchmarks/bench_real.py``: DepthComp's holes, blobs, SGBM holes, the truth's occlusions; eighth or quarter size);
 - with ``--middlebury FOLDER ...``, the same five hole kinds on other Middlebury 2014 pairs (``data_fetch``
   fetches them; ``middlebury:FOLDER-F/holes``), pooled by F to about twice the profile's pixels.
 SGM runs at 3× the working size below 96 rows and keeps each block's centre (as the notebooks do).
@@ -407,9 +409,14 @@ def main() -> None:
     add_profile_args(parser)
     parser.add_argument("--quick", action="store_true", help="a small subset of the suite, for iterating")
     parser.add_argument("--cases", nargs="+", help="case names (scene/holes); default: the whole suite")
-    parser.add_argument("--suite", choices=("synthetic", "real", "real-half", "all", "none"), default="synthetic",
+    parser.add_argument("--suite", choices=("synthetic", "real", "real-half", "all", "none", "middlebury"),
+                        default="synthetic",
                         help="which cases (the real ones: the Middlebury Motorcycle pair at 125×185 or 250×370; "
-                             "none: only --cases and --middlebury)")
+                             "none: only --cases and --middlebury; middlebury: every scene under --data and "
+                             "Motorcycle, benchmarks/bench_real.py)")
+    parser.add_argument("--data", metavar="DIR", help="with --suite middlebury: the folder of Middlebury scenes")
+    parser.add_argument("--real-size", choices=("eighth", "quarter"), default="eighth",
+                        help="with --suite middlebury: ≈ 160×140 to iterate on, ≈ 320×280 to confirm")
     parser.add_argument("--middlebury", nargs="+", default=[], metavar="FOLDER",
                         help="other Middlebury 2014 pairs (im0/im1.png, disp0.pfm, calib.txt): their five real hole "
                              "kinds join the suite")
@@ -425,6 +432,19 @@ def main() -> None:
     parser.add_argument("--mixes", nargs="+", default=[], metavar="A+B",
                         help="with --report and --save-fits: also report the mean of one fit of each recipe (same seed)")
     args = parser.parse_args()
+    if args.suite == "middlebury":
+        import bench_real
+
+        out = Path(args.out or args.report or bench_real.RESULTS / f"real_suite_{args.real_size}.jsonl")
+        if not args.report:
+            if not args.data:
+                parser.error("--suite middlebury needs --data DIR (a folder of Middlebury scenes)")
+            torch_threads = max(2, args.threads)  # the recipes of a case fit side by side, one thread each
+            profile_from_args(argparse.Namespace(threads=torch_threads, profile=args.profile, size=None))
+            recipes = [r for r in args.recipes if r != "default"] or ["kit", "paper", "photo"]
+            bench_real.run(args.data, args.real_size, recipes, args.variants, args.seeds, out, args.profile)
+        bench_real.report(out)
+        return
     if args.report:
         extra = None
         if (args.ensembles or args.mixes) and args.save_fits:

@@ -7,7 +7,8 @@ The input is never modified. Randomness comes only from ``seed``.
 Stereo (SGM) holes come from a real matcher and live in ``stereo.py`` (``sgm_depth``).
 
 **Synthetic holes.** ``random_holes`` removes smooth random blobs (a thresholded, blurred
-noise field), ``edge_band_holes`` removes a band across a depth discontinuity (where
+noise field), ``stroke_holes`` paints thick brush strokes (the holes DepthComp cut into the
+Middlebury disparities of the paper's Table 6), ``edge_band_holes`` removes a band across a depth discontinuity (where
 depth-only completion bleeds foreground into background), and ``kinect_noise`` imitates a
 structured-light sensor: noise growing as z², disparity quantised to 1/8 px, no reading out
 of range, and dropouts along the far side of depth edges (the projector's shadow).
@@ -19,7 +20,7 @@ from scipy import ndimage
 
 from ..core.checks import check_depth, check_int
 
-__all__ = ["random_holes", "edge_band_holes", "kinect_noise"]
+__all__ = ["random_holes", "stroke_holes", "edge_band_holes", "kinect_noise"]
 
 
 def _check_depth(depth) -> np.ndarray:
@@ -41,6 +42,35 @@ def random_holes(depth, fraction: float = 0.15, seed: int = 0, blob_size: float 
     field = ndimage.gaussian_filter(rng.standard_normal((H, W)), blob_size, mode="wrap")  # (H, W) smooth
     if fraction > 0:
         out[field <= np.quantile(field, fraction)] = np.nan
+    return out, np.isfinite(out)
+
+
+def stroke_holes(depth, fraction: float = 0.085, seed: int = 0, width: float | None = None):
+    """Remove thick brush strokes covering about ``fraction`` of the (H, W) depth (metres) → (depth, mask),
+    DepthComp-style: each stroke a polyline of 1–2 segments (each H/10–H/5 long, turning by up to 90°),
+    ``width`` px wide (default H/18, DepthComp's on Plastic), drawn until the fraction is reached."""
+    import cv2  # drawing only; the module's other models need numpy and scipy alone
+
+    out = _check_depth(depth)
+    if not 0.0 <= fraction < 0.5:
+        raise ValueError(f"fraction must be in [0, 0.5), got {fraction!r}")
+    H, W = out.shape
+    width = max(1.0, H / 18.0) if width is None else float(width)
+    if not np.isfinite(width) or width <= 0:
+        raise ValueError(f"width must be a positive number of pixels, got {width!r}")
+    rng = np.random.default_rng(check_int(seed, "seed", minimum=0))
+    canvas = np.zeros((H, W), np.uint8)
+    thickness = max(1, int(round(width)))
+    while fraction > 0 and canvas.mean() / 255.0 < fraction:
+        point = rng.uniform((0.1 * W, 0.1 * H), (0.9 * W, 0.9 * H))
+        angle = rng.uniform(0.0, 2.0 * np.pi)
+        points = [point]
+        for _ in range(int(rng.integers(1, 3))):
+            angle += rng.uniform(-np.pi / 2, np.pi / 2)
+            point = point + rng.uniform(H / 10, H / 5) * np.array([np.cos(angle), np.sin(angle)])
+            points.append(point)
+        cv2.polylines(canvas, [np.rint(np.array(points)).astype(np.int32)], False, 255, thickness, cv2.LINE_8)
+    out[canvas > 0] = np.nan
     return out, np.isfinite(out)
 
 

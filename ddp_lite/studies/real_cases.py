@@ -116,22 +116,30 @@ def pool_scene(scene: Scene, factor: int) -> Scene:
     return Scene(scene.name, [pooled(v) for v in scene.views], [pooled(v) for v in scene.right], meta)
 
 
-def make_real_case(holes: str = "sgbm", factor: int = 4, scene=None) -> RealCase:
+def make_real_case(holes: str = "sgbm", factor: int = 4, scene=None, hole_mask=None) -> RealCase:
     """A real stereo pair pooled by ``factor`` with holes of kind ``holes`` (one of ``REAL_HOLES``) →
     :class:`RealCase` named ``"<scene>/<holes>"`` (the right view as the warp loss's neighbour). Deterministic.
 
     ``scene``: None for the Motorcycle pair (``REAL_FACTORS`` gives its pooled sizes), or another
     Middlebury 2014 pair: a folder (``middlebury.load_middlebury``) or a loaded one-view stereo
     :class:`~ddp_lite.core.views.Scene` with a right view and ``meta`` ``baseline`` (m), ``doffs`` (px)
-    and ``ndisp``, at the size SGBM should run at. ``factor``: a positive integer.
+    and ``ndisp``, at the size SGBM should run at. ``factor``: a positive integer. A scene with more than
+    one view (``middlebury_rail.load_rail_scene``) gives its other views as the warp loss's neighbours
+    (view0 and view2 of the rail), one with a single view its right view.
+
+    ``hole_mask``: (H, W) bool at the scene's full size, True = hole (DepthComp's own holes, the truth's
+    occluded pixels): then ``holes`` only names the kind, and the mask is pooled as a hole where at
+    least half of a block is one.
 
     Example:
         >>> case = make_real_case("blobs-1", factor=4)
         >>> case.name, case.depth.shape, round(float(np.isnan(case.depth).mean()), 2) >= 0.2
         ('motorcycle/blobs-1', (125, 185), True)
     """
-    if holes not in REAL_HOLES:
+    if hole_mask is None and holes not in REAL_HOLES:
         raise ValueError(f"holes must be one of {REAL_HOLES}, got {holes!r}")
+    if hole_mask is not None and (not isinstance(holes, str) or not holes or "/" in holes):
+        raise ValueError(f"holes must name the kind of hole_mask (a word without '/'), got {holes!r}")
     if isinstance(factor, bool) or not isinstance(factor, (int, np.integer)) or factor < 1:
         raise ValueError(f"factor must be a positive integer, got {factor!r}")
     if scene is None:
@@ -142,25 +150,38 @@ def make_real_case(holes: str = "sgbm", factor: int = 4, scene=None) -> RealCase
             raise ValueError("scene must be a Middlebury stereo pair: a right view and meta 'baseline' and 'doffs' "
                              f"(load_middlebury gives them), got right views {len(full.right)}, meta {sorted(full.meta)}")
         name = full.name
+    if hole_mask is not None:
+        hole_mask = np.asarray(hole_mask)
+        if hole_mask.dtype != bool or hole_mask.shape != full[0].depth.shape:
+            raise ValueError(f"hole_mask must be a bool (H, W) = {full[0].depth.shape} array like the scene, got "
+                             f"{hole_mask.dtype} {hole_mask.shape}")
     full = _cropped(full)
     scene = pool_scene(full, factor)
     view, gt = scene[0], scene[0].depth
     H, W = gt.shape
-    if holes.startswith("blobs"):
+    if hole_mask is not None:
+        blocks = hole_mask[:H * factor, :W * factor].reshape(H, factor, W, factor)
+        depth = np.where(blocks.mean(axis=(1, 3)) >= 0.5, np.nan, gt).astype(np.float32)
+    elif holes.startswith("blobs"):
         depth, _ = random_holes(gt, fraction=0.2, seed=int(holes.split("-")[1]), blob_size=min(H, W) / 10)
     elif holes == "sgbm":
-        disparity, _ = sgm_disparity(full, 0, "dense")  # (H·f, W·f) px, NaN holes
+        disparity, _ = sgm_disparity(_stereo_pair(full), 0, "dense")  # (H·f, W·f) px, NaN holes
         shifted = disparity + float(full.meta["doffs"])
         with np.errstate(invalid="ignore", divide="ignore"):
             sgbm = np.where(shifted > 0, float(full[0].camera.focal * full.meta["baseline"]) / shifted, np.nan)
         depth = _pool_depth(sgbm.astype(np.float32), factor)
     else:  # occlusion
-        failed = sgm_left_right_failures(full, 0, "dense")  # (H·f, W·f) bool
+        failed = sgm_left_right_failures(_stereo_pair(full), 0, "dense")  # (H·f, W·f) bool
         blocks = failed[:H * factor, :W * factor].reshape(H, factor, W, factor).any(axis=(1, 3))
         depth = np.where(blocks, np.nan, gt).astype(np.float32)
     fb = float(view.camera.focal * scene.meta["baseline"])
-    return RealCase(f"{name}/{holes}", view.rgb, depth, gt, view.camera, [scene.right[0]], None, scene, 0,
-                    None, fb=fb)
+    neighbors = list(scene.views[1:]) or [scene.right[0]]
+    return RealCase(f"{name}/{holes}", view.rgb, depth, gt, view.camera, neighbors, None, scene, 0, None, fb=fb)
+
+
+def _stereo_pair(scene: Scene) -> Scene:
+    """The reference view and its stereo partner alone (a rail scene also holds its neighbours)."""
+    return Scene(scene.name, scene.views[:1], scene.right[:1], dict(scene.meta))
 
 
 def factor_for_profile(profile=None, shape=(500, 741)) -> int:

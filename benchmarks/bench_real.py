@@ -1,0 +1,151 @@
+"""The real suite: every fill and DDP (kit, paper, photo; rgbd and rgbd+warp) on every Middlebury scene.
+
+    python benchmarks/bench_quality.py --suite middlebury --data DIR                    # eighth size, seed 0
+    python benchmarks/bench_quality.py --suite middlebury --data DIR --size quarter --seeds 0 1 2
+    python benchmarks/bench_quality.py --suite middlebury --data DIR --report           # the tables only
+
+``DIR`` is a folder of Middlebury scenes with ground truth (what ``python -m data_fetch fetch
+middlebury2006 --from …`` and its siblings install, or a folder laid out like it); the cases are
+``ddp_lite.studies.real_suite``'s: DepthComp's own holes on Plastic, seeded blobs, OpenCV SGBM's holes and
+the truth's occlusions on every scene, and Motorcycle. ``--size eighth`` (≈ 160×140, about 40 s a fit on
+one core) is for iterating, ``quarter`` (≈ 320×280, minutes a fit) for confirming.
+
+It prints its expected wall time before it starts, fits the recipes of a case side by side (one torch
+thread each), appends one JSON row per fill or fit to ``--out`` (default
+``benchmarks/results/real_suite_<size>.jsonl``) and skips what is already there, so a stopped run resumes.
+Scores: hole RMSE in disparity px of the working size; per case the ratio of each DDP row to the best of
+all fills and to the best of the paper's Table 6 methods present in the kit (``baselines.PAPER_TABLE6``).
+Then the per-scene table, the means per hole kind and over all cases, and how long it took. Asserts nothing.
+"""
+from __future__ import annotations
+
+import json
+import time
+from collections import defaultdict
+from pathlib import Path
+
+import numpy as np
+
+from ddp_lite import baselines
+from ddp_lite.method.config import FitConfig
+from ddp_lite.studies.real_cases import _fit_reusing, _plain_fits
+from ddp_lite.studies.real_suite import SUITE_HOLES, make_suite_case, suite_case_names
+
+RESULTS = Path(__file__).resolve().parent / "results"
+SECONDS_PER_FIT = {"eighth": 45.0, "quarter": 240.0}  # one class fit on one core (AVX-512 Xeon, measured)
+_TABLE6_FALLBACK = ("linear", "cubic", "telea", "guided-filter")
+
+
+def table6_fills() -> tuple[str, ...]:
+    """The kit's fills that are rows of the paper's Table 6."""
+    names = tuple(getattr(baselines, "PAPER_TABLE6", {}).values()) or _TABLE6_FALLBACK
+    return tuple(n for n in names if n in baselines.BASELINES)
+
+
+def _done(path: Path) -> tuple[list[dict], set]:
+    rows = [json.loads(line) for line in path.read_text().splitlines() if line.strip()] if path.exists() else []
+    return rows, {(r["case"], r["method"], r["variant"], r["seed"]) for r in rows}
+
+
+def run(data, size: str, recipes, variants, seeds, out: Path, profile: str = "class") -> None:
+    """Fill and fit every case of the suite under ``data`` not yet in ``out``; rows appended as they finish."""
+    names = suite_case_names(data)
+    rows, done = _done(out)
+    fits_left = sum(1 for n in names for v in variants for s in seeds
+                    if any((n, f"DDP {r}", v, s) not in done for r in recipes))
+    plain = len([r for r in recipes if r != "photo"])
+    expected = fits_left * plain * SECONDS_PER_FIT[size] / min(2, plain)
+    print(f"{len(names)} cases, {fits_left} case-variant-seed runs of {plain} fits left: expect about "
+          f"{expected / 60:.0f} min on 2 cores (class, {size}); rows to {out}", flush=True)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    start = time.perf_counter()
+    with open(out, "a") as handle:
+        def record(row):
+            handle.write(json.dumps(row) + "\n")
+            handle.flush()
+        for name in names:
+            case = None
+            for method, fill in baselines.BASELINES.items():
+                if (name, method, None, None) in done:
+                    continue
+                case = case or make_suite_case(data, name, size)
+                began = time.perf_counter()
+                disparity = fill(case.fb / case.depth, case.rgb)
+                record(dict(case=name, method=method, variant=None, seed=None, size=size,
+                            px=case.rmse_px(case.fb / disparity), seconds=time.perf_counter() - began))
+            for variant in variants:
+                for seed in seeds:
+                    wanted = [r for r in recipes if (name, f"DDP {r}", variant, seed) not in done]
+                    if not wanted:
+                        continue
+                    case = case or make_suite_case(data, name, size)
+                    began = time.perf_counter()
+                    configs = [FitConfig.for_profile(profile, variant=variant, recipe=r, seed=seed, progress=False)
+                               for r in wanted]
+                    fitted = _plain_fits(case, variant, configs)
+                    seconds = (time.perf_counter() - began) / max(1, len(fitted))
+                    for recipe, config in zip(wanted, configs):
+                        result = _fit_reusing(case, variant, config, fitted)
+                        record(dict(case=name, method=f"DDP {recipe}", variant=variant, seed=seed, size=size,
+                                    px=case.rmse_px(result.merged(case.depth)), seconds=seconds,
+                                    iterations=int(getattr(result, "iterations", 0) or 0)))
+                    print(f"{name:<24} {variant:<10} seed {seed}: {time.perf_counter() - began:.0f} s "
+                          f"({(time.perf_counter() - start) / 60:.1f} min in all)", flush=True)
+    print(f"done in {(time.perf_counter() - start) / 60:.1f} min", flush=True)
+
+
+def ratios(rows: list[dict]) -> dict:
+    """{(case, method, variant): [ratio to the best fill, ratio to the best Table 6 fill, px]} over seeds."""
+    fills = defaultdict(dict)
+    fits = defaultdict(list)
+    for r in rows:
+        if r["variant"] is None:
+            fills[r["case"]][r["method"]] = r["px"]
+        else:
+            fits[(r["case"], r["method"], r["variant"])].append(r["px"])
+    table6 = table6_fills()
+    out = {}
+    for (case, method, variant), values in fits.items():
+        if case not in fills:
+            continue
+        best = min(fills[case].values())
+        best6 = min(fills[case][m] for m in table6 if m in fills[case])
+        px = float(np.mean(values))
+        out[(case, method, variant)] = [px / best, px / best6, px, len(values)]
+    return out
+
+
+def report(path: Path) -> None:
+    """The per-scene table and the means per hole kind, from the rows in ``path``."""
+    rows, _ = _done(path)
+    if not rows:
+        print(f"no rows in {path}")
+        return
+    fills = defaultdict(dict)
+    for r in rows:
+        if r["variant"] is None:
+            fills[r["case"]][r["method"]] = r["px"]
+    table = ratios(rows)
+    columns = sorted({(m, v) for _, m, v in table}, key=lambda mv: (mv[1], mv[0]))
+    table6 = table6_fills()
+    print(f"{path.name}: hole RMSE (disparity px) and DDP / best fill (DDP / best of Table 6's {', '.join(table6)})")
+    header = f"{'case':<22} {'best fill':<24} {'best Table 6':<20}" + "".join(f" {m[4:]}/{v:<10}" for m, v in columns)
+    print(header)
+    for case in sorted(fills):
+        best = min(fills[case], key=fills[case].get)
+        best6 = min((m for m in table6 if m in fills[case]), key=fills[case].get)
+        cells = "".join(f" {table[(case, m, v)][0]:>4.2f} ({table[(case, m, v)][1]:.2f})".ljust(len(m) - 3 + len(v) + 2)
+                        if (case, m, v) in table else " -".ljust(len(m) - 3 + len(v) + 2) for m, v in columns)
+        print(f"{case:<22} {best + f' {fills[case][best]:.3f}':<24} {best6 + f' {fills[case][best6]:.3f}':<20}{cells}")
+    print("\nmeans of the ratios (to the best fill; to the best Table 6 method), per hole kind and over all cases:")
+    for holes in SUITE_HOLES + ("all",):
+        parts = []
+        for m, v in columns:
+            chosen = [x for (c, mm, vv), x in table.items() if mm == m and vv == v and (holes == "all" or c.endswith("/" + holes))]
+            if chosen:
+                parts.append(f"{m[4:]}/{v} {np.mean([x[0] for x in chosen]):.3f}; {np.mean([x[1] for x in chosen]):.3f} "
+                             f"(n={len(chosen)})")
+        if parts:
+            print(f"  {holes:<10} " + " | ".join(parts))
+    seconds = sum(r.get("seconds", 0.0) for r in rows if r["variant"] is not None)
+    print(f"\n{len(rows)} rows; the fits' own time {seconds / 60:.0f} fit-minutes")

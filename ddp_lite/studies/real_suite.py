@@ -1,0 +1,116 @@
+"""The real suite: every Middlebury scene with ground truth in a folder, plus Motorcycle, with real holes.
+
+A folder of scenes is what ``data_fetch`` installs (``middlebury2005``, ``middlebury2006`` HalfSize,
+``middlebury2014q``) or any folder holding scene folders (``view1.png``/``disp1.png``/``dmin.txt``, or
+``im0.png``/``calib.txt``/``disp0GT.pfm``) at any depth; DepthComp's ``plastic-disp-hole.png`` anywhere
+in it adds the paper's own holes on Plastic. Hole kinds (``SUITE_HOLES``):
+
+- ``depthcomp``: DepthComp's own Table 6 holes (Plastic only);
+- ``blobs``: DepthComp-style smooth blobs, 20 % of the pixels, one fixed pattern (seed 1);
+- ``sgbm``: the input is OpenCV SGBM's own depth on the scene's stereo pair (view1–view5, im0–im1), holes
+  where it gives no answer: the real stereo holes;
+- ``occlusion``: the ground truth with holes where the stereo partner does not see the reference
+  (``middlebury_rail.ground_truth_occlusion``; Motorcycle: where SGBM's left-right check fails).
+
+Each scene is pooled by the integer factor that brings it nearest a size's pixel count (``SUITE_SIZES``:
+``eighth`` ≈ 160×140 of a 2005/2006 scene, to iterate on; ``quarter`` ≈ 320×280, to confirm). The warp
+loss's neighbours are view0 and view2 of the rail (the paper's N = 2), or the right view of a 2014 pair.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..data.middlebury_rail import ground_truth_occlusion, is_2014_folder, is_rail_folder, load_middlebury_scene
+from ..data.samples import read_depthcomp_holes
+from .real_cases import RealCase, make_real_case
+
+__all__ = ["SUITE_HOLES", "SUITE_SIZES", "MOTORCYCLE", "find_scenes", "suite_case_names", "make_suite_case",
+           "pooling_factor"]
+
+SUITE_HOLES = ("depthcomp", "blobs", "sgbm", "occlusion")
+SUITE_SIZES = {"eighth": 160 * 140, "quarter": 320 * 280}  # target pixels of a pooled scene
+MOTORCYCLE = "Motorcycle"  # scikit-image's pair, always in the suite
+DEPTHCOMP_FILE = "plastic-disp-hole.png"
+
+
+def find_scenes(root) -> dict[str, Path]:
+    """{scene name: folder} of every Middlebury scene with ground truth under ``root`` (any depth), named
+    by the folder (``2006-Plastic``, ``HalfSize/Plastic`` → ``Plastic``; ``2014-Piano-Q`` → ``Piano``)."""
+    root = Path(root)
+    if not root.is_dir():
+        raise ValueError(f"root must be a folder of Middlebury scenes (as data_fetch installs them), got {root}")
+    found = {}
+    for folder in sorted(p for p in root.rglob("*") if p.is_dir()) + [root]:
+        if is_rail_folder(folder) or is_2014_folder(folder):
+            name = folder.name.split("-", 1)[1] if folder.name[:4].isdigit() and "-" in folder.name else folder.name
+            name = name[:-2] if name.endswith("-Q") else name
+            if name in found:
+                raise ValueError(f"root: two folders hold scene {name!r}: {found[name]} and {folder}")
+            found[name] = folder
+    if not found:
+        raise ValueError(f"root: no Middlebury scene with ground truth under {root} (a scene folder holds view1.png, "
+                         f"disp1.png and dmin.txt, or im0.png, calib.txt and disp0GT.pfm)")
+    return found
+
+
+def _depthcomp_file(root) -> Path | None:
+    hits = sorted(Path(root).rglob(DEPTHCOMP_FILE))
+    return hits[0] if hits else None
+
+
+def suite_case_names(root) -> list[str]:
+    """The suite's case names ``scene/holes``, hole kind by hole kind: Plastic with ``depthcomp`` when the
+    hole file is under ``root``, then every scene of ``root`` and Motorcycle with ``blobs``, ``sgbm``, ``occlusion``."""
+    scenes = list(find_scenes(root)) + [MOTORCYCLE]
+    names = []
+    for holes in SUITE_HOLES:  # hole kind by hole kind: a run stopped part-way has covered every scene once
+        for scene in scenes:
+            if holes == "depthcomp" and (scene != "Plastic" or _depthcomp_file(root) is None):
+                continue
+            names.append(f"{scene}/{holes}")
+    return names
+
+
+def pooling_factor(shape, size: str = "eighth") -> int:
+    """The integer factor that pools an image of ``shape`` (H, W) nearest ``SUITE_SIZES[size]`` pixels."""
+    if size not in SUITE_SIZES:
+        raise ValueError(f"size must be one of {sorted(SUITE_SIZES)}, got {size!r}")
+    pixels = shape[0] * shape[1]
+    return min(range(1, 17), key=lambda f: abs(np.log(pixels / f ** 2 / SUITE_SIZES[size])))
+
+
+def make_suite_case(root, name: str, size: str = "eighth") -> RealCase:
+    """The case ``scene/holes`` of the suite under ``root`` at ``size`` → :class:`RealCase` (neighbours:
+    view0 and view2 of a rail scene, the right view of a pair). Deterministic."""
+    scene_name, holes = name.rsplit("/", 1)
+    if holes not in SUITE_HOLES:
+        raise ValueError(f"name: the holes must be one of {SUITE_HOLES}, got {name!r}")
+    if scene_name == MOTORCYCLE:
+        from ..data.middlebury import load_motorcycle
+
+        factor = pooling_factor((500, 740), size)
+        kind = {"blobs": "blobs-1"}.get(holes, holes)
+        if holes == "depthcomp":
+            raise ValueError("name: DepthComp's holes exist for Plastic only")
+        case = make_real_case(kind, factor=factor, scene=load_motorcycle())
+    else:
+        folders = find_scenes(root)
+        if scene_name not in folders:
+            raise ValueError(f"name: no scene {scene_name!r} under {root}; found {sorted(folders)}")
+        folder = folders[scene_name]
+        scene = load_middlebury_scene(folder, name=scene_name)
+        factor = pooling_factor(scene[0].depth.shape, size)
+        if holes == "depthcomp":
+            hole_file = _depthcomp_file(root)
+            if scene_name != "Plastic" or hole_file is None:
+                raise ValueError(f"name: DepthComp's holes exist for Plastic only, and {DEPTHCOMP_FILE} must be "
+                                 f"under {root}")
+            case = make_real_case(holes, factor, scene, hole_mask=read_depthcomp_holes(hole_file, scene.size))
+        elif holes == "occlusion":
+            case = make_real_case(holes, factor, scene, hole_mask=ground_truth_occlusion(folder))
+        else:
+            case = make_real_case({"blobs": "blobs-1"}.get(holes, holes), factor, scene)
+    case.name = name
+    return case
