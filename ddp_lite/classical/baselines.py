@@ -14,8 +14,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .depth_fills import fill_biharmonic, fill_cubic, fill_linear, fill_navier_stokes, fill_nearest, fill_telea
-from .guided_fills import fill_bilateral_solver, fill_colorization, fill_cross_bilateral, fill_guided_filter
+from .depth_fills import (fill_biharmonic, fill_cubic, fill_ebi, fill_fbf, fill_linear, fill_navier_stokes, fill_nearest,
+                          fill_telea)
+from .guided_fills import (fill_bilateral_solver, fill_colorization, fill_cross_bilateral, fill_fast_global_smoother,
+                           fill_guided_filter)
 
 __all__ = ["BASELINES", "fill"]
 
@@ -27,10 +29,13 @@ BASELINES = {
     "telea": fill_telea,
     "navier-stokes": fill_navier_stokes,
     "biharmonic": fill_biharmonic,
+    "ebi": fill_ebi,
+    "fbf": fill_fbf,
     "colorization": fill_colorization,
     "guided-filter": fill_guided_filter,
     "bilateral-solver": fill_bilateral_solver,
     "cross-bilateral": fill_cross_bilateral,
+    "fast-global-smoother": fill_fast_global_smoother,
 }
 
 
