@@ -322,7 +322,7 @@ def fill_cross_bilateral(depth, rgb=None, space_sigmas=(12.0, 5.0, 8.0), range_s
     coarse pixel's value. As the toolbox (its ``cbf`` mex file), but in float metres where the toolbox
     quantises depth to 256 levels of its maximum, and with the nearest valid depth where no scale
     reached a hole (the toolbox leaves 0 there), and OpenCV's disc window where the toolbox's is the 11×11
-    square (the hole RMSE moves by −4 % to +2 % on Motorcycle blobs; a pixel's value by 0.2–1.7 px rms).
+    square (Motorcycle 250×370, four hole kinds: hole RMSE −6 % to +4 %, mean 3.51 → 3.49 px).
     Valid pixels keep their value.
     """
     depth, valid, image = check_fill_input(depth, rgb, need_rgb=True)
