@@ -106,3 +106,27 @@ def test_the_fourier_fill_reproduces_a_smooth_surface_to_its_quantisation():
     level = np.ptp(truth[~holes]) / 63
     assert np.max(np.abs(out - truth)[holes]) < 4 * level  # measured 2.5 levels (1/63 of the range each)
     np.testing.assert_array_equal(out[~holes], truth[~holes].astype(np.float32))
+
+
+@pytest.mark.parametrize("method", ["ebi", "fbf", "fast-global-smoother"])
+def test_the_new_fills_refuse_bad_input_and_survive_sparse_depth(method):
+    from ddp_lite.classical.baselines import fill
+    rgb = np.full((20, 30, 3), 0.5, np.float32)
+    with pytest.raises(ValueError, match="at least 1 valid"):
+        fill(np.full((20, 30), np.nan), rgb, method=method)
+    with pytest.raises(ValueError, match="inf"):
+        fill(np.full((20, 30), np.inf), rgb, method=method)
+    with pytest.raises(ValueError, match=r"rgb must be \(H, W, 3\)"):
+        fill(np.ones((20, 30)), np.zeros((20, 31, 3)), method=method)
+    one = np.full((20, 30), np.nan)
+    one[4, 7] = 2.0  # a single valid pixel: every hole takes its depth
+    np.testing.assert_allclose(fill(one, rgb, method=method), 2.0, atol=1e-5)
+
+
+def test_the_fast_global_smoother_needs_the_image_and_positive_parameters():
+    depth, _, rgb, _ = _edge_case()
+    with pytest.raises(ValueError, match="rgb is required"):
+        fill_fast_global_smoother(depth)
+    for bad in ({"lam": 0.0}, {"sigma_color": -1.0}, {"lam": np.nan}, {"lam": True}):
+        with pytest.raises(ValueError, match="must be a positive number"):
+            fill_fast_global_smoother(depth, rgb, **bad)

@@ -219,7 +219,10 @@ def fill_ebi(depth, rgb=None) -> np.ndarray:
     blended from many patches); shift-map pastes single offsets and does not see the colour image (given
     Lab colour as extra channels it was better on 2 of 4 Motorcycle hole kinds, worse on the other 2). The
     float32 depth is used as it is: quantised to uint16 levels the same fill was ~1.8× worse (its costs
-    are scaled for 8-bit levels). On Motorcycle 250×370 it is ~2× the linear fill's hole RMSE.
+    are scaled for 8-bit levels). On Motorcycle 250×370 it is ~2× the linear fill's hole RMSE, takes
+    ~5–14 s a fill on 2 shared cores, and is fragile: the offsets it picks move with the input's last
+    digits (125×185 blobs-1: 2.86 px, or 1.67 px with the mean subtracted in float32 instead of float64).
+    For one input it is deterministic.
     Valid pixels keep their input value.
     """
     depth, valid, _ = check_fill_input(depth, rgb)
