@@ -16,7 +16,7 @@ Every fill has the signature of :mod:`ddp_lite.classical.baselines`, ``fn(depth,
   ``cv2.ximgproc.guidedFilter``: that filter has no per-pixel weights, and its ratio on [valid·depth,
   valid] is a ratio of two affine models, not a model fitted to the valid pixels (Motorcycle 250×370
   blobs-1: 11.3 px against 2.2 in the reached holes). With all weights 1 the two agree (a test checks it).
-- ``bilateral-solver``: Barron & Poole's fast bilateral solver (2016; the FBS row): the smoothest depth
+- ``bilateral-solver``: Barron & Poole's fast bilateral solver (2016; not a row of Table 6): the smoothest depth
   in a bilateral grid over (x, y, luma, chroma), pulled to the input where it is valid; a sparse
   system on the grid's vertices, solved by preconditioned conjugate gradients (scipy.sparse). OpenCV's
   ``cv2.ximgproc.fastBilateralSolverFilter`` is in the contrib wheel but built without Eigen, and refuses to run.
