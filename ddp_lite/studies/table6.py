@@ -12,7 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..classical.baselines import BASELINES
+from ..classical.baselines import BASELINES, PAPER_TABLE6
+from ..classical.baselines import PAPER_TABLE6_RMSE as BASELINE_PAPER_RMSE
 from ..classical.holes import stroke_holes
 from ..data.middlebury_rail import load_rail_scene
 from ..data.samples import depthcomp_holes, sample_scene
@@ -21,14 +22,9 @@ from .real_cases import RealCase, compare_fills, factor_for_profile, make_real_c
 __all__ = ["TABLE6_SCENES", "PAPER_TABLE6_RMSE", "PAPER_ROWS", "table6_case", "table6", "paper_ratios", "our_ratios"]
 
 TABLE6_SCENES = ("Plastic", "Baby1", "Bowling1")
-# The paper's Table 6 (RMSE, full-size disparity px): Plastic, Baby, Bowling, and the kit's fill for the row
-PAPER_TABLE6_RMSE = {
-    "SSI": (1.7573, 2.9638, 6.4936), "Linear Inter": (1.3432, 1.3473, 1.4503), "Cubic Inter": (1.2661, 1.3384, 1.4460),
-    "FMM": (0.9580, 0.8349, 1.2422), "GIF": (0.7947, 0.6008, 0.9436), "FBF": (0.8643, 0.6238, 0.5918),
-    "EBI": (0.6952, 0.6755, 0.4857), "Depthcomp": (0.6618, 0.3697, 0.4292), "DDP": (0.4951, 0.3232, 0.5743),
-}
-PAPER_ROWS = {"Linear Inter": "linear", "Cubic Inter": "cubic", "FMM": "telea", "GIF": "guided-filter",
-              "FBF": "fbf", "EBI": "ebi"}  # the paper's rows the kit has (SSI and Depthcomp: no open implementation)
+# The paper's Table 6 (RMSE, full-size disparity px: Plastic, Baby, Bowling) and the kit's fill for each row
+PAPER_TABLE6_RMSE = {row: values[:3] for row, values in BASELINE_PAPER_RMSE.items()}
+PAPER_ROWS = dict(PAPER_TABLE6)  # the paper's rows the kit has (SSI and Depthcomp: no open implementation)
 
 
 def table6_case(scene: str, profile=None, seed: int = 0) -> RealCase:
