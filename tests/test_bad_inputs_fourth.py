@@ -188,3 +188,90 @@ def test_bad_numbers_are_refused_before_any_request(server, tmp_path, bad):
 def test_cli_refuses_negative_retries(tmp_path, capsys):
     assert fetch_main(["fetch", "middlebury2006", "--dest", str(tmp_path), "--retries", "-1"]) == 1
     assert "--retries" in capsys.readouterr().err
+
+
+# ------------------------------------------------------------------ 5. a finished fit thrown away by a late error
+
+def _complete_argv(tmp_path, out="filled.npy"):
+    return ["complete", "--rgb", str(tmp_path / "rgb.png"), "--depth", str(tmp_path / "depth.npy"),
+            "--out", f"{tmp_path}/{out}", "--profile", "ci", "--iterations", "5", "--max-side", "16"]
+
+
+def test_a_terminal_that_cannot_print_an_arrow_still_gets_its_files(tmp_path, monkeypatch):
+    import io
+    import sys
+    from test_cli import _pair
+    from ddp_lite.interface.cli import main
+    _pair(tmp_path)
+    terminal = io.TextIOWrapper(io.BytesIO(), encoding="ascii")
+    monkeypatch.setattr(sys, "stdout", terminal)
+    assert main(_complete_argv(tmp_path)) == 0
+    assert np.load(tmp_path / "filled.npy").shape == (60, 90) and (tmp_path / "filled.preview.png").exists()
+    terminal.flush()
+    assert b"? " in terminal.buffer.getvalue() or b"?" in terminal.buffer.getvalue()  # the arrow, replaced
+    assert terminal.errors == "strict"  # the caller's stream as it was
+
+
+def test_an_out_that_names_a_folder_or_is_given_twice_is_refused_before_the_fit(tmp_path, capsys, monkeypatch):
+    from test_cli import _pair
+    from ddp_lite.interface import cli_complete
+    from ddp_lite.interface.cli import main
+    _pair(tmp_path)
+    monkeypatch.setattr(cli_complete, "_complete", lambda *a: pytest.fail("the fit started"))
+    assert main(_complete_argv(tmp_path, "o.npy/")) == 2
+    assert "folder" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main(_complete_argv(tmp_path) + ["--out", str(tmp_path / "second.npy")])
+    assert "--out was given twice" in capsys.readouterr().err
+    assert not (tmp_path / "o.npy").exists() and not (tmp_path / "second.npy").exists()
+
+
+def test_a_png_or_jpeg_declaring_a_huge_image_is_refused_by_its_header(tmp_path):
+    import struct
+    import zlib
+    from ddp_lite.data.fileio import read_image_file
+
+    def chunk(kind, body):
+        return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body))
+    bomb = (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", 100000, 100000, 8, 0, 0, 0, 0))
+            + chunk(b"IDAT", zlib.compress(b"\x00" * 1000)) + chunk(b"IEND", b""))
+    (tmp_path / "bomb.png").write_bytes(bomb)
+    with pytest.raises(ValueError, match=r"rgb: .*100000×100000.*refused before decoding"):
+        read_image_file(tmp_path / "bomb.png", "rgb")
+    import cv2
+    ok, jpeg = cv2.imencode(".jpg", np.zeros((8, 8, 3), np.uint8))
+    data = bytearray(jpeg.tobytes())
+    at = data.find(b"\xff\xc0")
+    data[at + 5:at + 9] = struct.pack(">HH", 60000, 60000)  # height, width
+    (tmp_path / "bomb.jpg").write_bytes(bytes(data))
+    with pytest.raises(ValueError, match="60000×60000"):
+        read_image_file(tmp_path / "bomb.jpg", "rgb")
+    cv2.imwrite(str(tmp_path / "fine.png"), np.zeros((5, 7), np.uint8))
+    assert read_image_file(tmp_path / "fine.png").shape == (5, 7)
+
+
+def test_an_empty_point_cloud_is_refused_clearly_and_colours_are_scaled_or_refused(tmp_path):
+    from ddp_lite.core.camera import Camera
+    from ddp_lite.evaluation.fusion import fuse_depths, points_from_depth, save_ply
+    camera = Camera.from_fov(8, 6, 60.0)
+    empty = fuse_depths([np.full((6, 8), np.nan)], [camera], min_views=0)
+    with pytest.raises(ValueError, match="no points"):
+        save_ply(empty, tmp_path / "empty.ply")
+    assert not (tmp_path / "empty.ply").exists()
+    depth = np.full((6, 8), 2.0)
+    points, colours = points_from_depth(depth, camera, np.full((6, 8, 3), 255, np.uint8))
+    assert np.allclose(colours, 1.0)
+    _, half = points_from_depth(depth, camera, np.full((6, 8, 3), 128, np.uint8))
+    assert np.allclose(half, 128 / 255)
+    with pytest.raises(ValueError, match="divide it by 255"):
+        points_from_depth(depth, camera, np.full((6, 8, 3), 200.0))
+
+
+def test_a_tum_list_naming_one_file_for_every_frame_is_refused(tmp_path):
+    from ddp_lite.data.tum import read_tum_list
+    path = tmp_path / "depth.txt"
+    path.write_text("# timestamp filename\n1.0 depth/1.png\n1.1 depth/1.png\n1.2 depth/1.png\n")
+    with pytest.raises(ValueError, match="depth/1.png was already listed on line 2"):
+        read_tum_list(path)
+    path.write_text("1.0 depth/1.png\n1.1 depth/2.png\n")
+    assert len(read_tum_list(path)) == 2

@@ -69,8 +69,8 @@ def check_output_file(path, flag: str, suffixes=None, inputs: dict | None = None
     """
     given = os.fspath(path)
     out = os.path.abspath(given)
-    if os.path.isdir(out):
-        raise ValueError(f"{flag} {given!r} is a folder; give a file name such as {example}")
+    if os.path.isdir(out) or given.endswith(tuple(filter(None, (os.sep, os.altsep, "/")))):
+        raise ValueError(f"{flag} {given!r} is a folder (or ends in a '/'); give a file name such as {example}")
     suffix = os.path.splitext(out)[1].lower()
     if suffixes is not None and suffix not in suffixes:
         raise ValueError(f"{flag} must end in {', '.join(sorted(suffixes))} (the format follows the suffix), "

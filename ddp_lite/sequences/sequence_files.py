@@ -141,6 +141,8 @@ def fuse_views(out: Path, scene: Scene, manifest: dict):
     width = views[0].camera.width
     cloud = fuse_depths(depths, [v.camera for v in views], [v.rgb for v in views], min_views=1,
                         disp_threshold=0.25 * width / 64)
+    if not cloud.has_points():  # nothing agreed across views: no file, said by the count
+        return None, 0, [name for name, _ in done]
     with writing_inside(out):
         save_ply(cloud, out / "fused.ply")
     return out / "fused.ply", len(cloud.points), [name for name, _ in done]
