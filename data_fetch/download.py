@@ -14,6 +14,7 @@ renames it to its final name; on a mismatch pooch deletes it, so neither the fin
 from __future__ import annotations
 
 import json
+import math
 import os
 import time
 from pathlib import Path
@@ -24,7 +25,8 @@ from tqdm.auto import tqdm
 
 from ddp_lite.core.files import regular_file
 
-__all__ = ["FetchError", "ChecksumError", "ResumableDownloader"]
+__all__ = ["FetchError", "ChecksumError", "UnsafeNameError", "ResumableDownloader", "entry_path", "normal_sha256",
+           "content_problem", "check_fetch_numbers"]
 
 
 class FetchError(RuntimeError):
@@ -33,6 +35,93 @@ class FetchError(RuntimeError):
 
 class ChecksumError(FetchError):
     """A file's SHA-256 differs from the pinned or recorded one."""
+
+
+class UnsafeNameError(FetchError, ValueError):
+    """A registry entry names a file outside its dataset folder (absolute, ``..``, a link out of it)."""
+
+
+def entry_path(folder, name: str, entry: str) -> Path:
+    """``folder / name`` for a registry entry's file (or an archive member it pins), refused with
+    :class:`UnsafeNameError` naming ``entry`` unless it stays inside ``folder`` (no absolute path, no
+    ``..``, no symbolic link leading out): the one guard every fetched or installed name passes."""
+    from ddp_lite.core.files import PathEscapeError, path_inside
+    if not isinstance(name, str):
+        raise UnsafeNameError(f"{entry}: the file name must be a string, got {type(name).__name__}")
+    try:
+        return path_inside(folder, name, f"{entry}: file name", links=True)
+    except PathEscapeError as error:
+        raise UnsafeNameError(f"{error}. The registry entry is refused: nothing was downloaded, verified or "
+                              f"returned for it") from None
+
+
+def normal_sha256(value, what: str) -> str | None:
+    """A SHA-256 as the kit compares it: 64 lower-case hex digits (a ``sha256:`` prefix and upper case
+    accepted and normalised, once, here); None stays None; anything else → ValueError naming ``what``."""
+    if value is None:
+        return None
+    text = value.strip().lower() if isinstance(value, str) else None
+    if text is not None and text.startswith("sha256:"):
+        text = text[len("sha256:"):]
+    if text is None or len(text) != 64 or any(c not in "0123456789abcdef" for c in text):
+        raise ValueError(f"{what} must be a SHA-256 (64 hex digits), got {value!r}")
+    return text
+
+
+# What a file's first bytes must be, by the ending of its name: a server's HTML error page saved as
+# "view1.png" is not a PNG, whatever its hash is.
+_MAGIC = (
+    ((".png",), (b"\x89PNG\r\n\x1a\n",), "a PNG"),
+    ((".jpg", ".jpeg"), (b"\xff\xd8\xff",), "a JPEG"),
+    ((".zip",), (b"PK\x03\x04", b"PK\x05\x06"), "a ZIP archive"),
+    ((".tar.gz", ".tgz", ".gz"), (b"\x1f\x8b",), "a gzip file"),
+    ((".tar.bz2", ".bz2"), (b"BZh",), "a bzip2 file"),
+    ((".tar.xz", ".xz"), (b"\xfd7zXZ\x00",), "an xz file"),
+    ((".7z",), (b"7z\xbc\xaf\x27\x1c",), "a 7-Zip archive"),
+    ((".pfm",), (b"PF\n", b"Pf\n", b"PF\r", b"Pf\r", b"PF ", b"Pf "), "a PFM image"),
+    ((".mat",), (b"MATLAB", b"\x89HDF\r\n\x1a\n"), "a MATLAB file"),
+    ((".h5", ".hdf5"), (b"\x89HDF\r\n\x1a\n",), "an HDF5 file"),
+    ((".npy",), (b"\x93NUMPY",), "a NumPy file"),
+    ((".tif", ".tiff"), (b"II*\x00", b"MM\x00*"), "a TIFF image"),
+    ((".exr",), (b"\x76\x2f\x31\x01",), "an OpenEXR image"),
+    ((".pgm",), (b"P5", b"P2"), "a PGM image"),
+    ((".ppm",), (b"P6", b"P3"), "a PPM image"),
+    ((".ply",), (b"ply",), "a PLY file"),
+)
+
+
+def content_problem(path, name: str) -> str | None:
+    """The one verdict on what arrived, before it is trusted or recorded: None if ``path``'s first bytes
+    are what its ``name`` says (a ``.png`` starts with PNG's signature, a ``.zip`` with ``PK``, ...) and
+    it is not empty; else a sentence saying what it is instead (an HTML page: an error or login page)."""
+    with open(regular_file(path, name), "rb") as handle:
+        head = handle.read(512)
+    if not head:
+        return f"{name} is empty (0 bytes)"
+    lower = name.lower()
+    stripped = head.lstrip().lower()
+    html = stripped.startswith((b"<!doctype html", b"<html", b"<head", b"<body", b"<?xml", b"<!--"))
+    looks = (f"an HTML page (starts {head[:40]!r}: the server's error or login page?)" if html
+             else f"something else (starts {head[:16]!r})")
+    if lower.endswith(".tar"):
+        return None if head[257:262] == b"ustar" else f"{name} is not a tar archive: it is {looks}"
+    for endings, signatures, kind in _MAGIC:
+        if lower.endswith(endings):
+            return None if head.startswith(signatures) else f"{name} is not {kind}: it is {looks}"
+    if html and not lower.endswith((".html", ".htm", ".xml", ".svg")):
+        return f"{name} is {looks}"
+    return None
+
+
+def check_fetch_numbers(retries, backoff=1.0, timeout=30.0) -> None:
+    """Refuse, before anything is fetched, a number that makes no sense (ValueError naming it)."""
+    if isinstance(retries, bool) or not isinstance(retries, (int, float)) or not math.isfinite(retries) \
+            or int(retries) != retries or retries < 0:
+        raise ValueError(f"retries must be an integer 0 or more, got {retries!r}")
+    for name, value, zero in (("backoff", backoff, True), ("timeout", timeout, False)):
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) \
+                or value < 0 or (value == 0 and not zero):
+            raise ValueError(f"{name} must be a finite number of seconds {'≥ 0' if zero else '> 0'}, got {value!r}")
 
 
 class _Incomplete(Exception):
@@ -62,8 +151,9 @@ class ResumableDownloader:
 
     def __init__(self, part, retries: int = 3, timeout: float = 30.0, progressbar: bool = True,
                  backoff: float = 1.0, chunk_size: int = 1 << 16):
-        if int(retries) != retries or retries < 0:
-            raise ValueError(f"retries must be a non-negative integer, got {retries!r}")
+        check_fetch_numbers(retries, backoff, timeout)
+        if isinstance(chunk_size, bool) or not isinstance(chunk_size, int) or chunk_size < 1:
+            raise ValueError(f"chunk_size must be a positive integer, got {chunk_size!r}")
         self.part = Path(part)
         self.retries, self.timeout, self.progressbar = int(retries), float(timeout), bool(progressbar)
         self.backoff, self.chunk_size = float(backoff), int(chunk_size)

@@ -16,14 +16,14 @@ import fnmatch
 import itertools
 import json
 import os
-import re
 from pathlib import Path
 
 import platformdirs
 import pooch
 
 from ddp_lite.core.files import regular_file, write_bytes_atomic
-from .download import ChecksumError, FetchError, ResumableDownloader
+from .download import (ChecksumError, FetchError, ResumableDownloader, check_fetch_numbers, content_problem,
+                       entry_path, normal_sha256)
 from .registry import Dataset, RemoteFile, get_dataset
 from .unpack import archive_files, safe_extract
 
@@ -78,7 +78,11 @@ def _read_records(folder: Path) -> dict:
                          f"fix or delete it")
     for name, record in records.items():
         digest = record.get("sha256") if isinstance(record, dict) else None
-        if not isinstance(digest, str) or not re.fullmatch(r"(sha256:)?[0-9a-f]{64}", digest):
+        try:
+            record["sha256"] = normal_sha256(digest, "sha256")  # upper case or a prefix: the same hash
+        except (ValueError, TypeError):
+            digest = None
+        if not isinstance(digest, str):
             raise FetchError(f"{path}: the entry for {name!r} must be a mapping with a 64-hex-digit 'sha256', "
                              f"got {record!r}; fix or delete it")
     return records
@@ -156,6 +160,15 @@ def _unpack(folder: Path, entry: RemoteFile, sha256: str, say) -> None:
     write_bytes_atomic(marker, (sha256 + "\n").encode())
 
 
+def check_names(folder: Path, dataset: Dataset, entries) -> None:
+    """Every file (and pinned archive member) of ``entries`` stays inside the dataset folder
+    (``download.entry_path``); else ``UnsafeNameError`` naming the entry, before anything is fetched."""
+    for entry in entries:
+        entry_path(folder, entry.name, f"{dataset.name} entry {entry.name!r}")
+        for member, _ in entry.members:
+            entry_path(folder, member, f"{dataset.name} entry {entry.name!r} (member {member!r})")
+
+
 def _select(dataset: Dataset, only) -> list[RemoteFile]:
     if not only:
         return list(dataset.files)
@@ -201,8 +214,8 @@ def _set_aside(path: Path, name: str) -> Path:
 
 def _verify_manual(folder: Path, entry: RemoteFile, known: str) -> None:
     path = regular_file(folder / entry.name, "manual download")
-    actual = pooch.file_hash(str(path), alg=known.split(":")[0] if ":" in known else "sha256")
-    if actual != known.split(":")[-1]:
+    actual = pooch.file_hash(str(path), alg="sha256").lower()
+    if actual != normal_sha256(known, entry.name):
         rejected = _set_aside(path, path.name + ".rejected")
         raise ChecksumError(f"{entry.name}: SHA-256 is {actual}, expected {known}. The file was moved to "
                             f"{rejected} (not deleted: it was yours); download it again.")
@@ -217,12 +230,14 @@ def fetch(dataset, dest=None, only=None, trust_first_download: bool = False, ret
         dataset = get_dataset(dataset)
     if not isinstance(dataset, Dataset):
         raise TypeError(f"dataset must be a name or a Dataset, got {type(dataset).__name__}")
+    check_fetch_numbers(retries, backoff)  # before anything is looked at or fetched
     root = data_dir(dest)
-    for where in (root, root / dataset.name):
+    folder = entry_path(root, dataset.name, f"dataset {dataset.name!r}")
+    for where in (root, folder):
         if where.exists() and not where.is_dir():
             raise FetchError(f"dest: {where} is a file; the data root and its dataset folders must be folders")
-    folder = root / dataset.name
     entries = _select(dataset, only)
+    check_names(folder, dataset, entries)
     _check_writable(folder)
     manual = dataset.manual is not None or any(f.url is None for f in entries)
     if manual:
@@ -257,12 +272,13 @@ def fetch(dataset, dest=None, only=None, trust_first_download: bool = False, ret
                 path.unlink(missing_ok=True)
                 raise ChecksumError(f"{problem}. The download was deleted (nothing is kept under its final name).")
         trusted = known is None and not entry.pixel_sha256
-        if trusted and path.stat().st_size == 0:  # an empty file is no dataset: never its trusted hash
+        problem = content_problem(path, entry.name) if trusted else None  # the one verdict, before any trust
+        if problem:
             if not manual:
                 path.unlink(missing_ok=True)
-            raise FetchError(f"{path} is empty (0 bytes){' as downloaded' if not manual else ''}; "
-                             f"--trust-first-download records only a file that holds something. "
-                             + ("Download it again by hand." if manual else "Fetch again later."))
+            raise FetchError(f"{path}: {problem}{' as downloaded' if not manual else ''}; "
+                             f"--trust-first-download records only a file that is what its name says. "
+                             + ("Download it again by hand." if manual else "It was deleted; fetch again later."))
         digest = known or pooch.file_hash(str(path))
         if entry.unpack:
             try:

@@ -26,7 +26,7 @@ from pathlib import Path
 
 import pooch
 
-from .download import ChecksumError, FetchError
+from .download import ChecksumError, FetchError, content_problem, entry_path
 from .fetch import REGISTRY_FILE, UnpinnedFileError, _check_writable, _read_records, _record, data_dir
 from .pixels import pixel_sha256
 from .registry import Dataset, get_dataset
@@ -126,7 +126,7 @@ def install_from(dataset, source, dest=None, only=None, trust_first_download: bo
     if not source.is_dir():
         raise ValueError(f"source: {source} is not a folder (--from must name a folder holding the files)")
     root = data_dir(dest)
-    folder = root / dataset.name
+    folder = entry_path(root, dataset.name, f"dataset {dataset.name!r}")
     for where in (root, folder):
         if where.exists() and not where.is_dir():
             raise FetchError(f"dest: {where} is a file; the data root and its dataset folders must be folders")
@@ -138,6 +138,8 @@ def install_from(dataset, source, dest=None, only=None, trust_first_download: bo
         targets = [t for t in targets if any(fnmatch.fnmatchcase(t[0], p) for p in patterns)]
         if not targets:
             raise ValueError(f"only={patterns!r} matches none of {dataset.name}'s files")
+    for name, _, _ in targets:  # the one guard: every name stays inside the dataset folder
+        entry_path(folder, name, f"{dataset.name} entry {name!r}")
     _check_writable(folder)
     records = _read_records(folder) if folder.is_dir() else {}
     found, missing, present = [], [], []
@@ -176,6 +178,10 @@ def install_from(dataset, source, dest=None, only=None, trust_first_download: bo
             staged.append((Path(temporary), final))
             shutil.copyfile(origin, temporary)  # a copy: the source is never touched
             _check(Path(temporary), name, origin, pixel, byte)
+            problem = None if (pixel or byte) else content_problem(temporary, name)  # before it is trusted
+            if problem:
+                raise FetchError(f"{problem} (from {origin}); --trust-first-download records only a file that is "
+                                 f"what its name says; nothing was installed")
         for temporary, final in staged:
             os.replace(temporary, final)
     finally:

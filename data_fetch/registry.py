@@ -38,6 +38,13 @@ class RemoteFile:
     pixel_sha256: str | None = None
     members: tuple[tuple[str, str], ...] = ()
 
+    def __post_init__(self):  # hashes normalised once, here: a pin in upper case is the same pin
+        from .download import normal_sha256
+        object.__setattr__(self, "sha256", normal_sha256(self.sha256, f"{self.name}: sha256"))
+        object.__setattr__(self, "pixel_sha256", normal_sha256(self.pixel_sha256, f"{self.name}: pixel_sha256"))
+        object.__setattr__(self, "members", tuple((member, normal_sha256(pin, f"{self.name}: member {member!r}"))
+                                                  for member, pin in self.members))
+
 
 @dataclass(frozen=True)
 class Dataset:

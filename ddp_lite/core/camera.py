@@ -184,22 +184,49 @@ def view_parallax(ref: "Camera", depth, nbr: "Camera", max_points: int = 4096) -
     return float(shift.max())
 
 
+def _point(value, name: str) -> np.ndarray:
+    """``value`` as a finite 3-vector (float64); ``ValueError`` naming ``name`` otherwise."""
+    try:
+        array = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be 3 numbers (x, y, z), got {value!r}") from None
+    if array.shape != (3,):
+        raise ValueError(f"{name} must be 3 numbers (x, y, z), got shape {array.shape}")
+    if not np.isfinite(array).all():
+        raise ValueError(f"{name} must be finite, got {array.tolist()}")
+    return array
+
+
+def _direction(vector: np.ndarray, name: str, why: str) -> np.ndarray:
+    """``vector`` scaled to unit length; ``ValueError`` naming ``name`` when it has (almost) none, which
+    would make a NaN pose."""
+    length = float(np.linalg.norm(vector))
+    if not (np.isfinite(length) and length > 1e-12):
+        raise ValueError(f"{name}: {why}")
+    return vector / length
+
+
 def look_at(eye, target, up=(0.0, -1.0, 0.0)) -> np.ndarray:
     """``cam_from_world`` (4×4) of a camera at ``eye`` looking at ``target`` (world metres).
 
     ``up`` is the world direction that should appear upwards in the image; with the OpenCV
-    convention (y down) the default world "up" is -y.
+    convention (y down) the default world "up" is -y. Degenerate input (``target`` at ``eye``, ``up``
+    zero or along the viewing direction, a NaN or an infinity) → ``ValueError`` naming the argument,
+    never a pose of NaNs.
     """
-    eye, target, up = (np.asarray(v, dtype=np.float64) for v in (eye, target, up))
-    forward = target - eye
-    forward /= np.linalg.norm(forward)
-    right = np.cross(forward, up)  # x = y × z with y = -up
-    right /= np.linalg.norm(right)
+    eye, target, up = _point(eye, "eye"), _point(target, "target"), _point(up, "up")
+    forward = _direction(target - eye, "target", f"{target.tolist()} is at eye {eye.tolist()}: no direction to look in")
+    _direction(up, "up", "must be a non-zero direction")
+    right = _direction(np.cross(forward, up), "up", f"{up.tolist()} is parallel to the viewing direction "
+                       f"{forward.tolist()}; give an up that is not along it")  # x = y × z with y = -up
     down = np.cross(forward, right)
     world_from_cam = np.eye(4)
     world_from_cam[:3, 0], world_from_cam[:3, 1], world_from_cam[:3, 2] = right, down, forward
     world_from_cam[:3, 3] = eye
-    return np.linalg.inv(world_from_cam)
+    pose = np.linalg.inv(world_from_cam)
+    if not np.isfinite(pose).all():  # the one rule: a geometric helper never returns NaN
+        raise ValueError(f"eye/target: {eye.tolist()} → {target.tolist()} gives a non-finite pose")
+    return pose
 
 
 # ---------------------------------------------------------------- NumPy: pixel lists ↔ world points
@@ -207,6 +234,9 @@ def look_at(eye, target, up=(0.0, -1.0, 0.0)) -> np.ndarray:
 def pixel_rays(u, v, K) -> np.ndarray:
     """Pixels ``u``, ``v`` (N,) → camera-frame rays ``K⁻¹ (u, v, 1)`` (N, 3) float64 with z = 1, so
     the point at depth z (metres along the optical axis) on pixel (u, v) is ``z · ray``."""
+    K = np.asarray(K, dtype=np.float64)
+    if K.shape != (3, 3) or not np.isfinite(K).all() or abs(np.linalg.det(K)) < 1e-12:
+        raise ValueError(f"K must be a finite, invertible 3×3 matrix, got {K.tolist() if K.size <= 9 else K.shape}")
     pixels = np.stack([u, v, np.ones(len(u))], 1).astype(np.float64)  # (N, 3)
     return pixels @ np.linalg.inv(K).T
 

@@ -6,6 +6,12 @@
   atomic because the temporary file is in the target's own folder (same file system). The new file
   gets the mode a plain ``open`` would give it (``0o666`` less the umask), or, when it replaces a
   file, that file's mode. A read-only target is refused unless ``overwrite_readonly``.
+- The one path guard (:func:`path_inside`): a name that must stay inside a folder (a dataset's
+  file under the data root, a file a command writes into its output folder) is refused when it is
+  absolute, climbs out with ``..``, or passes through a symbolic link on the way (a sub-folder of an
+  output folder linked to the user's own files would have them overwritten). Every atomic write
+  made inside :func:`writing_inside` (``ddp_lite.core.outpaths.output_lock`` enters it for every
+  output folder) goes through it, so no writer writes through a link inside its output folder.
 - The one check every reader of a user's file makes first (:func:`regular_file`): the path names an
   existing *regular* file. A FIFO, a device or a socket under a file's name makes a reader block
   forever (hashing a FIFO waits for a writer that never comes) or read endless bytes; a folder where
@@ -25,12 +31,65 @@ Example:
 from __future__ import annotations
 
 import contextlib
+import contextvars
 import os
 import stat
 import tempfile
 from pathlib import Path
 
-__all__ = ["atomic_path", "write_bytes_atomic", "regular_file", "describe_kind"]
+__all__ = ["atomic_path", "write_bytes_atomic", "regular_file", "describe_kind", "path_inside", "writing_inside",
+           "PathEscapeError"]
+
+
+class PathEscapeError(ValueError):
+    """A path that was to stay inside a folder leads out of it (absolute, ``..``, a symbolic link)."""
+
+
+def path_inside(root, name, what: str = "name", links: bool = False) -> Path:
+    """``root / name`` if it stays inside ``root``; else :class:`PathEscapeError` naming ``what``.
+
+    Refused: an empty or absolute ``name``, a ``..`` in it, and a symbolic link on the way below
+    ``root`` (the link itself or a folder on the way): with ``links=False`` any such link (a writer
+    must not write through one), with ``links=True`` only one whose target resolves outside ``root``.
+    ``root`` itself may be a link (the user's choice of folder)."""
+    text = os.fspath(name)
+    parts = Path(text).parts
+    if not text or not parts or os.path.isabs(text) or Path(text).drive or ".." in parts:
+        raise PathEscapeError(f"{what}: {text!r} must be a relative path inside {os.fspath(root)} (no leading "
+                              f"'/', no '..'); refusing to touch a file outside it")
+    root = Path(os.path.abspath(os.fspath(root)))
+    real_root = os.path.realpath(root)
+    here = root
+    for part in parts:
+        here = here / part
+        if os.path.islink(here):
+            real = os.path.realpath(here)
+            if not links or os.path.commonpath([real, real_root]) != real_root:
+                raise PathEscapeError(f"{what}: {here} is a symbolic link to {real}; refusing to write or read "
+                                      f"through it (it leads out of {root}); remove the link or choose another "
+                                      f"folder")
+    return root.joinpath(*parts)
+
+
+_OUTPUT_ROOTS: contextvars.ContextVar = contextvars.ContextVar("ddp_lite_output_roots", default=())
+
+
+@contextlib.contextmanager
+def writing_inside(*roots):
+    """Inside the block, every :func:`atomic_path` (so every writer of the kit) whose target lies under
+    one of ``roots`` refuses a symbolic link on its way below that root (:func:`path_inside`)."""
+    added = tuple(os.path.abspath(os.fspath(r)) for r in roots)
+    token = _OUTPUT_ROOTS.set(_OUTPUT_ROOTS.get() + added)
+    try:
+        yield
+    finally:
+        _OUTPUT_ROOTS.reset(token)
+
+
+def _check_roots(path: str) -> None:
+    for root in _OUTPUT_ROOTS.get():
+        if path != root and os.path.commonpath([path, root]) == root:
+            path_inside(root, os.path.relpath(path, root), "output")
 
 
 def _umask() -> int:
@@ -66,6 +125,7 @@ def atomic_path(path, suffix: str | None = None, overwrite_readonly: bool = Fals
         (3,)
     """
     path = os.path.abspath(os.fspath(path))
+    _check_roots(path)  # no symbolic link inside an output folder on the way
     if os.path.isdir(path):
         raise IsADirectoryError(f"{path} is a folder; give a file name")
     mode = 0o666 & ~_umask()

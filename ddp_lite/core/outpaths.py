@@ -24,7 +24,7 @@ import tempfile
 import threading
 import time
 
-from .files import atomic_path
+from .files import atomic_path, writing_inside
 
 __all__ = ["check_output_file", "check_output_folder", "check_not_overlapping", "output_lock", "output_set",
            "lock_path"]
@@ -69,8 +69,8 @@ def check_output_file(path, flag: str, suffixes=None, inputs: dict | None = None
     """
     given = os.fspath(path)
     out = os.path.abspath(given)
-    if os.path.isdir(out):
-        raise ValueError(f"{flag} {given!r} is a folder; give a file name such as {example}")
+    if os.path.isdir(out) or given.endswith(tuple(filter(None, (os.sep, os.altsep, "/")))):
+        raise ValueError(f"{flag} {given!r} is a folder (or ends in a '/'); give a file name such as {example}")
     suffix = os.path.splitext(out)[1].lower()
     if suffixes is not None and suffix not in suffixes:
         raise ValueError(f"{flag} must end in {', '.join(sorted(suffixes))} (the format follows the suffix), "
@@ -187,9 +187,12 @@ def _sigterm_raises():
 def output_lock(targets, flag: str):
     """Hold the lock file of every path in ``targets`` (files or folders; :func:`lock_path`)
     for the block; ``ValueError`` naming ``flag`` when another live command holds one. SIGTERM inside
-    the block raises ``KeyboardInterrupt``; the locks go at the end, whatever happened."""
+    the block raises ``KeyboardInterrupt``; the locks go at the end, whatever happened. Every output
+    folder among ``targets`` is guarded for the block (``files.writing_inside``): a write through a
+    symbolic link inside it is refused."""
     taken = []
-    with _sigterm_raises():
+    folders = [os.path.abspath(os.fspath(t)) for t in targets]  # a file target guards nothing below it
+    with _sigterm_raises(), writing_inside(*folders):  # no writer writes through a link inside an output folder
         try:
             for target in dict.fromkeys(os.path.abspath(os.fspath(t)) for t in targets):
                 path = lock_path(target)

@@ -78,6 +78,40 @@ def _jpeg_truncated(data: bytes) -> bool:
     return True  # no scan at all
 
 
+MAX_IMAGE_PIXELS = 200_000_000  # 200 MP: above any camera the kit reads; a 16-bit RGBA image this size is 1.6 GB
+
+
+def header_size(data: bytes) -> tuple[int, int] | None:
+    """(width, height) a PNG or JPEG header declares (None for another format, or none found): read
+    before decoding, so a file whose header claims a huge image is refused before memory is spent on it."""
+    if data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) >= 24 and data[12:16] == b"IHDR":
+        return int.from_bytes(data[16:20], "big"), int.from_bytes(data[20:24], "big")
+    if data[:2] == b"\xff\xd8":
+        at = 2
+        while at + 9 < len(data):
+            if data[at] != 0xFF:
+                return None
+            marker = data[at + 1]
+            if marker in (0xD8, 0x01) or 0xD0 <= marker <= 0xD7:
+                at += 2
+                continue
+            length = int.from_bytes(data[at + 2:at + 4], "big")
+            if 0xC0 <= marker <= 0xCF and marker not in (0xC4, 0xC8, 0xCC):  # a start of frame
+                return int.from_bytes(data[at + 7:at + 9], "big"), int.from_bytes(data[at + 5:at + 7], "big")
+            at += 2 + length
+    return None
+
+
+def check_pixel_limit(data: bytes, path, name: str) -> None:
+    """Refuse (ValueError naming ``name``) an image whose header declares more than
+    :data:`MAX_IMAGE_PIXELS` pixels: a decompression bomb, refused by its header."""
+    size = header_size(data)
+    if size is not None and size[0] * size[1] > MAX_IMAGE_PIXELS:
+        raise ValueError(f"{name}: {path} declares a {size[0]}×{size[1]} image ({size[0] * size[1] / 1e6:.0f} MP), "
+                         f"more than the {MAX_IMAGE_PIXELS / 1e6:.0f} MP the kit reads; refused before decoding "
+                         f"(a damaged or hostile file; resize it first if it is real)")
+
+
 def read_image_file(path, name: str = "path", flags: int = cv2.IMREAD_UNCHANGED) -> np.ndarray:
     """Any image file → the array OpenCV decodes (``flags``; BGR order), the pixels **as stored**.
 
@@ -92,6 +126,7 @@ def read_image_file(path, name: str = "path", flags: int = cv2.IMREAD_UNCHANGED)
                          f"below the cut would be read as grey. Copy or export the file again")
     if not data:
         raise ValueError(f"{name}: {path} is empty (0 bytes); was it copied or downloaded completely?")
+    check_pixel_limit(data, path, name)  # the header's size, before any pixel is decoded
     try:
         image = cv2.imdecode(np.frombuffer(data, np.uint8), flags | cv2.IMREAD_IGNORE_ORIENTATION)
     except cv2.error as error:  # OpenCV raises for a codec it was built without or left off (EXR)

@@ -13,6 +13,8 @@ Conventions as in ``formats``: depth float32 metres, NaN = no reading; OpenCV ca
 """
 from __future__ import annotations
 
+import os
+
 import re
 from pathlib import Path
 
@@ -53,7 +55,7 @@ def read_tum_list(path) -> list[tuple[float, str]]:
         >>> read_tum_list(p)
         [(1.0, 'rgb/1.0.png')]
     """
-    entries, lines = [], {}
+    entries, lines, files = [], {}, {}
     for line, text in text_lines(path):
         tokens = text.split()
         if len(tokens) != 2:
@@ -63,6 +65,11 @@ def read_tum_list(path) -> list[tuple[float, str]]:
             raise parse_error(path, line, f"timestamp {tokens[0]} was already listed on line {lines[stamp]}; "
                                     f"every frame needs its own timestamp")
         lines[stamp] = line
+        named = os.path.normpath(tokens[1])
+        if named in files:  # one image for two instants: every frame would read the same pixels
+            raise parse_error(path, line, f"{tokens[1]} was already listed on line {files[named]}; every frame "
+                                    f"needs its own file (a list that names one file for every frame is broken)")
+        files[named] = line
         entries.append((stamp, tokens[1]))
     if not entries:
         raise parse_error(path, None, "lists no frames")

@@ -60,9 +60,15 @@ def _check_view(depth, camera, rgb=None, index: str = "") -> tuple:
     image = np.asarray(rgb)
     if image.shape != array.shape + (3,):
         raise ValueError(f"image{index} must be (H, W, 3) = {array.shape + (3,)}, got {image.shape}")
+    if image.dtype.kind in "ui" and image.dtype != np.bool_:  # 8- or 16-bit colour: scaled by its range, once
+        image = image.astype(np.float64) / float(np.iinfo(image.dtype).max)
     image = image.astype(np.float64)
     if not np.all(np.isfinite(image)):
         raise ValueError(f"image{index} must be finite, in [0, 1]")
+    if image.size and (image.min() < 0.0 or image.max() > 1.0):
+        raise ValueError(f"image{index} must be colours in [0, 1] (a float image) or an integer image, got values in "
+                         f"[{image.min():.4g}, {image.max():.4g}]" + ("; a 0-255 image stored as floats? divide it "
+                                                                       "by 255" if image.max() > 1.0 else ""))
     return array, camera, image
 
 
@@ -222,6 +228,9 @@ def save_ply(cloud, path) -> None:
     path = os.fspath(path)
     if not path.lower().endswith(".ply"):
         raise ValueError(f"path must end in .ply, got {path!r}")
+    if not cloud.has_points():  # Open3D cannot write one; said here, not as "could not write"
+        raise ValueError(f"cloud has no points (every depth was a hole, or no point was seen by enough views); "
+                         f"nothing was written to {path!r}")
     with atomic_path(path, suffix=".ply") as tmp:  # Open3D picks the format from the suffix
         if not o3d.io.write_point_cloud(tmp, cloud):
             raise OSError(f"open3d could not write {path!r}")

@@ -10,6 +10,7 @@ at run time (an ``OSError``, a diverged fit, a failed view), 2 a usage error (ar
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import os
 import sys
@@ -98,10 +99,24 @@ def _intrinsics(text: str):
     return [[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]]
 
 
+class _StoreOnce(argparse._StoreAction):
+    """An option that takes one value refuses a second (``--out a.npy --out b.npy``): argparse would keep
+    the last and drop the first in silence."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        seen = namespace.__dict__.setdefault("_given_once", set())
+        if self.dest in seen:
+            parser.error(f"{option_string} was given twice; give it once (the first value would be ignored)")
+        seen.add(self.dest)
+        super().__call__(parser, namespace, values, option_string)
+
+
 def _subparser(sub, name: str, help: str, run: str) -> argparse.ArgumentParser:
     parser = sub.add_parser(name, help=help, description=help[:1].upper() + help[1:] + ".",
                             epilog=EXAMPLES[name] + "\n\n" + EXIT_CODES,
                             formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.register("action", None, _StoreOnce)  # every single-valued option of every command
+    parser.register("action", "store", _StoreOnce)
     parser.set_defaults(run=run)
     return parser
 
@@ -267,8 +282,31 @@ def _warning_printer(command: str):
     return show
 
 
+def _printable(stream) -> bool:
+    """Let ``stream`` print what its encoding cannot (``→`` on an ASCII or cp1252 terminal) as ``?``
+    instead of raising after the work is done; whether it was changed (to undo on the way out)."""
+    if getattr(stream, "errors", None) == "strict" and hasattr(stream, "reconfigure"):
+        try:
+            stream.reconfigure(errors="replace")
+            return True
+        except (ValueError, OSError, AttributeError):
+            pass
+    return False
+
+
 def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
+    args.__dict__.pop("_given_once", None)
+    changed = [stream for stream in (sys.stdout, sys.stderr) if _printable(stream)]  # one rule for every message
+    try:
+        return _main(args)
+    finally:
+        for stream in changed:
+            with contextlib.suppress(ValueError, OSError):
+                stream.reconfigure(errors="strict")
+
+
+def _main(args) -> int:
     try:
         with warnings.catch_warnings():  # restores the caller's warning handling on the way out
             warnings.showwarning = _warning_printer(args.command)

@@ -35,6 +35,31 @@ def _report(name: str, failures: list[str], cases: int, reference: str) -> bool:
     return True
 
 
+def _not_finite(got, expected=None) -> str | None:
+    """The one rule every check applies to a student's result before comparing it: a NaN or an infinity
+    is a failure (``nan > tol`` is False, so a comparison alone would pass a function that returns NaN),
+    except a NaN where the reference itself is NaN (an unknown pixel that must stay unknown) or an
+    infinity equal to the reference's. None if the result is finite where it must be, else why not."""
+    try:
+        got = np.asarray(got, dtype=np.float64)
+    except (TypeError, ValueError):
+        return None  # not numbers: the comparison says what is wrong
+    allowed = np.zeros(got.shape, bool)
+    if expected is not None:
+        try:
+            expected = np.asarray(expected, dtype=np.float64)
+        except (TypeError, ValueError):
+            expected = None
+        if expected is not None and expected.shape == got.shape:
+            allowed = (np.isnan(got) & np.isnan(expected)) | (np.isinf(got) & (got == expected))
+    bad = ~np.isfinite(got) & ~allowed
+    if not bad.any():
+        return None
+    index = tuple(int(k) for k in np.argwhere(bad)[0]) if got.ndim else ()
+    return (f"got {got[index]} at index {index}{f' ({int(bad.sum())} of {bad.size} values)' if got.ndim else ''}, "
+            f"expected a finite number: a NaN or an infinity never passes a check")
+
+
 def _run(name, fn, cases, reference_name, compare):
     failures = []
     for i, (args, expected) in enumerate(cases):
@@ -43,7 +68,7 @@ def _run(name, fn, cases, reference_name, compare):
         except Exception as error:  # a student's bug should be reported, not raised
             failures.append(f"case {i} raised {type(error).__name__}: {error}")
             continue
-        problem = compare(got, expected)
+        problem = _not_finite(got, expected) or compare(got, expected)
         if problem:
             failures.append(f"case {i}: {problem}")
     return _report(name, failures, len(cases), reference_name)
@@ -183,7 +208,9 @@ def check_warp(student_warp) -> bool:
             continue
         if got.shape != expected.shape:
             failures.append(f"case {i}: shape {got.shape}, expected {expected.shape}")
-        elif np.abs(got - expected)[valid].max() > 1e-3:
+        elif _not_finite(got[valid], expected[valid]):
+            failures.append(f"case {i}: on valid pixels, {_not_finite(got[valid], expected[valid])}")
+        elif not np.abs(got - expected)[valid].max() <= 1e-3:
             failures.append(f"case {i}: max error {np.abs(got - expected)[valid].max():.4f} on valid pixels "
                             "(pixel centres? u is the column, v the row)")
     return _report("warp", failures, 2, "the kit's warp_to_reference")
@@ -213,6 +240,9 @@ def check_nearest_fill(student_fill) -> bool:
             continue
         if got.shape != depth.shape:
             failures.append(f"case {case}: shape {got.shape}, expected {depth.shape}")
+            continue
+        if _not_finite(got):
+            failures.append(f"case {case}: {_not_finite(got)} (every hole gets a depth)")
             continue
         known, holes = np.argwhere(valid), np.argwhere(~valid)  # (N, 2), (M, 2) rows, cols
         distance = ((holes[:, None, :] - known[None, :, :]) ** 2).sum(-1)  # (M, N)
@@ -276,6 +306,8 @@ def check_depth_from_disparity(student_depth) -> bool:
             failures.append(f"case {i}: the disparity passed in was modified")
         elif got.shape != want.shape:
             failures.append(f"case {i}: shape {got.shape}, expected {want.shape}")
+        elif np.isinf(got).any():
+            failures.append(f"case {i}: {_not_finite(got, want)}")
         elif not np.array_equal(np.isnan(got), np.isnan(want)):
             where = tuple(int(k) for k in np.argwhere(np.isnan(got) != np.isnan(want))[0])
             failures.append(f"case {i}: at {where} (disparity {args[0][where]}) expected "
@@ -311,6 +343,9 @@ def check_resize_calibration(student_resize) -> bool:
             continue
         if K_small.shape != (3, 3):
             failures.append(f"case {i}: K' has shape {K_small.shape}, expected (3, 3)")
+            continue
+        if _not_finite(K_small) or _not_finite(doffs_small):
+            failures.append(f"case {i}: K' or doffs': {_not_finite(K_small) or _not_finite(doffs_small)}")
             continue
         u, v = points[:, 0] / points[:, 2] * K[0, 0] + K[0, 2], points[:, 1] / points[:, 2] * K[1, 1] + K[1, 2]
         want_u, want_v = (u + 0.5) * sx - 0.5, (v + 0.5) * sy - 0.5
@@ -353,6 +388,8 @@ def check_kinect_quantisation(student_quantise) -> bool:
             failures.append(f"case {i}: the depth passed in was modified")
         elif got.shape != want.shape:
             failures.append(f"case {i}: shape {got.shape}, expected {want.shape}")
+        elif _not_finite(got, want):
+            failures.append(f"case {i}: {_not_finite(got, want)}")
         elif not np.allclose(got, want, rtol=1e-5, atol=0, equal_nan=True):
             where = tuple(int(k) for k in np.argwhere(~np.isclose(got, want, rtol=1e-5, atol=0, equal_nan=True))[0])
             failures.append(f"case {i} (f {f:g} px, b {b:g} m, 1/{subpixel} px): at {where} (depth {z[where]:g} m) "

@@ -14,7 +14,7 @@ from ..core.files import regular_file, write_bytes_atomic
 from .classroom import exercises, listed_exercises, open_answers, read_notebook, source_notebooks
 from .grading import Score, match_submissions, notebook_files
 
-__all__ = ["read_hand_points", "merge_hand_points", "format_grades", "write_csv", "write_feedback"]
+__all__ = ["read_hand_points", "merge_hand_points", "format_grades", "write_csv", "write_feedback", "spreadsheet_text"]
 
 
 def read_hand_points(path) -> dict:
@@ -97,15 +97,29 @@ def format_grades(scores: list[Score]) -> str:
     return "\n".join(lines)
 
 
+_FORMULA_START = ("=", "+", "-", "@", "\t", "\r")
+
+
+def spreadsheet_text(value: str) -> str:
+    """A text cell a spreadsheet shows as text: one that starts with ``= + - @``, a tab or a carriage
+    return (a student's folder named ``=HYPERLINK(...)``) gets a leading ``'`` (OWASP's advice against
+    CSV injection); a line break inside it is written as ``\\r`` / ``\\n`` (a row stays one line); any
+    other text is unchanged."""
+    value = str(value)
+    value = "'" + value if value.startswith(_FORMULA_START) else value
+    return value.replace("\r", "\\r").replace("\n", "\\n")
+
+
 def write_csv(scores: list[Score], path) -> None:
     """One row per student and exercise (student, notebook, exercise, grade_id, kind, points,
-    max_points, status), written atomically."""
+    max_points, status), written atomically; every text cell through :func:`spreadsheet_text`, so no
+    name becomes a formula."""
     buffer = io.StringIO()
     writer = csv.writer(buffer, lineterminator="\n")
     writer.writerow(["student", "notebook", "exercise", "grade_id", "kind", "points", "max_points", "status"])
     for s in scores:
-        writer.writerow([s.student, s.notebook, s.exercise, s.grade_id, s.kind, f"{s.points:g}",
-                         f"{s.max_points:g}", s.status])
+        writer.writerow([spreadsheet_text(s.student), spreadsheet_text(s.notebook), spreadsheet_text(s.exercise),
+                         spreadsheet_text(s.grade_id), s.kind, f"{s.points:g}", f"{s.max_points:g}", s.status])
     write_bytes_atomic(path, buffer.getvalue().encode("utf-8"))
 
 

@@ -16,12 +16,20 @@ from __future__ import annotations
 
 import contextlib
 import copy
+import ctypes
 import hashlib
+import hmac
+import json
 import os
 import re
+import secrets
 import shutil
+import signal
+import sys
 import tempfile
-from dataclasses import dataclass, replace
+import threading
+import time
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 import nbformat
@@ -33,7 +41,7 @@ from .grading_kernel import check_imports, run_graded
 
 __all__ = ["GradingStopped", "Score", "grade_notebook", "grade", "match_submissions"]
 
-STATUSES = ("pass", "fail", "not run", "missing", "unreadable", "answered", "blank", "graded")
+STATUSES = ("pass", "fail", "not run", "missing", "unreadable", "answered", "blank", "graded", "tampered")
 
 
 class GradingStopped(RuntimeError):
@@ -109,7 +117,9 @@ def grade_notebook(submission, source, student: str = "", timeout: int = 600, pr
         # as its kernel, the grader starts its own python3)
         raise GradingStopped(f"no cell of {name} ran: the kernel did not start ({type(stopped).__name__}: "
                            f"{stopped}); fix the environment and grade again") from stopped
-    if executed is not None:
+    if isinstance(executed, list):  # the supervisor's way of getting it back
+        executed.append(nb)
+    elif executed is not None:
         write_notebook(nb, executed)
 
     from nbgrader.utils import determine_grade
@@ -275,10 +285,201 @@ def grade(submissions_dir, source_dir="notebooks", timeout: int = 600, profile: 
     try:
         kept = _Snapshot(list(sources) + [p for handed_in, _, _ in matched.values() for p in handed_in.values()],
                          private)
-        return _grade_students(students, sources, source_nbs, matched, kept, timeout, profile, log, executed_dir,
-                               details)
+        reaper = _subreaper(True)  # a hand-in's detached processes come back to the grader, to be killed
+        try:
+                return _grade_students(students, sources, source_nbs, matched, kept, timeout, profile, log,
+                                   executed_dir, details)
+        finally:
+            if reaper:
+                _subreaper(False)
     finally:
         shutil.rmtree(private, ignore_errors=True)
+
+
+# ------------------------------------------------------------------ the supervisor: one hand-in, out of reach
+#
+# Each hand-in is graded in a child of the grader (a fork: the checks' modules are the ones the grader
+# imported before any submission ran) that starts a session of its own, so a signal the student's kernel
+# sends to its parent or its process group reaches that child, never the grader. The grader owns the
+# clock (a hard limit, then SIGKILL to the child's session and to every process left of it: the grader is
+# a child subreaper, so a detached process comes back to it and is killed too), owns the result (sent
+# through a pipe, signed with a key only the grader and that child hold, read only once every process of
+# the hand-in is gone) and watches its working folder (a change while the hand-in ran is named and the
+# notebook scored 0, "tampered").
+
+_PR_SET_CHILD_SUBREAPER = 36
+
+
+def _subreaper(on: bool) -> bool:
+    """Make this process the reaper of its orphaned descendants (Linux); whether it could."""
+    if not sys.platform.startswith("linux"):
+        return False
+    try:
+        return ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_CHILD_SUBREAPER, int(on), 0, 0, 0) == 0
+    except (OSError, AttributeError):
+        return False
+
+
+def _children() -> set:
+    """This process's child process ids (Linux /proc; empty elsewhere)."""
+    found = set()
+    me = os.getpid()
+    try:
+        with open(f"/proc/{me}/task/{me}/children") as handle:
+            found.update(int(p) for p in handle.read().split())
+    except OSError:
+        for entry in os.listdir("/proc") if os.path.isdir("/proc") else ():
+            if entry.isdigit():
+                try:
+                    with open(f"/proc/{entry}/stat") as handle:
+                        if int(handle.read().rsplit(")", 1)[1].split()[1]) == me:
+                            found.add(int(entry))
+                except (OSError, ValueError, IndexError):
+                    pass
+    return found
+
+
+def _kill_leftovers(before: set, session: int) -> int:
+    """SIGKILL the hand-in's session and every child of this process that was not there ``before`` (a
+    killed one's own children come back to this subreaper and are killed in the next round); reap them.
+    How many processes were killed."""
+    with contextlib.suppress(OSError):
+        os.killpg(session, signal.SIGKILL)
+    killed = 0
+    for _ in range(200):
+        left = _children() - before
+        if not left:
+            break
+        for pid in left:
+            with contextlib.suppress(OSError):
+                os.kill(pid, signal.SIGKILL)
+                killed += 1
+        time.sleep(0.02)
+        for pid in left:
+            with contextlib.suppress(ChildProcessError, OSError):
+                os.waitpid(pid, os.WNOHANG)
+    return killed
+
+
+def _folder_state(folder: str, limit: int = 20000) -> dict:
+    """``{relative path: (size, mtime_ns)}`` of ``folder``'s files (at most ``limit``, three levels deep,
+    ``__pycache__`` left out): what the grader compares around each hand-in."""
+    state = {}
+    for here, dirs, names in os.walk(folder):
+        dirs[:] = [d for d in dirs if d != "__pycache__"]
+        if os.path.relpath(here, folder).count(os.sep) >= 2:
+            dirs[:] = []
+        for name in names:
+            path = os.path.join(here, name)
+            with contextlib.suppress(OSError):
+                info = os.lstat(path)
+                state[os.path.relpath(path, folder)] = (info.st_size, info.st_mtime_ns)
+            if len(state) >= limit:
+                return state
+    return state
+
+
+def _state_change(before: dict, after: dict) -> str | None:
+    """What the hand-in did to the grader's files: deleted or changed ones (a new file is not counted:
+    the student's code runs in a folder of its own, and imports leave caches)."""
+    gone = sorted(set(before) - set(after))
+    changed = sorted(k for k in set(before) & set(after) if before[k] != after[k])
+    parts = [f"{what} {', '.join(names[:3])}{' ...' if len(names) > 3 else ''}"
+             for what, names in (("deleted", gone), ("changed", changed)) if names]
+    return "; ".join(parts) or None
+
+
+def _child_grade(write_fd: int, key: bytes, submission, source, student, timeout, profile, workdir, name) -> None:
+    """In the forked child: grade, send the signed result, never return."""
+    code = 0
+    try:
+        os.setsid()  # a session of its own: the student's signals to its group stop this child, not the grader
+        for number in (signal.SIGTERM, signal.SIGINT):
+            signal.signal(number, signal.SIG_DFL)
+        os.chdir(workdir)
+        executed: list = []
+        try:
+            scores = grade_notebook(submission, source, student, timeout, profile, workdir=workdir, name=name,
+                                    executed=executed)
+            payload = {"scores": [asdict(score) for score in scores],
+                       "executed": nbformat.writes(executed[0]) if executed else None}
+        except GradingStopped as error:
+            payload = {"stopped": str(error)}
+        except Exception as error:  # noqa: BLE001 - the notebook is not gradable: the grader scores it so
+            payload = {"error": f"{type(error).__name__}: {error}"}
+        data = json.dumps(payload).encode()
+        message = hmac.new(key, data, hashlib.sha256).hexdigest().encode() + b"\n" + data
+        view = memoryview(message)
+        while view:
+            view = view[os.write(write_fd, view):]
+    except BaseException:  # noqa: BLE001 - the grader reads no result and says so
+        code = 3
+    finally:
+        os._exit(code)
+
+
+def _supervised(submission, source, student: str, timeout: int, profile: str, name: str, watch: str):
+    """Grade one hand-in in a supervised child (see above). Returns (scores or None, executed notebook or
+    None, what went wrong or None); raises GradingStopped for what is not the student's doing."""
+    key = secrets.token_bytes(32)
+    workdir = tempfile.mkdtemp(prefix="ddp-grade-")  # the hand-in's own working folder
+    limit = 2 * timeout * (sum(c.cell_type == "code" for c in submission.cells) + 2) + 60
+    before_children = _children()
+    before_state = _folder_state(watch)
+    read_fd, write_fd = os.pipe()
+    try:
+        pid = os.fork()
+        if pid == 0:
+            os.close(read_fd)
+            _child_grade(write_fd, key, submission, source, student, timeout, profile, workdir, name)
+        os.close(write_fd)
+        chunks: list = []
+        reader = threading.Thread(target=lambda: chunks.extend(iter(lambda: os.read(read_fd, 1 << 16), b"")),
+                                  daemon=True)
+        reader.start()
+        deadline, status, killed_at_limit = time.monotonic() + limit, None, False
+        while status is None:
+            done, code = os.waitpid(pid, os.WNOHANG)
+            if done:
+                status = code
+            elif time.monotonic() > deadline:
+                killed_at_limit = True
+                with contextlib.suppress(OSError):
+                    os.killpg(pid, signal.SIGKILL)
+                _, status = os.waitpid(pid, 0)
+            else:
+                time.sleep(0.05)
+        _kill_leftovers(before_children, pid)  # every process of the hand-in gone before its result is read
+        reader.join(5)
+    finally:
+        with contextlib.suppress(OSError):
+            os.close(read_fd)
+        shutil.rmtree(workdir, ignore_errors=True)
+    changed = _state_change(before_state, _folder_state(watch))
+    data = b"".join(chunks)
+    mac, _, payload = data.partition(b"\n")
+    result = None
+    if data and hmac.compare_digest(mac, hmac.new(key, payload, hashlib.sha256).hexdigest().encode()):
+        result = json.loads(payload)
+    if result is not None and "stopped" in result:
+        raise GradingStopped(result["stopped"])
+    if result is not None and "error" in result:
+        raise ValueError(result["error"])  # scored unreadable by the caller
+    if killed_at_limit:
+        return None, None, f"it ran past the grader's limit of {limit} s and was killed"
+    if result is None:
+        if os.WIFSIGNALED(status):
+            return None, None, (f"its grading was stopped by {signal.Signals(os.WTERMSIG(status)).name} "
+                                f"(sent by its own code)")
+        if data:
+            return None, None, "its result was tampered with on the way to the grader"
+        raise GradingStopped(f"grading {student}/{name} failed in the grader (exit {os.WEXITSTATUS(status)}, no "
+                             f"result); grade again")
+    if changed:
+        return None, None, f"while it ran, files in the grader's working folder {watch} changed: {changed}"
+    scores = [Score(**fields) for fields in result["scores"]]
+    executed = nbformat.reads(result["executed"], as_version=4) if result.get("executed") else None
+    return scores, executed, None
 
 
 def _grade_students(students, sources, source_nbs, matched, kept, timeout, profile, log, executed_dir,
@@ -292,42 +493,47 @@ def _grade_students(students, sources, source_nbs, matched, kept, timeout, profi
             log(f"{student.name}: not graded, no notebook of that name: "
                 + ", ".join(repr(str(p.relative_to(student))) for p in unmatched))
         mine = []
-        with tempfile.TemporaryDirectory(prefix="ddp-grade-") as workdir:
-            for source_path in sources:
-                source = source_nbs[source_path.name]
-                path = handed_in.get(source_path.name)
-                result = None
-                if path is not None:
-                    try:
-                        if os.path.islink(path) or not _inside(path, student):  # the source's solutions, say
-                            raise ValueError(f"{path.name} is a symbolic link to {os.path.realpath(path)}; a hand-in "
-                                             f"must be the student's own file")
-                        if path not in kept:  # a FIFO, a folder, a vanished file: scored, not read
-                            regular_file(path, "notebook")
-                            raise OSError(f"{path} could not be read")
-                        data = kept.bytes(path)
-                        submission = nbformat.reads(data.decode("utf-8"), as_version=4)
-                        nbformat.validate(submission)
-                        write_bytes_atomic(Path(workdir) / source_path.name, data)
-                        executed = Path(executed_dir) / student.name / source_path.name if executed_dir else None
-                        result = grade_notebook(submission, source, student.name, timeout, profile, workdir=workdir,
-                                                name=source_path.stem, executed=executed)
-                    except GradingStopped:
-                        raise  # not the student's doing: stop, score nobody 0
-                    except Exception as error:  # the student's file is not a gradable notebook: 0, go on
-                        why = f"{type(error).__name__}: {error}"
-                    if result is None:
-                        log(f"{student.name}/{path.name}: unreadable, scored 0 ({why.splitlines()[0][:300]})")
-                        mine.extend(replace(s, status="unreadable")
-                                    for s in grade_notebook(None, source, student.name, name=source_path.stem))
-                        continue
-                else:
-                    result = grade_notebook(None, source, student.name, name=source_path.stem)
-                if details:
-                    auto = [s for s in result if s.kind == "auto"]
-                    log(f"{student.name:<16} {source_path.stem:<26} {sum(s.points for s in auto):g}/"
-                        f"{sum(s.max_points for s in auto):g}" + ("  (not handed in)" if path is None else ""))
-                mine.extend(result)
+        for source_path in sources:
+            source = source_nbs[source_path.name]
+            path = handed_in.get(source_path.name)
+            result = None
+            if path is not None:
+                try:
+                    if os.path.islink(path) or not _inside(path, student):  # the source's solutions, say
+                        raise ValueError(f"{path.name} is a symbolic link to {os.path.realpath(path)}; a hand-in "
+                                         f"must be the student's own file")
+                    if path not in kept:  # a FIFO, a folder, a vanished file: scored, not read
+                        regular_file(path, "notebook")
+                        raise OSError(f"{path} could not be read")
+                    data = kept.bytes(path)
+                    submission = nbformat.reads(data.decode("utf-8"), as_version=4)
+                    nbformat.validate(submission)
+                    result, ran, trouble = _supervised(submission, source, student.name, timeout, profile,
+                                                       source_path.stem, os.getcwd())
+                    if trouble is not None:
+                        status = "tampered" if "working folder" in trouble or "tampered" in trouble else "not run"
+                        log(f"{student.name}/{path.name}: scored 0, {trouble}")
+                        result = [replace(s, points=0.0, status=status if s.kind == "auto" else s.status)
+                                  for s in grade_notebook(None, source, student.name, name=source_path.stem)]
+                        result = [replace(s, status="blank") if s.kind == "manual" else s for s in result]
+                    elif executed_dir and ran is not None:
+                        write_notebook(ran, Path(executed_dir) / student.name / source_path.name)
+                except GradingStopped:
+                    raise  # not the student's doing: stop, score nobody 0
+                except Exception as error:  # the student's file is not a gradable notebook: 0, go on
+                    why = f"{type(error).__name__}: {error}"
+                if result is None:
+                    log(f"{student.name}/{path.name}: unreadable, scored 0 ({why.splitlines()[0][:300]})")
+                    mine.extend(replace(s, status="unreadable")
+                                for s in grade_notebook(None, source, student.name, name=source_path.stem))
+                    continue
+            else:
+                result = grade_notebook(None, source, student.name, name=source_path.stem)
+            if details:
+                auto = [s for s in result if s.kind == "auto"]
+                log(f"{student.name:<16} {source_path.stem:<26} {sum(s.points for s in auto):g}/"
+                    f"{sum(s.max_points for s in auto):g}" + ("  (not handed in)" if path is None else ""))
+            mine.extend(result)
         for line in kept.restore():
             log(f"{student.name}: their notebooks {line}")
         auto = [s for s in mine if s.kind == "auto"]

@@ -208,9 +208,24 @@ def run_graded(nb, is_check, workdir, env: dict, timeout: int):
     from nbclient import NotebookClient
     from nbclient.exceptions import DeadKernelError
 
+    from jupyter_core.utils import ensure_async
+
+    class GradingClient(NotebookClient):
+        """At a cell's timeout the kernel is interrupted (the cell fails, the next ones run); if the cell
+        is still running one more timeout later (its code swallowed the KeyboardInterrupt), the kernel is
+        killed and the run stops there: the grader owns the clock, not the student's code."""
+        interrupted = None
+
+        async def _async_handle_timeout(self, timeout, cell=None):
+            if self.interrupted is not cell:
+                self.interrupted = cell
+                return await super()._async_handle_timeout(timeout, cell)
+            await ensure_async(self.km.shutdown_kernel(now=True))
+            raise DeadKernelError(f"a cell ignored the interrupt at its {timeout} s timeout; the kernel was killed")
+
     nb.metadata.pop("kernelspec", None)  # the notebook's choice of kernel is the student's: not followed
-    client = NotebookClient(nb, timeout=timeout, allow_errors=True, interrupt_on_timeout=True, kernel_name="python3",
-                            resources={"metadata": {"path": str(workdir)}})
+    client = GradingClient(nb, timeout=timeout, allow_errors=True, interrupt_on_timeout=True, kernel_name="python3",
+                           resources={"metadata": {"path": str(workdir)}})
     calls = Path(workdir) / ".grader-calls"
     calls.mkdir(exist_ok=True)
 

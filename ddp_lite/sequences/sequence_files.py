@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure  # no pyplot: no global figure state in a long run
 
-from ..core.files import regular_file, write_bytes_atomic
+from ..core.files import path_inside, regular_file, write_bytes_atomic, writing_inside
 from ..data.file_writers import depth_png_bytes, npy_bytes
 from ..data.fileio import load_npy
 from ..evaluation.fusion import fuse_depths, save_ply
@@ -68,12 +68,15 @@ def check_out_folder(out, inputs) -> Path:
             continue
         raise ValueError(f"out: {out} {problem}. Choose a folder outside the capture, e.g. "
                          f"{source.parent / (source.name + '-ddp')}")
+    for name in ("depth", "preview", MANIFEST, "fused.ply"):  # before any fit: nothing written through a link
+        path_inside(out, name, "out")
     return out
 
 
 def write_manifest(out: Path, manifest: dict) -> None:
     """Write the run's manifest (JSON) into ``out`` atomically."""
-    write_bytes_atomic(out / MANIFEST, (json.dumps(manifest, indent=1, sort_keys=False) + "\n").encode("utf-8"))
+    with writing_inside(out):
+        write_bytes_atomic(out / MANIFEST, (json.dumps(manifest, indent=1, sort_keys=False) + "\n").encode("utf-8"))
 
 
 def view_files(job: ViewJob) -> dict:
@@ -105,10 +108,11 @@ def _load_depth(path: Path) -> np.ndarray:
 def write_view(out: Path, job: ViewJob, result: dict) -> int:
     """Write a finished view's files atomically; → the number of pixels a 16-bit mm PNG cannot hold."""
     files = view_files(job)
-    write_bytes_atomic(out / files["npy"], npy_bytes(result["depth"]))
-    png, overflow = depth_png_bytes(result["depth"])  # millimetres
-    write_bytes_atomic(out / files["png"], png)
-    _write_preview(out / files["preview"], job, result["depth"])
+    with writing_inside(out):  # never through a link inside the output folder
+        write_bytes_atomic(out / files["npy"], npy_bytes(result["depth"]))
+        png, overflow = depth_png_bytes(result["depth"])  # millimetres
+        write_bytes_atomic(out / files["png"], png)
+        _write_preview(out / files["preview"], job, result["depth"])
     return overflow
 
 
@@ -137,5 +141,8 @@ def fuse_views(out: Path, scene: Scene, manifest: dict):
     width = views[0].camera.width
     cloud = fuse_depths(depths, [v.camera for v in views], [v.rgb for v in views], min_views=1,
                         disp_threshold=0.25 * width / 64)
-    save_ply(cloud, out / "fused.ply")
+    if not cloud.has_points():  # nothing agreed across views: no file, said by the count
+        return None, 0, [name for name, _ in done]
+    with writing_inside(out):
+        save_ply(cloud, out / "fused.ply")
     return out / "fused.ply", len(cloud.points), [name for name, _ in done]

@@ -1,0 +1,63 @@
+"""The grader owns its clock, its files and its results: each hand-in is graded by a supervised child in a
+session of its own, killed (with every process it left) at the limit, in a working folder of its own; a
+student's signal to its parent or group stops only that hand-in; a change to the grader's working folder is
+named and scored 0; a student's folder name never becomes a spreadsheet formula. The tiny one-exercise source
+of test_grader_trust, at `ci`: a kernel start per hand-in."""
+import csv
+import os
+import time
+
+import nbformat
+
+from ddp_lite import classroom, grading
+from ddp_lite.interface import grades
+from test_grader_trust import RIGHT, _hand_in, _source
+
+
+def test_a_hand_in_cannot_stop_hang_outlive_or_rewrite_the_grader(tmp_path, monkeypatch):
+    source_path = _source(tmp_path)
+    student = classroom.student_copy(nbformat.read(source_path, as_version=4))
+    grader_home = tmp_path / "grader"
+    grader_home.mkdir()
+    precious = grader_home / "points.csv"
+    precious.write_text("student,exercise,points\n")
+    monkeypatch.chdir(grader_home)
+    late = tmp_path / "grades.csv"
+    swallow = ("import time\ndef fscore(precision, recall):\n    while True:\n        try:\n"
+               "            time.sleep(100)\n        except KeyboardInterrupt:\n            pass")
+    _hand_in(tmp_path, "a_hangs_in_its_function", student, swallow)
+    _hand_in(tmp_path, "b_hangs_in_a_cell", student, RIGHT + "\nimport time\nwhile True:\n    try:\n"
+             "        time.sleep(100)\n    except KeyboardInterrupt:\n        pass")
+    _hand_in(tmp_path, "c_deletes", student, RIGHT + f"\nimport os\nos.remove({str(precious)!r})")
+    _hand_in(tmp_path, "d_detaches", student, RIGHT + (
+        "\nimport subprocess, sys\nsubprocess.Popen([sys.executable, '-c', "
+        f"\"import time; time.sleep(4); open({str(late)!r}, 'w').write('=rewritten')\"], start_new_session=True)"))
+    _hand_in(tmp_path, "e_kills_its_parent", student, RIGHT + "\nimport os, signal\nos.kill(os.getppid(), signal.SIGTERM)")
+    _hand_in(tmp_path, "f_kills_its_group", student,
+             RIGHT + "\nimport os, signal\nos.killpg(os.getpgid(os.getppid()), signal.SIGTERM)")
+    _hand_in(tmp_path, "g_honest", student)
+    log = []
+    started = time.monotonic()
+    scores = grading.grade(tmp_path / "hand-in", source_path.parent, timeout=3, log=log.append)
+    took = time.monotonic() - started
+    table = {s.student: (s.points, s.status) for s in scores}
+    assert table["a_hangs_in_its_function"][0] == 0 and table["b_hangs_in_a_cell"][0] == 0, (table, log)
+    assert table["c_deletes"] == (0, "tampered"), (table, log)
+    assert any(line.startswith("c_deletes/") and "points.csv" in line for line in log), log
+    assert table["d_detaches"] == (2, "pass"), (table, log)
+    assert table["e_kills_its_parent"] == (0, "not run") and table["f_kills_its_group"] == (0, "not run"), (table, log)
+    assert any(line.startswith("e_kills_its_parent/") and "SIGTERM" in line for line in log), log
+    assert table["g_honest"] == (2, "pass"), (table, log)  # graded after all of them
+    assert took < 120, took
+    time.sleep(5)  # the detached process would have written by now
+    assert not late.exists()
+
+
+def test_a_folder_name_never_becomes_a_spreadsheet_formula(tmp_path):
+    scores = [grading.Score(name, "01_fs", "01.1", "ex1", "auto", 2.0, 2.0, "pass")
+              for name in ("=HYPERLINK(\"http://x\",\"y\")", "+1", "-2", "@SUM(A1)", "\tx", "\rx", "ada")]
+    grades.write_csv(scores, tmp_path / "grades.csv")
+    rows = list(csv.DictReader(open(tmp_path / "grades.csv", encoding="utf-8", newline="")))
+    assert [r["student"] for r in rows] == ["'=HYPERLINK(\"http://x\",\"y\")", "'+1", "'-2", "'@SUM(A1)", "'\tx", "'\\rx",
+                                            "ada"]
+    assert os.path.getsize(tmp_path / "grades.csv") > 0
