@@ -4,6 +4,7 @@ rgbd+warp) against every classical fill, with seconds per iteration and peak mem
     python benchmarks/paper_scale.py                                  # 500×740, 16000 iterations per fit
     python benchmarks/paper_scale.py --budget-s 480 --out paper.jsonl # the schedule cut to fit 480 s
     python benchmarks/paper_scale.py --size 32 48 --iterations 3      # a tiny end-to-end run on a CPU
+    python benchmarks/paper_scale.py --table6 --data DIR --budget-s 540  # Table 6's scenes, < 10 min on one GPU
 
 The five hole kinds of ``ddp_lite.studies.real_cases`` (three blob patterns, real SGBM holes, occlusion
 holes), the pair pooled to the profile's size (``factor_for_profile``: ``paper`` → full size, 500×740).
@@ -32,6 +33,7 @@ import torch  # noqa: E402
 import ddp_lite as ddp  # noqa: E402
 from ddp_lite import baselines  # noqa: E402
 from ddp_lite.studies.real_cases import REAL_HOLES, factor_for_profile  # noqa: E402
+from ddp_lite.studies.table6 import TABLE6_SCENES, table6_case  # noqa: E402
 from ddp_lite.method.device import resolve_device  # noqa: E402
 from _common import add_profile_args, profile_from_args  # noqa: E402
 from bench_quality import build_case, region_errors, report, rmse_px  # noqa: E402
@@ -118,10 +120,16 @@ def run(args) -> None:
     full = next(iter(planned.values())).iterations
     milestones = next(iter(planned.values())).lr_milestones
     device = resolve_device(next(iter(planned.values())))
-    names = [f"motorcycle-{factor}/{holes}" for holes in args.holes]  # bench_quality's case names
-    cases = [build_case(name, profile) for name in names]
+    if args.table6:  # the paper's own Table 6 scenes, pooled to the profile's size
+        names = [f"table6/{scene}" for scene in TABLE6_SCENES]
+        cases = [(case, case.fb) for case in (table6_case(s, profile, args.seed, args.data) for s in TABLE6_SCENES)]
+        where = f"Table 6 scenes ({'from ' + args.data if args.data else 'shipped, quarter size'})"
+    else:
+        names = [f"motorcycle-{factor}/{holes}" for holes in args.holes]  # bench_quality's case names
+        cases = [build_case(name, profile) for name in names]
+        where = f"Motorcycle pooled by {factor}"
     size = f"{cases[0][0].depth.shape[0]}x{cases[0][0].depth.shape[1]}"
-    print(f"profile '{profile.name}', Motorcycle pooled by {factor}: {size}, on {device}; "
+    print(f"profile '{profile.name}', {where}: {size}, on {device}; "
           f"schedule {full} iterations, lr milestones {milestones}", flush=True)
     distinct = {}  # {key: config}: a config equal to one already planned (kit and paper at ``paper``) fits once
     for key, config in planned.items():
@@ -205,6 +213,11 @@ def main(argv=None) -> None:
     parser.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=VARIANTS)
     parser.add_argument("--holes", nargs="+", default=list(REAL_HOLES), choices=REAL_HOLES, help="hole kinds")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--table6", action="store_true",
+                        help="the paper's Table 6 scenes (Plastic under DepthComp's holes, Baby1, Bowling1) instead of "
+                             "Motorcycle's hole kinds")
+    parser.add_argument("--data", metavar="DIR", help="with --table6: a folder of Middlebury scenes (HalfSize, as "
+                                                      "data_fetch installs them); default the shipped quarter-size copies")
     parser.add_argument("--iterations", type=int, help="iterations per fit (default: the profile's schedule); "
                                                        "the lr milestones scale with it")
     parser.add_argument("--budget-s", type=float, help="cut the iterations so that the whole run takes about this long")

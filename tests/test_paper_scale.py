@@ -51,3 +51,18 @@ def test_paper_scale_runs_end_to_end_at_a_tiny_size(tmp_path, capsys):
 def test_paper_scale_refuses_a_bad_budget_before_any_work():
     with pytest.raises(SystemExit):
         paper_scale.main(["--budget-s", "-5"])
+
+
+def test_paper_scale_runs_the_table6_scenes(tmp_path, capsys):
+    out = tmp_path / "rows.jsonl"
+    paper_scale.main(["--table6", "--size", "32", "48", "--iterations", "1", "--variants", "rgbd", "--recipes", "paper",
+                      "--out", str(out)])
+    assert "Table 6 scenes (shipped, quarter size)" in capsys.readouterr().out
+    rows = [json.loads(line) for line in out.read_text().splitlines()]
+    assert {r["case"] for r in rows} == {"table6/Plastic", "table6/Baby1", "table6/Bowling1"}
+    from ddp_lite.studies.table6 import table6_case
+    case = table6_case("Plastic", paper_scale.profile_from_args(paper_scale.argparse.Namespace(
+        threads=1, profile="paper", size=(32, 48))))
+    linear = next(r for r in rows if r["case"] == "table6/Plastic" and r["method"] == "linear")
+    disparity = case.fb / case.depth
+    assert linear["px"] == pytest.approx(case.rmse_px(case.fb / BASELINES["linear"](disparity, case.rgb)), rel=1e-6)

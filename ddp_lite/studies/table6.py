@@ -10,13 +10,15 @@ profile's size (``real_cases.factor_for_profile``), so our px are px of that wor
 """
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
 from ..classical.baselines import BASELINES, PAPER_TABLE6
 from ..classical.baselines import PAPER_TABLE6_RMSE as BASELINE_PAPER_RMSE
 from ..classical.holes import stroke_holes
 from ..data.middlebury_rail import load_rail_scene
-from ..data.samples import depthcomp_holes, sample_scene
+from ..data.samples import depthcomp_holes, read_depthcomp_holes, sample_scene
 from .real_cases import RealCase, compare_fills, factor_for_profile, make_real_case
 
 __all__ = ["TABLE6_SCENES", "PAPER_TABLE6_RMSE", "PAPER_ROWS", "table6_case", "table6", "paper_ratios", "our_ratios"]
@@ -27,15 +29,24 @@ PAPER_TABLE6_RMSE = {row: values[:3] for row, values in BASELINE_PAPER_RMSE.item
 PAPER_ROWS = dict(PAPER_TABLE6)  # the paper's rows the kit has (SSI and Depthcomp: no open implementation)
 
 
-def table6_case(scene: str, profile=None, seed: int = 0) -> RealCase:
+def table6_case(scene: str, profile=None, seed: int = 0, data=None) -> RealCase:
     """A Table 6 scene (``TABLE6_SCENES``) with its holes, pooled to the profile's size → :class:`RealCase`
     (the rail's view0 and view2 as neighbours). Plastic: DepthComp's own holes; the others: strokes
-    (``seed``). Deterministic."""
+    (``seed``). ``data``: a folder of Middlebury scenes (``real_suite.find_scenes``) to take the scene from
+    at its own size (HalfSize, say), DepthComp's full-size hole file with it when it is there; None: the
+    shipped quarter-size copies. Deterministic."""
     if scene not in TABLE6_SCENES:
         raise ValueError(f"scene must be one of {TABLE6_SCENES}, got {scene!r}")
-    full = load_rail_scene(sample_scene(scene), name=scene)
+    if data is None:
+        full = load_rail_scene(sample_scene(scene), name=scene)
+        hole_file = None
+    else:
+        from .real_suite import DEPTHCOMP_FILE, find_scenes  # the suite reads folders; only this path needs it
+
+        full = load_rail_scene(find_scenes(data)[scene], name=scene)
+        hole_file = next(iter(sorted(Path(data).rglob(DEPTHCOMP_FILE))), None)
     if scene == "Plastic":
-        holes = depthcomp_holes(full.size)
+        holes = depthcomp_holes(full.size) if hole_file is None else read_depthcomp_holes(hole_file, full.size)
     else:
         holes = ~stroke_holes(full[0].depth, seed=seed)[1] & np.isfinite(full[0].depth)
     factor = factor_for_profile(profile, full.size)
