@@ -129,13 +129,14 @@ def report(path: Path) -> None:
     columns = sorted({(m, v) for _, m, v in table}, key=lambda mv: (mv[1], mv[0]))
     table6 = table6_fills()
     print(f"{path.name}: hole RMSE (disparity px) and DDP / best fill (DDP / best of Table 6's {', '.join(table6)})")
-    header = f"{'case':<22} {'best fill':<24} {'best Table 6':<20}" + "".join(f" {m[4:]}/{v:<10}" for m, v in columns)
-    print(header)
-    for case in sorted(fills):
+    width = max(13, *(len(m) - 3 + len(v) for m, v in columns))
+    print(f"{'case':<22} {'best fill (px)':<24} {'best Table 6 (px)':<20}" + "".join(f" {m[4:] + '/' + v:<{width}}"
+                                                                                  for m, v in columns))
+    for case in sorted(fills, key=lambda c: (c.split("/")[1], c)):
         best = min(fills[case], key=fills[case].get)
         best6 = min((m for m in table6 if m in fills[case]), key=fills[case].get)
-        cells = "".join(f" {table[(case, m, v)][0]:>4.2f} ({table[(case, m, v)][1]:.2f})".ljust(len(m) - 3 + len(v) + 2)
-                        if (case, m, v) in table else " -".ljust(len(m) - 3 + len(v) + 2) for m, v in columns)
+        cells = "".join(f" {f'{table[(case, m, v)][0]:.2f} ({table[(case, m, v)][1]:.2f})' if (case, m, v) in table else '-':<{width}}"
+                        for m, v in columns)
         print(f"{case:<22} {best + f' {fills[case][best]:.3f}':<24} {best6 + f' {fills[case][best6]:.3f}':<20}{cells}")
     print("\nmeans of the ratios (to the best fill; to the best Table 6 method), per hole kind and over all cases:")
     for holes in SUITE_HOLES + ("all",):
