@@ -1,6 +1,8 @@
 """Where does the warp term point? Its photometric cost inside the real pair's holes, at the truth and at its own minimum.
 
     python benchmarks/study_warp_residual.py            # the five real hole kinds at 125×185, ~15 s
+    python benchmarks/study_warp_residual.py --data DIR --holes sgbm occlusion   # every Middlebury scene under DIR,
+                                                        # each rail neighbour (view0, view2) apart; a line per scene
 
 For each real case (``ddp_lite.studies.real_cases``, the right view as the neighbour), a plane sweep of the
 warp term's own per-pixel cost (``warp_confidence.photometric_cost``: λw (1 − SSIM) + (1 − λw) L1, through
@@ -31,11 +33,12 @@ from ddp_lite.studies.real_cases import REAL_HOLES, make_real_case  # noqa: E402
 WRONG_PX = 2.0  # a minimum this far from the truth pulls the fit wrong
 
 
-def real_sweep(holes: str):
-    """The real pair at 1/4 with ``holes``, its right view, both images as tensors (1, 3, H, W), the fit's
-    disparity range and the sweep's depth planes over it: ``(case, nbr, ref, image, transform, planes)``."""
-    case = make_real_case(holes, 4)
-    nbr = case.neighbors[0]
+def real_sweep(holes: str, case=None, neighbor: int = 0):
+    """The real pair at 1/4 with ``holes`` (or ``case``), its neighbour ``neighbor``, both images as tensors
+    (1, 3, H, W), the fit's disparity range and the sweep's depth planes over it:
+    ``(case, nbr, ref, image, transform, planes)``."""
+    case = make_real_case(holes, 4) if case is None else case
+    nbr = case.neighbors[neighbor]
     ref, image = to_tensor(case.rgb, "cpu"), to_tensor(nbr.rgb, "cpu")
     transform = DisparityTransform.from_depth(case.depth)  # the fit's range (the default a user gets)
     planes = sweep_planes(case.camera, nbr.camera, transform.d_min, transform.d_max)
@@ -85,7 +88,40 @@ def study(holes: str) -> None:
           f"{confident[valid].mean():.2f} of the valid input")
 
 
+def scene_line(case, neighbor: int) -> str:
+    """One line for a suite case and one neighbour: inside the scored holes the neighbour sees, the median
+    distance (px) of the photometric minimum from the truth and the share farther than ``WRONG_PX``."""
+    case, nbr, ref, image, transform, planes = real_sweep("", case, neighbor)
+    cost = cost_volume(ref, image, case.camera, nbr.camera, planes).numpy()  # (D, H, W)
+    seen = np.isfinite(cost.min(axis=0))
+    truth = filled_truth(case)
+    with torch.no_grad():
+        hidden = Visibility(case.camera, nbr.camera)(to_tensor(truth, "cpu"))[0, 0].numpy()
+    error = np.abs(case.fb / planes[np.nanargmin(np.where(np.isfinite(cost), cost, np.inf), axis=0)] - case.fb / truth)
+    scored = case.scored_holes & seen & ~hidden
+    if not scored.any():
+        return f"{case.name:<22} {nbr.name:<7} no scored hole pixel the neighbour sees"
+    return (f"{case.name:<22} {nbr.name:<7} {scored.sum():6d} px seen (hidden {(case.scored_holes & hidden).sum():5d}): "
+            f"|d_min − d| median {np.median(error[scored]):5.2f} px, > {WRONG_PX:g} px {np.mean(error[scored] > WRONG_PX):.2f}")
+
+
 if __name__ == "__main__":
+    import argparse
+
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--data", metavar="DIR", help="a folder of Middlebury scenes: the real suite's cases instead")
+    parser.add_argument("--holes", nargs="+", default=None, help="hole kinds (default: all of the chosen suite's)")
+    parser.add_argument("--size", default="eighth", choices=("eighth", "quarter"))
+    args = parser.parse_args()
     torch.set_num_threads(1)
-    for kind in REAL_HOLES:
-        study(kind)
+    if args.data:
+        from ddp_lite.studies.real_suite import make_suite_case, suite_case_names
+
+        for name in suite_case_names(args.data):
+            if args.holes is None or name.split("/")[1] in args.holes:
+                case = make_suite_case(args.data, name, args.size)
+                for k in range(len(case.neighbors)):
+                    print(scene_line(case, k), flush=True)
+    else:
+        for kind in args.holes or REAL_HOLES:
+            study(kind)
