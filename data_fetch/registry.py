@@ -188,7 +188,7 @@ _add(Dataset(
     files=_views(2005, MIDDLEBURY2005_SCENES, PINNED.get("middlebury2005", {})),
     licence=_MB0506_LICENCE,
     use="Real multi-view scenes with GT disparity: view1 with neighbours view0/view2 (the paper's N = 2), "
-        "view5 its stereo partner; SGM holes and DDP on real photographs (load_middlebury2006).",
+        "view5 its stereo partner; SGM holes and DDP on real photographs (ddp_lite.data.middlebury_rail.load_rail_scene).",
     size_note="Not measured (server unreachable here): 180 files; a HalfSize scene is about 2 MB "
               "(the offline copies), FullSize about 4 times that.",
     homepage="https://vision.middlebury.edu/stereo/data/scenes2005/",
@@ -204,7 +204,7 @@ _add(Dataset(
     files=_views(2006, MIDDLEBURY2006_SCENES, PINNED.get("middlebury2006", {})),
     licence=_MB0506_LICENCE,
     use="Table 6 (comparison with DepthComp's baselines, RMSE in disparity) and real multi-view scenes with "
-        "GT disparity (load_middlebury2006).",
+        "GT disparity (ddp_lite.data.middlebury_rail.load_rail_scene).",
     size_note="Not measured (server unreachable here): 630 files; a HalfSize scene is about 2 MB "
               "(the offline copies), FullSize about 4 times that; use --only 'HalfSize/Plastic/*'.",
     homepage="https://vision.middlebury.edu/stereo/data/scenes2006/",

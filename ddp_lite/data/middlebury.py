@@ -3,7 +3,8 @@
 * **calib.txt** (2014): ``cam0=[f 0 cx0; 0 f cy; 0 0 1]``, ``cam1=[...]``, ``doffs`` = cx1 − cx0
   (px), ``baseline`` (mm), ``width``, ``height``, ``ndisp``; depth Z = f·B / (d + doffs).
   Disparities are PFM (``disp0.pfm``), ``inf`` = unknown → NaN.
-* **2005/2006**: ``view1.png``/``view5.png``, disparity PNG (0 = unknown → NaN), ``dmin.txt``.
+* **2005/2006**: read by ``middlebury_rail`` (seven views on a rail, any of the dataset's sizes);
+  ``load_middlebury2006`` gives its stereo pair alone.
 
 A stereo scene has the left view at the world origin, the rectified right view in ``right``,
 ``meta`` baseline (m), doffs/ndisp/focal (px), d_min/d_max (m). ``MiddleburyCalib`` and
@@ -186,36 +187,13 @@ def load_motorcycle(size=None) -> Scene:
     return stereo_scene("motorcycle", rgb0, rgb1, depth0, np.full_like(depth0, np.nan), calib, size)
 
 
-def load_middlebury2006(folder, focal: float = 3740.0, baseline: float = 0.160, size=None,
-                        name: str | None = None) -> Scene:
-    """A Middlebury 2005/2006 full-size scene folder (view1.png, view5.png, disp1.png, dmin.txt;
-    disp5.png optional) → one-view stereo ``Scene``. Disparity = PNG value (0 = unknown → NaN) and
-    Z = focal·baseline / (d + dmin). The defaults (3740 px, 160 mm) are the values the dataset page
-    gives for the full-size images; the principal point is assumed at the image centre."""
-    folder = existing_path(folder, "folder")
-    try:
-        dmin = float(read_text_file(folder / "dmin.txt", "folder").split()[0])
-    except (IndexError, ValueError) as error:
-        raise ValueError(f"folder: {folder / 'dmin.txt'} must hold one number ({error})") from None
-    if not np.isfinite(dmin):
-        raise ValueError(f"folder: {folder / 'dmin.txt'} must hold a finite number, got {dmin}")
-    rgb0, rgb1 = read_rgb(folder / "view1.png", "folder"), read_rgb(folder / "view5.png", "folder")
-    H, W = rgb0.shape[:2]
-    K0 = np.array([[focal, 0.0, (W - 1) / 2.0], [0.0, focal, (H - 1) / 2.0], [0.0, 0.0, 1.0]])
-    K1 = K0.copy()
-    K1[0, 2] += dmin
-    calib = MiddleburyCalib(K0, K1, dmin, float(baseline), W, H, 256)
+def load_middlebury2006(folder, size=None, name: str | None = None) -> Scene:
+    """A Middlebury 2005/2006 scene folder (view1.png, view5.png, disp1.png, dmin.txt; disp5.png optional), at
+    any of the dataset's sizes → one-view stereo ``Scene`` (view1 and view5): ``middlebury_rail.load_rail_scene``
+    with no rail neighbours, which gives the calibration (f = 3740 px / size, baseline 160 mm, ``doffs``)."""
+    from .middlebury_rail import load_rail_scene  # it builds on this module's readers
 
-    def depth_of(file):
-        if not (folder / file).exists():
-            return np.full((H, W), np.nan, np.float32)
-        raw = read_image_file(folder / file, "folder")
-        if raw.ndim != 2:
-            raise ValueError(f"folder: {folder / file} must be a 1-channel disparity PNG")
-        return calib.depth(np.where(raw > 0, raw.astype(np.float64), np.nan))
-    depth1 = require_valid_depth(depth_of("disp1.png"), "folder", folder / "disp1.png") if (folder / "disp1.png").exists() \
-        else depth_of("disp1.png")
-    return stereo_scene(name or folder.name, rgb0, rgb1, depth1, depth_of("disp5.png"), calib, size)
+    return load_rail_scene(folder, neighbors=(), size=size, name=name)
 
 
 def make_middlebury_fixture(folder, size=(48, 64), seed: int = 0, scene: str = "desk",
