@@ -42,16 +42,28 @@ def test_valid_pixels_kept_exactly_and_inputs_untouched(method):
         assert np.array_equal(before, after, equal_nan=True)
 
 
+@pytest.mark.parametrize("residual", [True, False])
 @pytest.mark.parametrize("method", REFINEMENTS)
-def test_blurred_target_sharpened_at_the_edge(method):
+def test_blurred_target_sharpened_at_the_edge(method, residual):
     rgb, depth, truth, target = two_planes()
     before = hole_rmse(depth, np.where(np.isnan(depth), target, depth), truth)
-    after = hole_rmse(depth, refine_full_resolution(depth, rgb, target, method=method), truth)
+    after = hole_rmse(depth, refine_full_resolution(depth, rgb, target, method=method, residual=residual), truth)
     assert after < 0.5 * before, (method, before, after)
     band = np.isnan(depth) & (np.abs(np.arange(W)[None, :] - EDGE + 0.5) < 4)  # the edge's own pixels
     err_before = np.abs(1 / target[band] - 1 / truth[band]).mean()
-    refined = refine_full_resolution(depth, rgb, target, method=method)
+    refined = refine_full_resolution(depth, rgb, target, method=method, residual=residual)
     assert np.abs(1 / refined[band] - 1 / truth[band]).mean() < 0.5 * err_before
+
+
+@pytest.mark.parametrize("method", REFINEMENTS)
+def test_residual_removes_a_fit_biased_like_its_rim(method):
+    """A fit off by a constant disparity everywhere (known on the valid pixels): the residual step carries
+    that offset into the hole, so the fill lands on the truth; without it the fill keeps part of the bias."""
+    rgb, depth, truth, _ = two_planes()
+    biased = 1.0 / (1.0 / truth + 0.1)
+    with_residual = hole_rmse(depth, refine_full_resolution(depth, rgb, biased, method=method), truth)
+    without = hole_rmse(depth, refine_full_resolution(depth, rgb, biased, method=method, residual=False), truth)
+    assert with_residual < 0.2 * 0.1 and with_residual < 0.5 * without, (with_residual, without)
 
 
 def test_zero_and_negative_depth_are_holes():
@@ -71,7 +83,7 @@ def test_no_holes_returns_the_input():
     (dict(hole_confidence=1.5), r"hole_confidence must be in \(0, 1\]"),
     (dict(hole_confidence=float("nan")), "hole_confidence"),
     (dict(lam=-1.0), "lam must be a positive number"),
-    (dict(radius=3), "method 'fgs' takes"),
+    (dict(method="fgs", radius=3), "method 'fgs' takes"),
     (dict(method="guided-filter", radius=2.5), "radius must be a positive integer"),
 ])
 def test_bad_settings_refused(kwargs, message):
@@ -88,6 +100,11 @@ def test_bad_arrays_refused():
     nan_target[30, 40] = np.nan  # inside the hole
     with pytest.raises(ValueError, match="target must be finite and > 0"):
         refine_full_resolution(depth, rgb, nan_target)
+    outside = target.copy()
+    outside[2, 2] = np.nan  # a valid pixel: read by the residual step only
+    with pytest.raises(ValueError, match="every pixel"):
+        refine_full_resolution(depth, rgb, outside)
+    assert np.isfinite(refine_full_resolution(depth, rgb, outside, residual=False)).all()
     with pytest.raises(ValueError, match="rgb"):
         refine_full_resolution(depth, rgb[:, :-1], target)
     with pytest.raises(ValueError, match="rgb"):

@@ -8,18 +8,19 @@ edge-aware solve at full size, guided by the full-size colour image, in disparit
     minimise   Σ_i c_i (x_i − t_i)²  +  λ · Σ_ij w_ij(colour) (x_i − x_j)²
 
 with t = the valid input where it is valid (confidence c = 1) and the up-sampled fit in the holes
-(confidence c = ``hole_confidence`` < 1). The valid depth around a hole is then carried into it along
+(confidence c = ``hole_confidence`` < 1), the fit first corrected by its own error on the valid pixels
+(input − fit), carried into the holes by the same solve (``residual``). The valid depth around a hole is then carried into it along
 surfaces of one colour and stops at colour edges, while the fit still decides where no valid pixel of
 the same surface is near. The valid input pixels are returned exactly as given; only the holes change.
 
 Solvers (``method``), chosen by ``benchmarks/bench_full_resolution.py``:
 
-- ``fgs`` (default): the fast global smoother (Min et al. 2014, OpenCV ``ximgproc``), normalised:
+- ``bilateral-solver`` (default, c = 0.01 in the holes): Barron & Poole's fast bilateral solver with the
+  confidence c, on the kit's bilateral grid (``classical.guided_fills``).
+- ``fgs``: the fast global smoother (Min et al. 2014, OpenCV ``ximgproc``), normalised:
   x = FGS(c·t) / FGS(c), the weighted least-squares solve above by separable 1-D passes.
-- ``bilateral-solver``: Barron & Poole's fast bilateral solver with the confidence c, on the kit's
-  bilateral grid (``classical.guided_fills``).
-- ``guided-filter``: He et al.'s guided filter, normalised the same way, GF(c·t) / GF(c): a local
-  (window ``radius``) edge-aware average.
+- ``guided-filter``: He et al.'s guided filter with the confidence as each pixel's weight in every
+  window's affine colour model (``classical.guided_fills``): local (window ``radius``).
 """
 from __future__ import annotations
 
@@ -59,11 +60,11 @@ def _fgs(guide: np.ndarray, values: np.ndarray, confidence: np.ndarray, lam: flo
 
 
 def _guided(image: np.ndarray, values: np.ndarray, confidence: np.ndarray, radius: int, eps: float):
-    """Normalised guided filter: GF(c·t) / GF(c), guide (H, W, 3) float32 in [0, 1]."""
-    guide = image.astype(np.float32)
-    num = cv2.ximgproc.guidedFilter(guide, (confidence * values).astype(np.float32), int(radius), float(eps))
-    den = cv2.ximgproc.guidedFilter(guide, confidence.astype(np.float32), int(radius), float(eps))
-    return num.astype(np.float64) / np.maximum(den.astype(np.float64), 1e-6)
+    """Confidence-weighted guided filter: per window, the affine colour model fitted to c-weighted
+    targets (``guided_fills._masked_guided_filter``), averaged over the windows covering a pixel."""
+    from ..classical.guided_fills import _masked_guided_filter
+    q, _ = _masked_guided_filter(image, values, confidence, int(radius), float(eps))
+    return q
 
 
 def _bilateral_solver(image: np.ndarray, values: np.ndarray, confidence: np.ndarray, lam: float, sigma_xy: float,
@@ -86,17 +87,21 @@ def _bilateral_solver(image: np.ndarray, values: np.ndarray, confidence: np.ndar
     return (S.T @ y).reshape(values.shape)
 
 
-def refine_full_resolution(depth, rgb, target, method: str = "fgs", hole_confidence: float = 0.1,
-                           **params) -> np.ndarray:
+def refine_full_resolution(depth, rgb, target, method: str = "bilateral-solver", hole_confidence: float = 0.01,
+                           residual: bool = True, **params) -> np.ndarray:
     """The holes of ``depth`` filled by an edge-aware solve toward ``target`` → (H, W) float32 metres.
 
     Args:
         depth: (H, W) metres at full size, NaN (or ≤ 0) = hole; its valid pixels are kept exactly.
         rgb: (H, W, 3) in [0, 1] (or uint8), the full-size photo that guides the solve.
-        target: (H, W) metres, finite and > 0 in the holes: the fit up-sampled to full size
-            (``working_size.fill_holes_at_full_size(depth, small, raw=True)``).
+        target: (H, W) metres, finite and > 0: the fit up-sampled to full size everywhere
+            (``working_size.fill_holes_at_full_size(depth, small, raw=True)``); without ``residual``
+            only its holes are read.
         method: one of ``REFINEMENTS``.
         hole_confidence: the target's weight in the holes, in (0, 1]; the valid input's is 1.
+        residual: first correct the target by its own error on the valid pixels (input − fit, in
+            disparity), carried into the holes by the same edge-aware solve: where the fit is off at a
+            hole's rim (a blurred edge, a biased surface), it is off the same way inside.
         params: the solver's own settings (``fgs``: ``lam``, ``sigma_color`` on a 0–255 scale;
             ``bilateral-solver``: ``lam``, ``sigma_xy`` px, ``sigma_luma``, ``sigma_chroma``;
             ``guided-filter``: ``radius`` px, ``eps``).
@@ -135,20 +140,29 @@ def refine_full_resolution(depth, rgb, target, method: str = "fgs", hole_confide
     holes = ~valid
     if not holes.any():
         return array.astype(np.float32)
-    if not np.all(np.isfinite(target[holes]) & (target[holes] > 0)):
-        raise ValueError("target must be finite and > 0 (metres) in every hole of depth: a completed depth")
-    disparity = np.where(valid, 1.0 / np.where(valid, array, 1.0), 1.0 / np.where(holes, target, 1.0))
-    scale = float(np.median(disparity))  # the solvers see values near 1, whatever the unit
-    values = disparity / scale
-    confidence = hole_confidence_map(valid, hole_confidence)
-    if method == "fgs":
-        guide = np.round(np.clip(image, 0, 1) * 255).astype(np.uint8)
-        solved = _fgs(guide, values, confidence, settings["lam"], settings["sigma_color"])
-    elif method == "guided-filter":
-        solved = _guided(image, values, confidence, int(settings["radius"]), settings["eps"])
-    else:
-        solved = _bilateral_solver(image, values, confidence, settings["lam"], settings["sigma_xy"],
-                                   settings["sigma_luma"], settings["sigma_chroma"])
-    low, high = values.min(), values.max()  # a normalised filter stays within its inputs; rounding may not
+    read = np.ones_like(holes) if residual else holes
+    if not np.all(np.isfinite(target[read]) & (target[read] > 0)):
+        raise ValueError("target must be finite and > 0 (metres) in every " + ("pixel" if residual else "hole of depth")
+                         + ": the completed depth up-sampled to full size" + (" (or residual=False)" if residual else ""))
+    measured = 1.0 / np.where(valid, array, 1.0)
+    fitted = 1.0 / np.where(read, target, 1.0)
+    scale = float(np.median(np.where(valid, measured, fitted)))  # the solvers see values near 1, whatever the unit
+    measured, fitted = measured / scale, fitted / scale
+
+    def solve(values, confidence):
+        if method == "fgs":
+            guide = np.round(np.clip(image, 0, 1) * 255).astype(np.uint8)
+            return _fgs(guide, values, confidence, settings["lam"], settings["sigma_color"])
+        if method == "guided-filter":
+            return _guided(image, values, confidence, int(settings["radius"]), settings["eps"])
+        return _bilateral_solver(image, values, confidence, settings["lam"], settings["sigma_xy"],
+                                 settings["sigma_luma"], settings["sigma_chroma"])
+
+    if residual:  # the fit's error where it is known, carried into the holes (0 where nothing reaches)
+        error = np.where(valid, measured - fitted, 0.0)
+        fitted = fitted + np.where(holes, solve(error, np.where(valid, 1.0, 1e-6)), 0.0)
+    values = np.where(valid, measured, fitted)
+    solved = solve(values, hole_confidence_map(valid, hole_confidence))
+    low, high = values.min(), values.max()  # a solve of positive weights stays within its inputs; rounding may not
     solved = np.clip(np.where(np.isfinite(solved), solved, values), low, high) * scale
     return np.where(valid, array, 1.0 / solved).astype(np.float32)
