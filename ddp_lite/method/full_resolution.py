@@ -27,7 +27,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from ..classical.depth_fills import check_fill_input
+from ..classical.depth_fills import check_fill_input, nearest_values
 
 __all__ = ["REFINEMENTS", "refine_full_resolution", "hole_confidence_map"]
 
@@ -68,8 +68,10 @@ def _guided(image: np.ndarray, values: np.ndarray, confidence: np.ndarray, radiu
 
 
 def _bilateral_solver(image: np.ndarray, values: np.ndarray, confidence: np.ndarray, lam: float, sigma_xy: float,
-                      sigma_luma: float, sigma_chroma: float):
-    """Barron & Poole's solve with confidence c on the kit's bilateral grid (``guided_fills``)."""
+                      sigma_luma: float, sigma_chroma: float, initial=None):
+    """Barron & Poole's solve with confidence c on the kit's bilateral grid (``guided_fills``); conjugate
+    gradients start from the grid's mean of ``initial`` (H, W) (default: of c·t / c), which is also what a
+    part of the grid that no confident pixel reaches keeps."""
     from scipy import sparse
     from scipy.sparse.linalg import cg
 
@@ -82,7 +84,7 @@ def _bilateral_solver(image: np.ndarray, values: np.ndarray, confidence: np.ndar
     laplacian = sparse.diags(np.asarray(affinity.sum(axis=1)).ravel()) - affinity
     A = (lam * laplacian + sparse.diags(S @ c)).tocsr()
     b = S @ (c * t)
-    start = b / np.maximum(S @ c, 1e-12)
+    start = b / np.maximum(S @ c, 1e-12) if initial is None else (S @ initial.ravel()) / np.asarray(S.sum(axis=1)).ravel()
     y, _ = cg(A, b, x0=start, rtol=1e-6, maxiter=500, M=sparse.diags(1.0 / np.maximum(A.diagonal(), 1e-10)))
     return (S.T @ y).reshape(values.shape)
 
@@ -158,9 +160,15 @@ def refine_full_resolution(depth, rgb, target, method: str = "bilateral-solver",
         return _bilateral_solver(image, values, confidence, settings["lam"], settings["sigma_xy"],
                                  settings["sigma_luma"], settings["sigma_chroma"])
 
-    if residual:  # the fit's error where it is known, carried into the holes (0 where nothing reaches)
+    if residual:  # the fit's error where it is known, carried into the holes
         error = np.where(valid, measured - fitted, 0.0)
-        fitted = fitted + np.where(holes, solve(error, np.where(valid, 1.0, 1e-6)), 0.0)
+        if method == "bilateral-solver":  # as the bilateral-solver fill: no pull in the holes, from the nearest error
+            carried = _bilateral_solver(image, error, valid.astype(np.float64), settings["lam"], settings["sigma_xy"],
+                                        settings["sigma_luma"], settings["sigma_chroma"],
+                                        initial=nearest_values(error, valid))
+        else:  # a normalised filter needs some weight everywhere: 0 error where no valid pixel reaches
+            carried = solve(error, np.where(valid, 1.0, 1e-6))
+        fitted = fitted + np.where(holes, carried, 0.0)
     values = np.where(valid, measured, fitted)
     solved = solve(values, hole_confidence_map(valid, hole_confidence))
     low, high = values.min(), values.max()  # a solve of positive weights stays within its inputs; rounding may not
