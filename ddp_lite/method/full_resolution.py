@@ -15,7 +15,7 @@ the same surface is near. The valid input pixels are returned exactly as given; 
 
 Solvers (``method``), chosen by ``benchmarks/bench_full_resolution.py`` (``class``, seed 0, hole RMSE in
 disparity px over Motorcycle's blob and SGBM holes and six Middlebury HalfSize scenes: the default is
-0.78–1.07× the best classical fill of each case, mean 0.95, and 0.73–0.96× the plain up-sampled fit; the
+0.78–1.07× the best classical fill of each case, mean 0.95, and 0.75–0.96× the plain up-sampled fit; the
 residual step is what takes it below the best fill; ``fgs`` and ``guided-filter`` reach 1.03 and 1.04):
 
 - ``bilateral-solver`` (default, c = 0.01 in the holes): Barron & Poole's fast bilateral solver with the
