@@ -217,6 +217,7 @@ def test_complete_keeps_valid_pixels_exactly_fills_the_holes_and_writes_a_previe
     assert main(argv + ["--gt", str(tmp_path / "gt.npy")]) == 0
     printed = capsys.readouterr().out
     assert "fitting at 21×32" in printed, printed  # 60×90 → longer side 32
+    assert "then sharpened at 60×90" in printed and "sharpening at full size" in printed, printed
     filled = np.load(tmp_path / "filled.npy")
     valid = np.isfinite(depth)
     assert filled.shape == depth.shape and np.array_equal(filled[valid], depth[valid])  # bit for bit
@@ -231,7 +232,14 @@ def test_complete_keeps_valid_pixels_exactly_fills_the_holes_and_writes_a_previe
                 __import__("re").findall(r"(DDP|linear|navier-stokes) ([0-9.e-]+) m", line))
     holes = ~valid  # the printed DDP RMSE is the file's, recomputed independently here
     assert rmse["DDP"] == pytest.approx(float(np.sqrt(np.mean((filled[holes] - gt[holes]) ** 2))), rel=1e-3)
-    assert main([str(tmp_path / "raw.npy") if a == str(tmp_path / "filled.npy") else a for a in argv] + ["--raw"]) == 0
+
+    def with_out(name):  # the same command with another --out (a repeated option is refused)
+        return [str(tmp_path / name) if a == str(tmp_path / "filled.npy") else a for a in argv]
+    assert main(with_out("plain.npy") + ["--no-refine"]) == 0
+    assert "sharpen" not in capsys.readouterr().out  # up-sampling alone
+    plain = np.load(tmp_path / "plain.npy")
+    assert np.array_equal(plain[valid], depth[valid]) and not np.array_equal(plain[~valid], filled[~valid])
+    assert main(with_out("raw.npy") + ["--raw"]) == 0
     assert "differ by" in capsys.readouterr().out  # without --gt: the two fills' mean difference
     raw = np.load(tmp_path / "raw.npy")
     assert np.isfinite(raw).all() and not np.array_equal(raw[valid], depth[valid])  # the net's own output
@@ -486,9 +494,11 @@ def test_demo_and_sequence_name_size_when_the_net_cannot_take_it(tmp_path, capsy
     assert "--size is 8×8 px" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("with_gt", [False, True])
 @pytest.mark.parametrize("shape", [(60, 90), (480, 640), (300, 1200), (600, 300), (12, 200)])
-def test_complete_preview_titles_overlap_nothing(shape, monkeypatch):
-    """No panel title, colour bar (with its labels) or the summary line overlaps another, at any aspect."""
+def test_complete_preview_titles_overlap_nothing(shape, with_gt, monkeypatch):
+    """No panel title, colour bar (with its labels), the hole panel's legend or the summary line overlaps
+    another, at any aspect; the hole panel has a two-entry legend and no colour bar."""
     import itertools
 
     from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -499,17 +509,27 @@ def test_complete_preview_titles_overlap_nothing(shape, monkeypatch):
     H, W = shape
     depth = np.full(shape, 2.0, np.float32)
     depth[: H // 3, : W // 3] = np.nan
+    scores = (np.full(shape, 2.4, np.float32), {"DDP": 0.1, "linear": 0.2, "navier-stokes": 0.25,
+                                                "bilateral-solver": 0.15}) if with_gt else None
     cli_complete._write_preview("unused.png", depth, np.nan_to_num(depth, nan=2.5),
-                                "hole RMSE at full size (1234 pixels with ground truth): DDP 0.1 m, linear 0.2 m")
+                                "hole RMSE at full size (1234 pixels with ground truth): DDP 0.1 m, linear 0.2 m",
+                                scores)
     fig = figures[0]
     FigureCanvasAgg(fig)
     fig.canvas.draw()
     renderer = fig.canvas.get_renderer()
+    panels = [ax for ax in fig.axes if ax.get_label() != "<colorbar>"]
+    assert len(panels) == (4 if with_gt else 3)
+    legend = panels[2].get_legend()
+    assert [t.get_text() for t in legend.get_texts()] == ["valid", "hole"]
     boxes = [(f"title {ax.get_title()!r}", ax.title.get_window_extent(renderer)) for ax in fig.axes if ax.get_title()]
     boxes += [("colour bar", ax.get_tightbbox(renderer)) for ax in fig.axes if ax.get_label() == "<colorbar>"]
-    boxes += [("summary", fig._suptitle.get_window_extent(renderer))]
-    assert len(boxes) == 3 + 3 + 1
+    boxes += [("legend", legend.get_window_extent(renderer)), ("summary", fig._suptitle.get_window_extent(renderer))]
+    assert len(boxes) == (4 + 3 + 2 if with_gt else 3 + 2 + 2)
     assert [(a, b) for (a, box_a), (b, box_b) in itertools.combinations(boxes, 2) if box_a.overlaps(box_b)] == []
+    assert len(panels[1].collections) >= 1  # the holes' outline on the filled panel
+    if with_gt:
+        assert "DDP 0.1" in panels[3].get_title() and "bilateral-solver 0.15" in panels[3].get_title()
 
 
 def test_sequence_dry_run_refuses_an_out_inside_the_capture_as_the_run_would(tmp_path, capsys):

@@ -182,8 +182,12 @@ def build_parser() -> argparse.ArgumentParser:
                           help="write the net's own output everywhere, with no colour-guided fill mixed in "
                                "(default: the valid input pixels kept exactly, the recipe's share of the fill "
                                "mixed into the holes)")
+    complete.add_argument("--no-refine", action="store_true",
+                          help="bring the fit back to full size by up-sampling alone, without sharpening it at "
+                               "full size along the photo's edges (default: sharpened; --raw implies this)")
     complete.add_argument("--preview", default=None,
-                          help="preview figure: input, filled, holes (default: OUT's name with .preview.png)")
+                          help="preview figure: input, filled, holes, and with --gt the error map "
+                               "(default: OUT's name with .preview.png)")
     complete.add_argument("--gt", default=None,
                           help="ground-truth depth (same formats and --depth-scale): print hole RMSE of DDP and "
                                "the classical fills")

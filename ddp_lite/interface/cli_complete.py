@@ -10,11 +10,15 @@ read as metres) is refused with the scale that would make it plausible.
 The fit runs at a working size (``--max-side``, default the profile's longer side) and its
 completed depth is brought back to full size in disparity, in the holes only: the valid input
 pixels keep their exact values (``--raw``: the net's own output everywhere, without the share of a
-colour-guided fill the ``kit`` recipe mixes in), see
-``ddp_lite.sequences.working_size``. Then one line compares the fill with a classical one computed here at
-full size (linear interpolation; their mean absolute difference in the holes), or, with ``--gt``,
-prints the hole RMSE of DDP, linear and Navier-Stokes fills; and a preview figure (input, filled,
-holes) is written beside ``--out``.
+colour-guided fill the ``kit`` recipe mixes in), see ``ddp_lite.sequences.working_size``. The
+up-sampled fill is then sharpened at full size (``ddp_lite.method.full_resolution``): an edge-aware
+solve guided by the full-size photo, pulled to the valid input (confidence 1) and to the fit in the
+holes (lower confidence), so that depth edges inside the holes follow the photo's edges instead of the
+working size's blur (``--no-refine``: up-sampling alone; ``--raw`` implies it). Then one line compares
+the fill with a classical one computed here at full size (linear interpolation; their mean absolute
+difference in the holes), or, with ``--gt``, prints the hole RMSE of DDP, linear, Navier-Stokes and the
+colour-guided fills; and a preview figure (input, filled with the holes outlined, the hole mask, and
+with ``--gt`` DDP's error map and the RMSEs) is written beside ``--out``.
 
 Output by the suffix of ``--out``: ``.npy``/``.pfm`` float32 metres, ``.png`` 16-bit
 millimetres (0 = none, at most ``PNG_MAX_METRES``), ``.exr`` if OpenCV has the codec. Every file
@@ -117,54 +121,76 @@ def _read_rgb(path: str) -> np.ndarray:
     return read_rgb(path, "--rgb")  # pixels as stored, the same way as the depth: a phone's EXIF rotation is not applied
 
 
-def _write_preview(path: str, depth: np.ndarray, filled: np.ndarray, summary: str) -> None:
-    """Input (holes coloured), filled depth, and the holes: one figure, same colour scale, atomically."""
+def _write_preview(path: str, depth: np.ndarray, filled: np.ndarray, summary: str, scores=None) -> None:
+    """Input (holes coloured), filled depth (the holes outlined), the hole mask (two colours), and with
+    ``scores`` = (gt (H, W) metres, {method: hole RMSE m}) the fill's error in the holes with every
+    method's RMSE: one figure, same depth colour scale, written atomically."""
+    from matplotlib.colors import ListedColormap
     from matplotlib.figure import Figure
+    from matplotlib.patches import Patch
 
-    from ..evaluation.viz import save_figure, show_depth
+    from ..evaluation.viz import HOLE_COLOUR, outline, save_figure, show_depth, show_errors
     holes = ~np.isfinite(depth)
     vmin, vmax = float(np.nanpercentile(filled, 1)), float(np.nanpercentile(filled, 99))
     H, W = depth.shape
-    fig = Figure(figsize=(15, 15 * H / W / 3 + 1.2))
-    axes = fig.subplots(1, 3)
+    panels = 3 if scores is None else 4
+    fig = Figure(figsize=(5 * panels, 15 * H / W / 3 + 1.6))
+    axes = fig.subplots(1, panels)
     show_depth(axes[0], depth, f"input ({holes.mean():.1%} holes)", vmin, vmax)
-    show_depth(axes[1], filled, "filled", vmin, vmax)
-    shown = axes[2].imshow(holes, cmap="gray_r", vmin=0, vmax=1, interpolation="nearest")
-    bar = fig.colorbar(shown, ax=axes[2], fraction=0.046, pad=0.04, ticks=[0.25, 0.75])  # same panel size as the others
-    bar.ax.set_yticklabels(["valid", "hole"])
+    show_depth(axes[1], filled, "filled (holes outlined)", vmin, vmax)
+    outline(axes[1], holes, colour="white")
+    axes[2].imshow(holes, cmap=ListedColormap(["lightgrey", HOLE_COLOUR]), vmin=0, vmax=1, interpolation="nearest")
+    axes[2].legend(handles=[Patch(color="lightgrey", label="valid"), Patch(color=HOLE_COLOUR, label="hole")],
+                   loc="upper center", bbox_to_anchor=(0.5, -0.02), ncol=2, fontsize=8, frameon=False)
     axes[2].set_title("holes")
     axes[2].axis("off")
+    if scores is not None:
+        gt, rmse = scores
+        show_errors([axes[3]], {"": filled}, gt, mask=holes & np.isfinite(gt), label="|DDP − truth| (m)")
+        lines = [f"{name} {value:.4g}" for name, value in rmse.items()]
+        axes[3].set_title("hole RMSE (m): " + ", ".join(lines[:2]) + "\n" + ", ".join(lines[2:]), fontsize=9)
     fig.suptitle(summary, fontsize=10)
     fig.tight_layout()
     save_figure(fig, path)
 
 
-def _classical_fills(depth, gt) -> dict:
+COLOUR_FILLS = ("colorization", "guided-filter", "bilateral-solver", "cross-bilateral")
+
+
+def _classical_fills(depth, rgb, gt) -> dict:
     """The classical fills (H, W) metres the summary line puts DDP beside, computed before the fit (they need
-    only the input) so that the fit's time left is the command's: linear from the holes' rims, and with
-    ``gt`` Navier-Stokes too. A ``gt`` with no value in the holes is refused here, before any work."""
-    from ..classical.depth_fills import fill_linear_from_rim, fill_navier_stokes
+    only the input) so that the fit's time left is the command's, each in disparity (1/Z) as DDP fills:
+    linear from the holes' rims, and with ``gt`` Navier-Stokes and every colour-guided fill
+    (``COLOUR_FILLS``) too. A ``gt`` with no value in the holes is refused here, before any work."""
+    from ..classical.baselines import BASELINES
+    from ..classical.depth_fills import fill_linear_from_rim
     holes = ~np.isfinite(depth)
     if gt is not None and not (holes & np.isfinite(gt)).any():
         raise ValueError("--gt has no valid value in the holes of --depth; nothing to score")
-    fills = {"linear": fill_linear_from_rim(depth)}  # fill_linear's triangulation of every valid pixel takes 13 s at 500×741
+    inverse = 1.0 / depth
+    fills = {"linear": 1.0 / fill_linear_from_rim(inverse)}  # fill_linear's triangulation of every valid pixel takes 13 s at 500×741
     if gt is not None:
-        fills["navier-stokes"] = fill_navier_stokes(depth)
+        for name in ("navier-stokes",) + COLOUR_FILLS:
+            fills[name] = 1.0 / BASELINES[name](inverse, rgb)
     return fills
 
 
-def _comparison(depth, filled, gt, classical: dict) -> str:
-    """The line that puts DDP's fill beside the classical ones (:func:`_classical_fills`) at full size."""
+def _comparison(depth, filled, gt, classical: dict) -> tuple[str, dict]:
+    """The line that puts DDP's fill beside the classical ones (:func:`_classical_fills`) at full size, and
+    the hole RMSE (m) of DDP, linear, Navier-Stokes and the best colour-guided fill ({} without ``gt``)."""
     holes = ~np.isfinite(depth)
     if gt is None:
         difference = float(np.mean(np.abs(filled[holes] - classical["linear"][holes])))
         return (f"holes at full size: DDP vs a linear fill (computed here) differ by {difference:.3g} m on average "
-                f"(mean |difference| over {holes.sum()} hole pixels; their error is unknown without --gt)")
+                f"(mean |difference| over {holes.sum()} hole pixels; their error is unknown without --gt)"), {}
     scored = holes & np.isfinite(gt)
     fills = {"DDP": filled, **classical}
     rmse = {name: float(np.sqrt(np.mean((f[scored] - gt[scored]) ** 2))) for name, f in fills.items()}
+    best = min(COLOUR_FILLS, key=rmse.get)
+    shown = {"DDP": rmse["DDP"], "linear": rmse["linear"], "navier-stokes": rmse["navier-stokes"], best: rmse[best]}
     return (f"hole RMSE at full size ({scored.sum()} pixels with ground truth): "
-            + ", ".join(f"{name} {value:.4g} m" for name, value in rmse.items()))
+            + ", ".join(f"{name} {value:.4g} m" for name, value in rmse.items())
+            + f" (best colour-guided fill: {best})"), shown
 
 
 def complete_command(args) -> int:
@@ -186,6 +212,7 @@ def _complete(args, writers, staged, start) -> int:
     from ..method.loop import earliest_share, expected_share
     from ..core.checks import check_depth
     from ..method.nets import check_input_size
+    from ..method.full_resolution import refine_full_resolution
     from ..sequences.working_size import fill_holes_at_full_size, shrink, working_shape
     profile = get_profile(args.profile)
     config = FitConfig.for_profile(profile, variant=args.variant, recipe=args.recipe, device=args.device,
@@ -219,24 +246,38 @@ def _complete(args, writers, staged, start) -> int:
     check_depth(small_depth, f"--depth {args.depth!r} (at the working size {shape[0]}×{shape[1]})")
     check_input_size(config.net, config.channels, shape[0], shape[1],
                      name=f"--depth {args.depth!r} (at the working size, --max-side {max_side})")
+    refine = not (args.raw or args.no_refine) and shape != depth.shape
     print(f"{depth.shape[0]}×{depth.shape[1]} (H×W), {holes.mean():.1%} holes; fitting at "
-          f"{shape[0]}×{shape[1]} (--max-side {max_side}), profile '{profile.name}'", flush=True)
-    classical = _classical_fills(depth, gt)
+          f"{shape[0]}×{shape[1]} (--max-side {max_side}), profile '{profile.name}'"
+          + (f", then sharpened at {depth.shape[0]}×{depth.shape[1]} along the photo's edges (off: --no-refine)"
+             if refine else ""), flush=True)
+    classical = _classical_fills(depth, rgb, gt)
     planned = config.resolved_iterations(args.variant) * config.fit_count()  # every fit of the command
     with command_progress(planned, expected_share(config), earliest_share(config)):
         result = complete_depth(small_rgb, small_depth, variant=args.variant, config=config)
-    filled = fill_holes_at_full_size(depth, result.depth, raw=args.raw)
-    comparison = _comparison(depth, filled, gt, classical)
+    refine_seconds = None
+    if refine:
+        print(f"fit done in {result.seconds:.1f} s; sharpening the fill at {depth.shape[0]}×{depth.shape[1]} ...",
+              flush=True)
+        started = time.perf_counter()
+        filled = refine_full_resolution(depth, rgb, fill_holes_at_full_size(depth, result.depth, raw=True))
+        refine_seconds = time.perf_counter() - started
+    else:
+        filled = fill_holes_at_full_size(depth, result.depth, raw=args.raw)
+    comparison, scores = _comparison(depth, filled, gt, classical)
     write_bytes_atomic(staged(args.out), writers[os.path.splitext(args.out)[1].lower()](filled))
     _write_preview(staged(_preview_path(args)), depth, filled,
-                   f"{os.path.basename(args.out)}: DDP {args.variant} fitted at {shape[0]}×{shape[1]}, "
-                   + ("the net's output everywhere" if args.raw else "valid input kept"))
+                   f"{os.path.basename(args.out)}: DDP {args.variant} fitted at {shape[0]}×{shape[1]}"
+                   + (f", sharpened at {depth.shape[0]}×{depth.shape[1]}" if refine else "") + ", "
+                   + ("the net's output everywhere" if args.raw else "valid input kept"),
+                   (gt, scores) if scores else None)
     if camera is not None:
         from ..evaluation.fusion import fuse_depths, save_ply
         save_ply(fuse_depths([filled], [camera], [rgb], min_views=0), staged(_ply_path(args)))  # one view: every pixel once
     print(comparison)
     share = result.history.get("blend_fill", 0.0)
     print(f"filled {holes.mean():.1%} holes in {time.perf_counter() - start:.1f} s (the fit {result.seconds:.1f} s"
-          + (f", with a {share:.0%} share of a colour-guided fill" if share else "") + ") "
+          + (f", with a {share:.0%} share of a colour-guided fill" if share else "")
+          + (f"; sharpening at full size {refine_seconds:.1f} s" if refine_seconds is not None else "") + ") "
           f"→ {args.out}; preview {_preview_path(args)}" + (f"; point cloud {_ply_path(args)}" if camera else ""))
     return 0
