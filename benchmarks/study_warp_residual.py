@@ -105,6 +105,29 @@ def scene_line(case, neighbor: int) -> str:
             f"|d_min − d| median {np.median(error[scored]):5.2f} px, > {WRONG_PX:g} px {np.mean(error[scored] > WRONG_PX):.2f}")
 
 
+def combined_lines(case) -> list[str]:
+    """Two lines for a suite case with two or more neighbours: inside the scored holes, how far from the truth
+    the minimum of the neighbours' *mean* cost lies (what the warp loss optimises) and that of their per-pixel
+    *minimum* (the occlusion-robust reading: a pixel hidden from one neighbour is judged by the other)."""
+    volumes, planes = [], None
+    for k in range(len(case.neighbors)):
+        _, nbr, ref, image, transform, planes_k = real_sweep("", case, k)
+        planes = planes_k if planes is None else planes
+        if len(planes_k) != len(planes) or not np.allclose(planes_k, planes):
+            return [f"{case.name:<22} neighbours sweep different planes: no combined line"]
+        volumes.append(cost_volume(ref, image, case.camera, nbr.camera, planes).numpy())  # (D, H, W) each
+    stacked = np.stack(volumes)  # (N, D, H, W), NaN where a plane falls outside that neighbour
+    truth_disparity = case.fb / filled_truth(case)
+    lines = []
+    for name, cost in (("mean", np.nanmean(stacked, axis=0)), ("min", np.nanmin(stacked, axis=0))):
+        seen = np.isfinite(cost).any(axis=0)
+        error = np.abs(case.fb / planes[np.argmin(np.where(np.isfinite(cost), cost, np.inf), axis=0)] - truth_disparity)
+        scored = case.scored_holes & seen
+        lines.append(f"{case.name:<22} {name + ' of ' + str(len(volumes)):<7} {scored.sum():6d} px: |d_min − d| median "
+                     f"{np.median(error[scored]):5.2f} px, > {WRONG_PX:g} px {np.mean(error[scored] > WRONG_PX):.2f}")
+    return lines
+
+
 if __name__ == "__main__":
     import argparse
 
@@ -122,6 +145,8 @@ if __name__ == "__main__":
                 case = make_suite_case(args.data, name, args.size)
                 for k in range(len(case.neighbors)):
                     print(scene_line(case, k), flush=True)
+                if len(case.neighbors) > 1:
+                    print("\n".join(combined_lines(case)), flush=True)
     else:
         for kind in args.holes or REAL_HOLES:
             study(kind)
