@@ -1,6 +1,6 @@
 """Running a submission for grading without trusting it: its code in a kernel, the checks in the grader.
 
-A check cell (``assert check_psnr(psnr_exercise)``) never runs in the student's kernel, where the
+A check cell (``assert check_psnr(psnr)``) never runs in the student's kernel, where the
 submission could have redefined ``check_psnr``, patched the module it comes from, installed an input
 transformer or an exception handler that swallows the failure. :func:`run_graded` executes every
 other cell in a fresh kernel (always the grader's ``python3``, whatever kernelspec the notebook
