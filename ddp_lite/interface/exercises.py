@@ -405,7 +405,7 @@ def check_resize_calibration(student_resize) -> bool:
     the centre of the top-left pixel. Reference: a point seen at full-size pixel (u, v) is seen at
     ((u + 0.5)·sx − 0.5, (v + 0.5)·sy − 0.5) after the resize; each disparity scales by sx."""
     f, B, doffs = MOTORCYCLE_CALIBRATION
-    K = np.array([[f, 0.0, 369.0], [0.0, f, 247.0], [0.0, 0.0, 1.0]])  # cx, cy: near the centre of 741×500
+    K = np.array([[f, 0.0, 369.0], [0.0, f, 247.0], [0.0, 0.0, 1.0]])  # cx, cy: near the centre of 500×741 (H×W)
     rng = np.random.default_rng(0)
     points = np.stack([rng.uniform(-1, 1, 20), rng.uniform(-1, 1, 20), rng.uniform(2, 5, 20)], axis=1)
     failures = []
