@@ -124,3 +124,19 @@ def test_the_notebooks_solutions_pass(path, capsys):
         exec(compile(source, f"<{path.stem} check>", "exec"), namespace)
         out = capsys.readouterr().out
         assert out.startswith("PASS"), out
+
+
+def test_in_grading_the_kernel_watches_and_reports_what_it_saw(tmp_path, capsys):
+    """The grader's path without a kernel: RemoteFunction → answer_call in a namespace standing for the kernel."""
+    from ddp_lite.interface.grading_kernel import RemoteFunction
+    kernel = {"np": np, "peak_signal_noise_ratio": peak_signal_noise_ratio}
+    exec("psnr = lambda a, b: peak_signal_noise_ratio(a, b, data_range=1.0)\n"
+         "mine = lambda a, b: 10 * np.log10(1 / np.mean((a - b) ** 2))", kernel)
+
+    def run(code):
+        exec(code, kernel)
+
+    assert exercises.check_psnr(RemoteFunction("psnr", run, tmp_path)) is False
+    out = capsys.readouterr().out
+    assert out.startswith("FAIL psnr: psnr calls skimage.metrics.peak_signal_noise_ratio"), out
+    assert exercises.check_psnr(RemoteFunction("mine", run, tmp_path)) is True
