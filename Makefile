@@ -8,12 +8,14 @@ STAMP  := $(VENV)/.ddp-lite-installed
 
 .PHONY: lab lab-command test install clean-venv student solutions grade classroom-check
 
-# `make lab` serves notebooks/ on $(IP):$(PORT) and prints the URL with its token.  --allow-root
+# `make lab` serves $(LAB_DIR) on $(IP):$(PORT) and prints the URL with its token: notebooks/ (the
+# instructor's, solutions in) or, for a student, `make lab LAB_DIR=build/student` (`make student`).  --allow-root
 # only for root (Jupyter refuses root without it); --no-browser on Linux & co. without a display
 # (macOS always has one).  tests/test_lab.py runs exactly $(LAB_CMD), via `make -s lab-command`.
 PORT ?= 8888
 IP   ?= 127.0.0.1
-LAB_ARGS := notebooks/ --ip=$(IP) --port=$(PORT)
+LAB_DIR ?= notebooks/
+LAB_ARGS := $(LAB_DIR) --ip=$(IP) --port=$(PORT)
 ifeq ($(shell id -u),0)
 LAB_ARGS += --allow-root
 endif

@@ -295,6 +295,11 @@ def test_the_exercise_table_is_the_notebooks(tmp_path):
     assert block == classroom.exercise_table(NOTEBOOKS)
     listed = sum(len(classroom.exercises(nbformat.read(p, as_version=4))) for p in SOURCES)
     assert f"{listed} exercises:" in block and "| 11.3 |" in block  # every notebook's, 11's too
+    for number, (path, task) in {f"{p.stem[:2]}.{n}": (p, t) for p in SOURCES
+                                 for n, t in classroom.listed_exercises(nbformat.read(p, as_version=4)).items()}.items():
+        row = next(r for r in block.splitlines() if r.startswith(f"| {number} |"))
+        assert f"| {task.replace('|', chr(92) + '|')} |" in row, (number, path.name)  # whole, never cut
+        assert "<!-- answer -->" not in row and row.count("`") % 2 == 0, row
     copy = tmp_path / "exercises.md"  # and the refresh rewrites only the table
     copy.write_text(text.replace("| 01.1 |", "| 01.9 |"), encoding="utf-8")
     assert classroom.update_readme_table(copy, NOTEBOOKS) and copy.read_text(encoding="utf-8") == text

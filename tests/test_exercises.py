@@ -24,6 +24,43 @@ def _ssim_skimage(**options):
     return lambda x, y: structural_similarity(x, y, **{**settings, **options})
 
 
+def _ssim(sample=False, uniform=False, data_range=1.0):
+    """SSIM written out (a student's own): Gaussian 11×11 window, σ = 1.5, valid windows only."""
+    from scipy.ndimage import correlate
+    g = np.ones(11) if uniform else np.exp(-(np.arange(11) - 5) ** 2 / (2 * 1.5 ** 2))
+    window = np.outer(g, g) / g.sum() ** 2
+    scale = 121 / 120 if sample else 1.0
+
+    def ssim_(x, y):
+        mean = lambda image: correlate(image, window)[5:-5, 5:-5]
+        mx, my = mean(x), mean(y)
+        vx, vy, cxy = [scale * (mean(a * b) - ma * mb) for a, b, ma, mb in ((x, x, mx, mx), (y, y, my, my), (x, y, mx, my))]
+        c1, c2 = (0.01 * data_range) ** 2, (0.03 * data_range) ** 2
+        return float(((2 * mx * my + c1) * (2 * cxy + c2) / ((mx ** 2 + my ** 2 + c1) * (vx + vy + c2))).mean())
+    return ssim_
+
+
+def _warp(depth_scale=1.0):
+    """The warp written out in NumPy (a student's own): back-project, move, project, bilinear sampling."""
+    from ddp_lite.core.camera import relative_pose
+
+    def warp(image, depth, ref, nbr):
+        H, W = depth.shape
+        v, u = np.mgrid[0:H, 0:W]
+        rays = np.stack([u, v, np.ones_like(u)], -1).reshape(-1, 3) @ np.linalg.inv(ref.K).T
+        points = rays * (depth_scale * depth.reshape(-1, 1))
+        pose = relative_pose(ref, nbr)
+        uvw = (points @ pose[:3, :3].T + pose[:3, 3]) @ nbr.K.T
+        x, y = uvw[:, 0] / uvw[:, 2], uvw[:, 1] / uvw[:, 2]
+        x0, y0 = np.floor(x).astype(int), np.floor(y).astype(int)
+        dx, dy = x - x0, y - y0
+        out = np.zeros((H * W, image.shape[2]))
+        for i, j, weight in ((0, 0, (1 - dx) * (1 - dy)), (1, 0, dx * (1 - dy)), (0, 1, (1 - dx) * dy), (1, 1, dx * dy)):
+            out += weight[:, None] * image[np.clip(y0 + j, 0, image.shape[0] - 1), np.clip(x0 + i, 0, image.shape[1] - 1)]
+        return out.reshape(H, W, -1)
+    return warp
+
+
 def _nearest(depth):
     _, (rows, cols) = ndimage.distance_transform_edt(np.isnan(depth), return_indices=True)
     return depth[rows, cols]
@@ -62,10 +99,10 @@ CASES = {
         "MSE, no root": lambda p, g, i: np.mean((p - g)[np.isnan(i)] ** 2),
         "RMSE over the valid pixels": lambda p, g, i: np.sqrt(np.mean((p - g)[np.isfinite(i)] ** 2)),
     }),
-    "check_ssim": (_ssim_skimage(), {
-        "sample covariance": _ssim_skimage(use_sample_covariance=True),
-        "uniform 11×11 window": lambda x, y: structural_similarity(x, y, win_size=11, data_range=1.0),
-        "data range 2": _ssim_skimage(data_range=2.0),
+    "check_ssim": (_ssim(), {
+        "sample covariance": _ssim(sample=True),
+        "uniform 11×11 window": _ssim(uniform=True),
+        "data range 2": _ssim(data_range=2.0),
         "1 - mean |x - y|": lambda x, y: 1 - np.abs(x - y).mean(),
     }),
     "check_masked_l1": (lambda x, y, m: np.abs(x - y)[m].mean(), {
@@ -79,9 +116,9 @@ CASES = {
         "fx used for both axes": lambda d, K: _backproject(d, np.array([[K[0, 0], 0, K[0, 2]], [0, K[0, 0], K[1, 2]],
                                                                       [0, 0, 1]])),
     }),
-    "check_warp": (lambda *a: warp_to_reference(*a)[0], {
+    "check_warp": (_warp(), {
         "the neighbour image unwarped": lambda img, d, r, n: img,
-        "warped with the wrong depth": lambda img, d, r, n: warp_to_reference(img, 1.3 * d, r, n)[0],
+        "warped with the wrong depth": _warp(depth_scale=1.3),
     }),
     "check_fscore": (lambda p, r: 0.0 if p + r == 0 else 2 * p * r / (p + r), {
         "arithmetic mean": lambda p, r: (p + r) / 2,
@@ -126,8 +163,25 @@ def test_check_fails_a_known_wrong_answer(name, mistake, capsys):
     assert out.startswith("FAIL") and "case" in out, out
 
 
-def test_the_kit_ssim_is_a_right_answer_too():
-    assert exercises.check_ssim(lambda x, y: ssim(x, y)) is True
+def test_the_written_out_ssim_and_warp_agree_with_scikit_image_and_the_kit():
+    rng = np.random.default_rng(0)
+    x = rng.random((20, 24))
+    y = np.clip(x + 0.1 * rng.standard_normal(x.shape), 0, 1)
+    for options in ({}, {"use_sample_covariance": True}, {"data_range": 2.0}):
+        mine = _ssim(sample=bool(options.get("use_sample_covariance")), data_range=options.get("data_range", 1.0))
+        assert np.isclose(mine(x, y), _ssim_skimage(**options)(x, y), atol=1e-6), options
+    assert np.isclose(_ssim(uniform=True)(x, y), structural_similarity(x, y, win_size=11, data_range=1.0), atol=1e-6)
+    from ddp_lite.core.camera import Camera, look_at
+    ref = Camera.from_fov(32, 24, 60.0)
+    nbr = Camera(ref.K, look_at([0.1, 0.0, 0.0], [0.0, 0.0, 3.0]), 32, 24)
+    image, depth = rng.random((24, 32, 3)).astype(np.float32), np.full((24, 32), 2.5, np.float32)
+    expected, valid = warp_to_reference(image, depth, ref, nbr)
+    assert np.abs(_warp()(image, depth, ref, nbr) - expected)[valid].max() < 1e-4
+
+
+def test_the_kit_ssim_is_not_the_students_own(capsys):
+    assert exercises.check_ssim(lambda x, y: ssim(x, y)) is False
+    assert "ddp_lite.method.losses.ssim" in capsys.readouterr().out
 
 
 def test_d1_cases_agree_with_the_hand_computed_definition():

@@ -163,7 +163,7 @@ def test_every_depth_writer_maps_no_depth_to_its_hole_value(tmp_path):
 # --------------------------------------------------------------------------- a camera checked against its image
 
 def test_a_camera_of_another_image_size_is_refused_wherever_intrinsics_enter(tmp_path, scene):
-    with pytest.raises(ValueError, match=r"K: the principal point \(319\.5, 239\.5\) px lies outside the 32×24"):
+    with pytest.raises(ValueError, match=r"K: the principal point \(319\.5, 239\.5\) px lies outside the 24×32 \(H×W\)"):
         Camera(K_640x480, np.eye(4), W, H)
     assert check_intrinsics(K_640x480, 640, 480).shape == (3, 3)
     with pytest.raises(ValueError, match="fx=5e\\+06 px is implausible"):

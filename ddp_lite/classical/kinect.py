@@ -16,7 +16,7 @@ the side of its IR camera and measures each dot's disparity against a reference 
   is below ``dark_level`` drop out with probability ``dark_dropout``;
 - **range**: no reading nearer than ``depth_range[0]`` or farther than ``depth_range[1]``;
 - **disparity quantisation**: the sensor's disparity ``f_s·b / z`` (``f_s`` the IR camera's focal
-  length, ≈ 580 px at 640×480, in *its* pixels, not the image's) is measured with noise
+  length, ≈ 580 px at 480×640, in *its* pixels, not the image's) is measured with noise
   ``disparity_noise`` px and rounded to 1/``subpixel`` px (1/8 for Kinect v1), so the depth
   steps are ``z² / (subpixel·f_s·b)`` and the depth noise grows as z².
 

@@ -47,7 +47,7 @@ def check_intrinsics(K, width: int, height: int, name: str = "K") -> np.ndarray:
     positive focal lengths and last row [0, 0, 1]; its focal lengths plausible for a ``width ×
     height`` image (``MIN_FOCAL_RATIO``–``MAX_FOCAL_RATIO`` × the larger side: a field of view
     strictly between 0° and 180°); and its principal point inside the image. A K for another image
-    size (a 640×480 camera's (319.5, 239.5) on a 48×32 image) fails the last; ``Camera.resized``
+    size (a 480×640 camera's (319.5, 239.5) on a 32×48 image) fails the last; ``Camera.resized``
     scales K with the image. ``ValueError`` naming ``name`` (the argument or file K came from)."""
     width, height = _check_size(width, "width"), _check_size(height, "height")
     K = _as_matrix(K, (3, 3), name)
@@ -60,14 +60,14 @@ def check_intrinsics(K, width: int, height: int, name: str = "K") -> np.ndarray:
     for axis, focal in (("fx", K[0, 0]), ("fy", K[1, 1])):
         ratio = focal / max(width, height)
         if not MIN_FOCAL_RATIO <= ratio <= MAX_FOCAL_RATIO:
-            raise ValueError(f"{name}: focal length {axis}={focal:.6g} px is implausible for a {width}×{height} "
+            raise ValueError(f"{name}: focal length {axis}={focal:.6g} px is implausible for a {height}×{width} (H×W) "
                              f"image (expected {MIN_FOCAL_RATIO:g}–{MAX_FOCAL_RATIO:g} × the larger side); "
                              f"is it in pixels?")
     cx, cy = float(K[0, 2]), float(K[1, 2])
     if not (-0.5 <= cx <= width - 0.5 and -0.5 <= cy <= height - 0.5):
-        raise ValueError(f"{name}: the principal point ({cx:.6g}, {cy:.6g}) px lies outside the {width}×{height} "
-                         f"(W×H) image it is used with (x in [-0.5, {width - 0.5:g}], y in [-0.5, {height - 0.5:g}]); "
-                         f"intrinsics belong to one image size, and these look like a ~{2 * cx + 1:.0f}×{2 * cy + 1:.0f} "
+        raise ValueError(f"{name}: the principal point ({cx:.6g}, {cy:.6g}) px lies outside the {height}×{width} "
+                         f"(H×W) image it is used with (x in [-0.5, {width - 0.5:g}], y in [-0.5, {height - 0.5:g}]); "
+                         f"intrinsics belong to one image size, and these look like a ~{2 * cy + 1:.0f}×{2 * cx + 1:.0f} "
                          f"image's. Give the K of this image size (Camera.resized scales one)")
     return K
 
@@ -140,7 +140,7 @@ class Camera:
 
     def __repr__(self) -> str:
         c = self.center
-        return (f"Camera({self.width}×{self.height}, f={self.focal:.1f}px, "
+        return (f"Camera({self.height}×{self.width} (H×W), f={self.focal:.1f}px, "
                 f"centre=({c[0]:.3f}, {c[1]:.3f}, {c[2]:.3f}) m)")
 
 

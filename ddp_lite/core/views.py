@@ -50,7 +50,7 @@ class View:
             raise ValueError(f"rgb must be (H, W, 3) = {(H, W, 3)} like depth, got {np.shape(self.rgb)}")
         self.rgb = check_image(self.rgb, "rgb", (H, W))
         if (self.camera.height, self.camera.width) != (H, W):
-            raise ValueError(f"camera is {self.camera.width}×{self.camera.height} but the images are {W}×{H}")
+            raise ValueError(f"camera is {self.camera.height}×{self.camera.width} but the images are {H}×{W} (H×W)")
 
     @property
     def mask(self) -> np.ndarray:

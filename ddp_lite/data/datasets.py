@@ -39,7 +39,7 @@ __all__ = ["read_pfm", "write_pfm", "MiddleburyCalib", "parse_middlebury_calib",
            "read_kitti_disparity", "read_kitti_calib", "load_kitti", "read_mvsnet_cam", "load_tnt",
            "read_depth_image", "load_nyu", "NYU_K"]
 
-# NYU Depth v2 RGB intrinsics at 640×480 (fx_rgb, fy_rgb, cx_rgb, cy_rgb of the toolbox's camera_params.m).
+# NYU Depth v2 RGB intrinsics at 480×640 (H×W) (fx_rgb, fy_rgb, cx_rgb, cy_rgb of the toolbox's camera_params.m).
 NYU_K = np.array([[5.1885790117450188e+02, 0.0, 3.2558244941119034e+02],
                   [0.0, 5.1946961112127485e+02, 2.5373616633400465e+02],
                   [0.0, 0.0, 1.0]])
@@ -182,7 +182,7 @@ def load_nyu(path, index: int = 0, depth_path=None, raw: bool = True, depth_scal
     """NYU Depth v2 → one-view ``Scene``. ``path`` is either the labelled ``.mat`` (frame ``index``;
     ``raw`` picks rawDepths (Kinect holes) over the toolbox's filled depths) or an RGB
     image with ``depth_path`` a depth PNG/NPY in millimetres (× ``depth_scale``). ``K`` defaults to
-    ``NYU_K`` (640×480)."""
+    ``NYU_K`` (480×640)."""
     path = regular_file(path, "path")
     if path.suffix.lower() == ".mat":
         import h5py  # a dependency, imported here because only this branch needs it
@@ -204,6 +204,6 @@ def load_nyu(path, index: int = 0, depth_path=None, raw: bool = True, depth_scal
                     "the depth")
     if K is None:
         if (H, W) != (480, 640):
-            raise ValueError(f"K must be given for a {W}×{H} image (NYU_K is for 640×480)")
+            raise ValueError(f"K must be given for a {H}×{W} (H×W) image (NYU_K is for 480×640)")
         K = NYU_K
     return Scene(name, [View(rgb, depth, Camera(K, np.eye(4), W, H), name)], [], scene_depth_range([depth]))

@@ -162,10 +162,10 @@ def check_same_size(rgb_shape, other_shape, rgb_path, rgb_name: str, other_name:
             orientation = None
         if orientation in (5, 6, 7, 8):
             hint = (f". {rgb_name} carries EXIF orientation {orientation} ({_ORIENTATIONS[orientation]}): a viewer shows "
-                    f"it {H}×{W} (W×H), ddp-lite reads its pixels as stored ({W}×{H}), as it reads depth. Store colour "
+                    f"it {W}×{H} (H×W), ddp-lite reads its pixels as stored ({H}×{W}), as it reads depth. Store colour "
                     f"and depth the same way up (e.g. PIL.ImageOps.exif_transpose on the colour, if the depth was "
                     f"saved upright)")
-    raise ValueError(f"{rgb_name} is {W}×{H} (W×H) but {other_name} is {w}×{h}; they must be the same size, pixel "
+    raise ValueError(f"{rgb_name} is {H}×{W} (H×W) but {other_name} is {h}×{w}; they must be the same size, pixel "
                      f"for pixel{hint}")
 
 
@@ -251,7 +251,7 @@ def read_colmap_depth(path) -> np.ndarray:
         raise parse_error(path, 1, f"a depth map has 1 channel and a positive size, got {width}&{height}&{channels}&")
     body = data[header.end():]
     if len(body) != 4 * count:
-        raise parse_error(path, None, f"holds {len(body)} data bytes, expected {4 * count} for {width}×{height}")
+        raise parse_error(path, None, f"holds {len(body)} data bytes, expected {4 * count} for {height}×{width} (H×W)")
     return np.frombuffer(body, dtype="<f4").reshape(width, height).T.astype(np.float32)
 
 

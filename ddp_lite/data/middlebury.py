@@ -128,7 +128,7 @@ def stereo_scene(name, rgb0, rgb1, depth0, depth1, calib: MiddleburyCalib, size)
     cam0, cam1 = calib.cameras()
     for what, array in (("left image", rgb0), ("right image", rgb1), ("left depth", depth0), ("right depth", depth1)):
         if array.shape[:2] != (calib.height, calib.width):
-            raise ValueError(f"{what} is {array.shape[1]}×{array.shape[0]} but calib says {calib.width}×{calib.height}")
+            raise ValueError(f"{what} is {array.shape[0]}×{array.shape[1]} but calib says {calib.height}×{calib.width} (H×W)")
     # the depth range comes from the full-resolution map, so it does not depend on ``size``
     meta = {"baseline": float(calib.baseline), "doffs": float(calib.doffs), "ndisp": float(calib.ndisp),
             "focal": cam0.focal, **scene_depth_range([depth0])}

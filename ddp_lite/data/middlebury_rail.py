@@ -94,7 +94,7 @@ def _disparity_png(path: Path, shape) -> np.ndarray:
     if raw.ndim != 2 or raw.dtype != np.uint8:
         raise ValueError(f"folder: {path} must be an 8-bit 1-channel disparity PNG, got {raw.dtype} {raw.shape}")
     if raw.shape != shape:
-        raise ValueError(f"folder: {path} is {raw.shape[1]}×{raw.shape[0]} but view1.png is {shape[1]}×{shape[0]} (W×H)")
+        raise ValueError(f"folder: {path} is {raw.shape[0]}×{raw.shape[1]} but view1.png is {shape[0]}×{shape[1]} (H×W)")
     return np.where(raw > 0, raw.astype(np.float64), np.nan)
 
 
@@ -155,7 +155,7 @@ def load_rail_scene(folder, neighbors=(0, 2), size=None, scale: int | None = Non
     def view(k: int, depth: np.ndarray) -> View:
         rgb = rgb1 if k == 1 else read_rgb(folder / f"view{k}.png", "folder")
         if rgb.shape[:2] != (H, W):
-            raise ValueError(f"folder: view{k}.png is {rgb.shape[1]}×{rgb.shape[0]} but view1.png is {W}×{H} (W×H)")
+            raise ValueError(f"folder: view{k}.png is {rgb.shape[0]}×{rgb.shape[1]} but view1.png is {H}×{W} (H×W)")
         return View(rgb, depth, _rail_camera(k, W, H, scale, dmin), f"view{k}")
     depth1 = require_valid_depth(depth_of("disp1.png"), "folder", folder / "disp1.png")
     unknown = np.full((H, W), np.nan, np.float32)

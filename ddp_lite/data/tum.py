@@ -31,7 +31,7 @@ from .textparse import parse_error, parse_floats, quaternion_rotation, text_line
 from ..core.views import Scene, View
 
 
-# The published colour-camera calibrations of the TUM RGB-D benchmark (640×480; "file formats" /
+# The published colour-camera calibrations of the TUM RGB-D benchmark (480×640; "file formats" /
 # "camera calibration" pages): fx, fy, cx, cy and the OpenCV distortion k1, k2, p1, p2, k3.
 # fr3 images were undistorted by the dataset authors; "ros" is the ROS default the depth was registered with.
 TUM_INTRINSICS = {
@@ -157,7 +157,7 @@ def _tum_intrinsics(folder: Path, intrinsics):
             raise ValueError(f"intrinsics must be one of {sorted(TUM_INTRINSICS)} or a 3×3 K, got {intrinsics!r}")
         (fx, fy, cx, cy), dist = TUM_INTRINSICS[intrinsics]
         label = (f"intrinsics ({intrinsics!r}, the TUM camera {folder.name!r} names)" if named
-                 else f"intrinsics ({intrinsics!r}, a 640×480 TUM camera)")
+                 else f"intrinsics ({intrinsics!r}, a 480×640 TUM camera)")
         return np.array([[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]]), np.array(dist), label
     K = np.asarray(intrinsics, dtype=np.float64)
     if K.shape != (3, 3) or not np.all(np.isfinite(K)):

@@ -237,7 +237,7 @@ def save_ply(cloud, path) -> None:
 
 
 def _default_camera(points: np.ndarray) -> Camera:
-    """A 128×96, 60° camera looking along +z at the cloud's centre, just far enough back to see every point."""
+    """A 96×128 (H×W), 60° camera looking along +z at the cloud's centre, just far enough back to see every point."""
     centre = (points.min(0) + points.max(0)) / 2.0
     offset = points - centre  # (N, 3)
     tan_x = 0.95 * np.tan(np.radians(30.0))  # a 5 % margin inside the frame
@@ -255,7 +255,7 @@ def render_point_cloud(cloud, camera=None, ax=None, point_size: int = 1, backgro
     Each point is splatted as a ``point_size`` × ``point_size`` square; where splats overlap the
     nearest point wins. Colours come from the cloud, or from its depth (viridis, near = yellow)
     if it has none: ``depth_range`` (near, far) in metres fixes that colour scale, so that several
-    renders compare (default: the cloud's own 1st-99th percentile). ``camera``: default a 128×96,
+    renders compare (default: the cloud's own 1st-99th percentile). ``camera``: default a 96×128 (H×W),
     60° view along +z (the kit's scenes are seen along +z), centred on the cloud and just far
     enough back to frame all of it. With ``ax``, the image is also drawn there, with a depth colour
     bar when the colours are depths. No OpenGL: works headless.

@@ -198,16 +198,18 @@ def open_answers(nb) -> dict:
 def listed_exercises(nb) -> dict:
     """``{"1": text}`` of the numbered items under a notebook's "## Exercises" heading."""
     listed = next((c.source for c in nb.cells if c.cell_type == "markdown" and "## Exercises" in c.source), "")
-    items = re.findall(r"^(\d+)\. (.+?)(?=^\d+\. |\Z)", listed.split("## Exercises", 1)[-1], flags=re.M | re.S)
+    listed = ANSWER_SPAN.sub("", listed.split("## Exercises", 1)[-1])  # an open exercise's answer stays hidden
+    items = re.findall(r"^(\d+)\. (.+?)(?=^\d+\. |\Z)", listed, flags=re.M | re.S)
     return {number: " ".join(text.split()) for number, text in items}
 
 TABLE_START = "<!-- exercise table: written by ddp_lite.interface.classroom.exercise_table; refresh: python -m ddp_lite.interface.classroom docs/exercises.md -->"
 TABLE_END = "<!-- end of the exercise table -->"
 
 
-def exercise_table(source_dir="notebooks", width: int = 80) -> str:
-    """The Markdown table of every exercise (number, task, how it is graded, points) and a count,
-    read from the source notebooks: the README's table, so that it cannot drift from them."""
+def exercise_table(source_dir="notebooks") -> str:
+    """The Markdown table of every exercise (number, its whole task as the notebook states it, how it is
+    graded, points) and a count, read from the source notebooks: ``docs/exercises.md``'s table, so that
+    it cannot drift from them."""
     rows = ["| exercise | task | graded by | points |", "|---|---|---|---|"]
     checked = open_ = checked_points = open_points = 0
     for path in source_notebooks(source_dir):
@@ -215,17 +217,14 @@ def exercise_table(source_dir="notebooks", width: int = 80) -> str:
         items = listed_exercises(nb)
         cells = {nbgrader_meta(c).get("grade_id"): c for c in nb.cells}
         for number, meta in exercises(nb):
-            task = items.get(number, "")
-            first = task if len(task) <= width else task[:width - 1].rsplit(" ", 1)[0] + " …"
-            if first.count("`") % 2:  # cut inside a code span: close it
-                first = first[:-2] + "` …"
+            task = items.get(number, "").replace("|", "\\|")  # a pipe would end the table's cell
             if meta.get("solution"):
                 graded, open_, open_points = "expected answer, by hand", open_ + 1, open_points + meta["points"]
             else:
                 names = sorted(set(re.findall(r"\b(check_\w+)\(", cells[meta["grade_id"]].source)))
                 graded = ", ".join(f"`{n}`" for n in names) or "its assert"
                 checked, checked_points = checked + 1, checked_points + meta["points"]
-            rows.append(f"| {path.stem[:2]}.{number} | {first.replace('|', '/')} | {graded} | {meta['points']:g} |")
+            rows.append(f"| {path.stem[:2]}.{number} | {task} | {graded} | {meta['points']:g} |")
     rows += ["", f"{checked + open_} exercises: {checked} checked ({checked_points:g} points), {open_} open "
                  f"({open_points:g} points, graded by hand)."]
     return "\n".join(rows)

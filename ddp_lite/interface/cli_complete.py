@@ -1,6 +1,7 @@
 """``ddp-lite complete``: fill the holes of your own RGB-D image, with every check before the fit.
 
-Input: ``--rgb`` any image OpenCV reads, pixels as stored (no EXIF rotation, like the depth);
+Input: ``--rgb`` an 8-bit colour image OpenCV reads (one channel or 16 bits, a depth map's look, is refused:
+"did you swap --rgb and --depth?"), pixels as stored (no EXIF rotation, like the depth);
 ``--depth`` ``.npy``/``.pfm`` (metres, or × ``--depth-scale``) or a 16-bit image (needs ``--depth-scale``,
 metres per stored unit), read by the kit's one depth reader (``fileio.read_depth``: 8-bit pictures
 refused); 0, ≤ 0, inf and NaN are holes (NaN). ``--rgb`` and ``--depth`` must be the same size;
@@ -35,7 +36,7 @@ import numpy as np
 
 from ..core.files import regular_file, write_bytes_atomic
 from ..data.file_writers import depth_png_bytes, npy_bytes, pfm_bytes
-from ..data.fileio import check_plausible_depth, check_same_size, read_depth, read_rgb
+from ..data.fileio import check_plausible_depth, check_same_size, read_depth, read_image_file, read_rgb
 from ..core.outpaths import check_output_file, output_set
 
 
@@ -96,7 +97,12 @@ def _read_depth(path: str, scale: float | None, flag: str = "--depth") -> np.nda
     depth reader (``fileio.read_depth``: 8-bit pictures refused, sentinels reported); a scale that gives an
     implausible depth range is refused (:func:`check_plausible_depth`)."""
     _input_file(path, flag)
-    depth = read_depth(path, scale, flag, scale_name="--depth-scale")
+    try:
+        depth = read_depth(path, scale, flag, scale_name="--depth-scale")
+    except ValueError as error:
+        if flag == "--depth" and _looks_like_colour(path):
+            raise ValueError(f"{error}. {path!r} is a 3-channel 8-bit image, a colour picture: {SWAPPED}") from None
+        raise
     valid = np.isfinite(depth)
     if not valid.any():
         raise ValueError(f"{flag}: {path!r} holds no depth at all (every pixel is 0, negative, NaN or inf"
@@ -116,8 +122,30 @@ def _input_file(path: str, flag: str) -> None:
         raise ValueError(str(error)) from None
 
 
+SWAPPED = "did you swap --rgb and --depth?"
+
+
+def _looks_like_colour(path: str) -> bool:
+    """``path`` is an image file OpenCV reads as 3 or 4 channels of 8 bits: a colour picture."""
+    if os.path.splitext(path)[1].lower() in (".npy", ".pfm", ".bin"):
+        return False
+    try:
+        raw = read_image_file(path, "--depth")
+    except ValueError:
+        return False
+    return raw.dtype == np.uint8 and raw.ndim == 3 and raw.shape[2] in (3, 4)
+
+
 def _read_rgb(path: str) -> np.ndarray:
+    """``--rgb``: an 8-bit colour image; one channel or 16 bits is what a depth map looks like, refused."""
     _input_file(path, "--rgb")
+    raw = read_image_file(path, "--rgb")
+    channels = 1 if raw.ndim == 2 else raw.shape[2]
+    if channels == 1 or raw.dtype != np.uint8:
+        what = ", ".join(w for w, bad in (("one channel", channels == 1), (f"{raw.dtype} values", raw.dtype != np.uint8))
+                         if bad)
+        raise ValueError(f"--rgb: {path!r} has {what} ({raw.shape[0]}×{raw.shape[1]} (H×W)), as a depth map has; "
+                         f"--rgb takes the 8-bit colour photograph (3 channels): {SWAPPED}")
     return read_rgb(path, "--rgb")  # pixels as stored, the same way as the depth: a phone's EXIF rotation is not applied
 
 

@@ -3,8 +3,11 @@
 Each ``check_*`` takes the student's function, runs it on a few seeded cases, compares with a
 reference that does not come from the student's code (scikit-image, SciPy, a hand-computed
 value or the kit's tested implementation) and prints ``PASS`` or ``FAIL: <what is wrong>``.
-It returns True or False. In the notebooks each check sits in a read-only nbgrader test cell as
-``assert check_x(student_function)``: a FAIL prints what is wrong and the assert marks the cell
+It returns True or False. A check also FAILs a function that calls the kit's or a library's
+implementation of that very exercise (each check names those it forbids, in its ``@_own_work(...)``
+line; the rule is :mod:`ddp_lite.interface.own_work`): a one-line answer that calls
+``skimage.metrics.peak_signal_noise_ratio`` is not the student's PSNR. In the notebooks each check
+sits in a read-only nbgrader test cell as ``assert check_x(student_function)``: a FAIL prints what is wrong and the assert marks the cell
 failed, which is what nbgrader and ``ddp-lite grade`` (``ddp_lite.grading``) score.
 
     >>> from ddp_lite.interface.exercises import check_psnr
@@ -14,17 +17,59 @@ failed, which is what nbgrader and ``ddp-lite grade`` (``ddp_lite.grading``) sco
 """
 from __future__ import annotations
 
+import contextlib
+import functools
+import io
+
 import numpy as np
 from skimage.metrics import peak_signal_noise_ratio, structural_similarity
 
 from ..core.camera import Camera, look_at
 from ..evaluation.metrics import d1_error
 from ..method.warp import warp_to_reference
+from .own_work import call_watched
 
 __all__ = ["check_psnr", "check_masked_mse", "check_disparity_transform", "check_hole_rmse", "check_ssim",
            "check_masked_l1", "check_backproject", "check_warp", "check_fscore", "check_nearest_fill",
            "check_d1", "check_depth_from_disparity", "check_resize_calibration", "check_kinect_quantisation",
            "check_paired_change"]
+
+
+class _Watched:
+    """The student's function as a check calls it: each call watched for the forbidden callables, here or,
+    for a function in a grading kernel (``call_watched`` method), there."""
+
+    def __init__(self, fn, forbidden):
+        self.fn, self.forbidden, self.seen = fn, forbidden, set()
+
+    def __call__(self, *args, **kwargs):
+        if hasattr(self.fn, "call_watched"):  # grading_kernel.RemoteFunction: the kernel watches
+            return self.fn.call_watched(args, kwargs, self.forbidden, self.seen)
+        return call_watched(self.fn, args, kwargs, self.forbidden, self.seen)
+
+
+def _own_work(*forbidden):
+    """Decorate a check: it FAILs the student's function if that calls one of ``forbidden`` (dotted names
+    of the kit's and libraries' implementations of the same exercise), whatever the numbers say."""
+    def decorate(check):
+        @functools.wraps(check)
+        def run(student_fn) -> bool:
+            watched = _Watched(student_fn, forbidden)
+            printed = io.StringIO()
+            with contextlib.redirect_stdout(printed):
+                verdict = check(watched)
+            text = printed.getvalue()
+            if not watched.seen:
+                print(text, end="")
+                return verdict
+            label = text.split(":", 1)[0].split(" ", 1)[-1] if text.startswith(("PASS ", "FAIL ")) else check.__name__
+            who = getattr(student_fn, "name", None) or getattr(student_fn, "__name__", "the function")
+            print(f"FAIL {label}: {who} calls {', '.join(sorted(watched.seen))}, an implementation of this very "
+                  f"exercise: write it yourself (NumPy, SciPy's building blocks)")
+            return False
+        run.forbidden = forbidden
+        return run
+    return decorate
 
 
 def _report(name: str, failures: list[str], cases: int, reference: str) -> bool:
@@ -88,6 +133,10 @@ def _close(atol):
     return compare
 
 
+@_own_work("skimage.metrics.peak_signal_noise_ratio",
+           "cv2.PSNR",
+           "cv2.quality.QualityPSNR_compute",
+           "ddp_lite.evaluation.metrics.psnr")
 def check_psnr(student_psnr) -> bool:
     """``student_psnr(a, b)`` for images in [0, 1] vs ``skimage.metrics.peak_signal_noise_ratio``."""
     rng = np.random.default_rng(0)
@@ -99,6 +148,8 @@ def check_psnr(student_psnr) -> bool:
     return _run("psnr", student_psnr, cases, "scikit-image", _close(1e-6))
 
 
+@_own_work("skimage.metrics.mean_squared_error",
+           "ddp_lite.evaluation.metrics.rmse")
 def check_masked_mse(student_mse) -> bool:
     """``student_mse(output, target, mask)`` (H, W, C), (H, W, C), (H, W) bool: mean over masked pixels
     and channels."""
@@ -113,6 +164,7 @@ def check_masked_mse(student_mse) -> bool:
     return _run("masked mse", student_mse, cases, "a per-pixel loop", _close(1e-9))
 
 
+@_own_work("ddp_lite.method.disparity.DisparityTransform.to_disparity")
 def check_disparity_transform(student_to_disparity) -> bool:
     """``student_to_disparity(depth, d_min, d_max, constant)`` → [0, 1], 1 = nearest (paper Sec. 3.2)."""
     cases = []
@@ -124,6 +176,10 @@ def check_disparity_transform(student_to_disparity) -> bool:
     return _run("disparity transform", student_to_disparity, cases, "the paper's formula", _close(1e-9))
 
 
+@_own_work("ddp_lite.evaluation.metrics.hole_rmse",
+           "ddp_lite.evaluation.metrics.rmse",
+           "skimage.metrics.mean_squared_error",
+           "skimage.metrics.normalized_root_mse")
 def check_hole_rmse(student_hole_rmse) -> bool:
     """``student_hole_rmse(pred, gt, input_depth)``: RMSE over pixels that are holes (NaN) in the input."""
     gt = np.array([[1.0, 2.0], [3.0, 4.0]])
@@ -143,6 +199,9 @@ def check_hole_rmse(student_hole_rmse) -> bool:
     return _run("hole rmse", student_hole_rmse, cases, "hand-computed values and a per-pixel loop", _close(1e-9))
 
 
+@_own_work("skimage.metrics.structural_similarity",
+           "cv2.quality.QualitySSIM_compute",
+           "ddp_lite.method.losses.ssim")
 def check_ssim(student_ssim) -> bool:
     """``student_ssim(x, y)`` for grey images in [0, 1] vs scikit-image (Gaussian 11×11, σ = 1.5,
     population covariance, data range 1, mean over the windows that fit inside the image)."""
@@ -161,6 +220,8 @@ def check_ssim(student_ssim) -> bool:
     return _run("ssim", student_ssim, cases, "scikit-image", _close(1e-4))
 
 
+@_own_work("ddp_lite.method.losses.masked_l1",
+           "ddp_lite.evaluation.metrics.mae")
 def check_masked_l1(student_l1) -> bool:
     """``student_l1(x, y, mask)`` (H, W) arrays: mean |x - y| over mask only."""
     rng = np.random.default_rng(3)
@@ -171,6 +232,10 @@ def check_masked_l1(student_l1) -> bool:
     return _run("masked L1", student_l1, cases, "a per-pixel loop", _close(1e-9))
 
 
+@_own_work("ddp_lite.core.camera.backproject",
+           "ddp_lite.core.camera.backproject_pixels",
+           "ddp_lite.core.camera.pixel_rays",
+           "ddp_lite.evaluation.fusion.points_from_depth")
 def check_backproject(student_backproject) -> bool:
     """``student_backproject(depth (H, W), K)`` → camera-frame points (H, W, 3), OpenCV convention:
     u = column, v = row, pixel (0, 0) = centre of the top-left pixel."""
@@ -190,6 +255,8 @@ def check_backproject(student_backproject) -> bool:
     return _run("backproject", student_backproject, cases, "the pinhole model, pixel by pixel", _close(1e-9))
 
 
+@_own_work("ddp_lite.method.warp.warp_to_reference",
+           "ddp_lite.method.warp.Warper.forward")
 def check_warp(student_warp) -> bool:
     """``student_warp(nbr_image, ref_depth, ref_cam, nbr_cam)`` → (H, W, 3) vs the kit's tested warp
     (compared where the kit's warp is valid)."""
@@ -216,6 +283,9 @@ def check_warp(student_warp) -> bool:
     return _report("warp", failures, 2, "the kit's warp_to_reference")
 
 
+@_own_work("scipy.stats.hmean",
+           "statistics.harmonic_mean",
+           "ddp_lite.evaluation.metrics.point_cloud_prf")
 def check_fscore(student_fscore) -> bool:
     """``student_fscore(precision, recall)`` → the harmonic mean (0 when both are 0); works for
     fractions and for percentages alike."""
@@ -224,6 +294,10 @@ def check_fscore(student_fscore) -> bool:
     return _run("f-score", student_fscore, cases, "hand-computed values", _close(1e-9))
 
 
+@_own_work("ddp_lite.classical.depth_fills.fill_nearest",
+           "ddp_lite.classical.depth_fills.nearest_values",
+           "scipy.interpolate.NearestNDInterpolator.__call__",
+           "scipy.interpolate.griddata")
 def check_nearest_fill(student_fill) -> bool:
     """``student_fill(depth_with_nans)`` → every hole takes the depth of a nearest valid pixel
     (Euclidean distance in pixels; any of several equally near ones is accepted); valid pixels kept."""
@@ -257,6 +331,7 @@ def check_nearest_fill(student_fill) -> bool:
     return _report("nearest fill", failures, 2, "a brute-force nearest search")
 
 
+@_own_work("ddp_lite.evaluation.metrics.d1_error")
 def check_d1(student_d1) -> bool:
     """``student_d1(pred_disp, gt_disp)`` → percentage of bad pixels among those with a finite truth;
     bad = error > 3 px **and** error > 5 % of the *true* disparity (KITTI 2015)."""
@@ -286,6 +361,8 @@ def check_d1(student_d1) -> bool:
 MOTORCYCLE_CALIBRATION = (994.978, 0.193001, 31.086)
 
 
+@_own_work("ddp_lite.classical.stereo.disparity_to_depth",
+           "ddp_lite.data.middlebury.MiddleburyCalib.depth")
 def check_depth_from_disparity(student_depth) -> bool:
     """``student_depth(disp, f, baseline, doffs)`` → (H, W) metres: Z = f·B/(d + doffs), NaN where the
     disparity is unknown (inf or NaN, Middlebury's marker) or d + doffs ≤ 0; ``disp`` unchanged."""
@@ -320,12 +397,15 @@ def check_depth_from_disparity(student_depth) -> bool:
     return _report("depth_from_disparity", failures, 2, "hand-computed depths of the motorcycle calibration")
 
 
+@_own_work("ddp_lite.core.camera.Camera.resized",
+           "ddp_lite.data.resample.resize_view",
+           "ddp_lite.data.resample.resize_scene")
 def check_resize_calibration(student_resize) -> bool:
     """``student_resize(K, doffs, sx, sy)`` → (K', doffs') of the image resized by (sx, sy), pixel (0, 0)
     the centre of the top-left pixel. Reference: a point seen at full-size pixel (u, v) is seen at
     ((u + 0.5)·sx − 0.5, (v + 0.5)·sy − 0.5) after the resize; each disparity scales by sx."""
     f, B, doffs = MOTORCYCLE_CALIBRATION
-    K = np.array([[f, 0.0, 369.0], [0.0, f, 247.0], [0.0, 0.0, 1.0]])  # cx, cy: near the centre of 741×500
+    K = np.array([[f, 0.0, 369.0], [0.0, f, 247.0], [0.0, 0.0, 1.0]])  # cx, cy: near the centre of 500×741 (H×W)
     rng = np.random.default_rng(0)
     points = np.stack([rng.uniform(-1, 1, 20), rng.uniform(-1, 1, 20), rng.uniform(2, 5, 20)], axis=1)
     failures = []
@@ -366,6 +446,7 @@ def check_resize_calibration(student_resize) -> bool:
     return _report("resize_calibration", failures, len(cases), "pixel-centre resizing of projected points")
 
 
+@_own_work("ddp_lite.classical.kinect.quantise_depth")
 def check_kinect_quantisation(student_quantise) -> bool:
     """``student_quantise(depth, focal, baseline, subpixel)`` → (H, W) metres as a structured-light
     sensor reads them: disparity f·b/z rounded to 1/subpixel px, back to depth; NaN stays NaN, and so
@@ -398,6 +479,7 @@ def check_kinect_quantisation(student_quantise) -> bool:
     return _report("kinect quantisation", failures, len(cases), "hand-computed readings")
 
 
+@_own_work("ddp_lite.studies.additions.paired_change")
 def check_paired_change(student_paired) -> bool:
     """``student_paired(before, after)`` → (mean of after − before, its standard error (sample standard
     deviation / √n; 0 for one pair), how many pairs got better, i.e. lower) for two equal-length

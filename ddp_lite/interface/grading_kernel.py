@@ -1,6 +1,6 @@
 """Running a submission for grading without trusting it: its code in a kernel, the checks in the grader.
 
-A check cell (``assert check_psnr(psnr_exercise)``) never runs in the student's kernel, where the
+A check cell (``assert check_psnr(psnr)``) never runs in the student's kernel, where the
 submission could have redefined ``check_psnr``, patched the module it comes from, installed an input
 transformer or an exception handler that swallows the failure. :func:`run_graded` executes every
 other cell in a fresh kernel (always the grader's ``python3``, whatever kernelspec the notebook
@@ -109,16 +109,21 @@ def decode(data: bytes):
 
 
 def answer_call(namespace: dict, name: str, folder) -> None:
-    """Kernel side: call ``namespace[name]`` with the arguments (positional, keyword) in
-    ``folder/args.npz``; write its return value and the arguments after the call, or what it raised,
-    to ``folder/answer.npz``."""
+    """Kernel side: call ``namespace[name]`` with the arguments (positional, keyword and, if given, the
+    check's forbidden callables) in ``folder/args.npz``; write its return value and the arguments after
+    the call, or what it raised, and the forbidden callables it called, to ``folder/answer.npz``."""
     folder = Path(folder)
-    args, kwargs = decode((folder / "args.npz").read_bytes())
+    args, kwargs, *forbidden = decode((folder / "args.npz").read_bytes())
+    seen: set = set()
     try:
-        value = namespace[name](*args, **kwargs)
-        data = encode({"value": [value], "args": list(args)})
+        if forbidden:  # the check's forbidden callables: watched for while the function runs (own_work)
+            from .own_work import call_watched
+            value = call_watched(namespace[name], args, kwargs, tuple(forbidden[0]), seen)
+        else:
+            value = namespace[name](*args, **kwargs)
+        data = encode({"value": [value], "args": list(args), "seen": sorted(seen)})
     except BaseException as error:  # the student's error is the answer: the grader reports it
-        data = encode({"error": [type(error).__name__, str(error)]})
+        data = encode({"error": [type(error).__name__, str(error)], "seen": sorted(seen)})
     (folder / "answer.npz").write_bytes(data)
 
 
@@ -130,9 +135,13 @@ class RemoteFunction:
         self.name, self._run, self._folder = name, run, folder
 
     def __call__(self, *args, **kwargs):
+        return self.call_watched(args, kwargs, (), set())
+
+    def call_watched(self, args, kwargs, forbidden, seen: set):
+        """The call, with the forbidden callables (dotted names) it made in the kernel added to ``seen``."""
         args_file, answer_file = self._folder / "args.npz", self._folder / "answer.npz"
         answer_file.unlink(missing_ok=True)
-        args_file.write_bytes(encode([list(args), kwargs]))
+        args_file.write_bytes(encode([list(args), kwargs] + ([list(forbidden)] if forbidden else [])))
         failure = self._run("from ddp_lite.interface.grading_kernel import answer_call as __ddp_answer\n"
                             f"__ddp_answer(globals(), {self.name!r}, {str(self._folder)!r})\ndel __ddp_answer")
         try:
@@ -141,6 +150,7 @@ class RemoteFunction:
             raise StudentError(failure or f"no answer from {self.name} ({type(error).__name__})") from None
         if not isinstance(answer, dict):
             raise StudentError(f"{self.name} gave no readable answer")
+        seen.update(str(name) for name in answer.get("seen", []) if isinstance(name, str))
         if "error" in answer:
             kind, message = answer["error"]
             raise StudentError(f"{kind}: {message}")

@@ -99,7 +99,7 @@ def check_fit_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth, t
     if camera is not None and not isinstance(camera, Camera):
         raise TypeError(f"camera must be a ddp_lite.Camera, got {type(camera).__name__}")
     if camera is not None and (camera.height, camera.width) != (H, W):
-        raise ValueError(f"camera is {camera.width}×{camera.height} but depth is {W}×{H}")
+        raise ValueError(f"camera is {camera.height}×{camera.width} but depth is {H}×{W} (H×W)")
     if spec.needs_neighbors and (camera is None or not neighbors):
         raise ValueError(f"variant {spec.name!r} needs camera and at least one neighbor; use 'rgbd' without them")
     if spec.needs_neighbors:

@@ -266,7 +266,7 @@ def check_memory(config: FitConfig, out_channels: int, height: int, width: int, 
     estimate = estimate_peak_memory_gb(config, out_channels, height, width, n_neighbors)
     if estimate > limit:
         raise ValueError(
-            f"depth: a {width}×{height} fit with this config needs about {estimate:.1f} GB at its peak, more than "
+            f"depth: a {height}×{width} (H×W) fit with this config needs about {estimate:.1f} GB at its peak, more than "
             f"the limit of {limit:.1f} GB ({source}). Downscale the inputs (e.g. cv2.resize, or "
             f"datasets.resize_scene for a Scene), use smaller config.channels, or a GPU; or raise the limit with "
             f"config.max_memory_gb (CLI: --max-memory-gb) if you know it fits.")

@@ -252,7 +252,7 @@ def check_input_size(kind: str, channels, height: int, width: int, name: str = "
     """``ValueError`` naming ``name`` if a ``height × width`` input is smaller than :func:`smallest_input`."""
     smallest = smallest_input(kind, channels)
     if min(height, width) < smallest:
-        raise ValueError(f"{name} is {width}×{height} px, but the {kind} of this config (encoder widths "
+        raise ValueError(f"{name} is {height}×{width} px (H×W), but the {kind} of this config (encoder widths "
                          f"{tuple(channels) if channels else 'the paper’s'}) needs at least {smallest} px on each "
                          f"side (its deepest level must be 2×2 or more); upsample the inputs or use fewer "
                          f"config.channels")

@@ -13,7 +13,7 @@ in it adds the paper's own holes on Plastic. Hole kinds (``SUITE_HOLES``):
   (``middlebury_rail.ground_truth_occlusion``; Motorcycle: where SGBM's left-right check fails).
 
 Each scene is pooled by the integer factor that brings it nearest a size's pixel count (``SUITE_SIZES``:
-``eighth`` ≈ 160×140 of a 2005/2006 scene, to iterate on; ``quarter`` ≈ 320×280, to confirm). The warp
+``eighth`` ≈ 140×160 of a 2005/2006 scene, to iterate on; ``quarter`` ≈ 280×320, to confirm). The warp
 loss's neighbours are view0 and view2 of the rail (the paper's N = 2), or the right view of a 2014 pair.
 """
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Four real Middlebury scenes shipped with the kit, at a quarter of full size (≈ 317×277 px, 2 MB).
+"""Four real Middlebury scenes shipped with the kit, at a quarter of full size (≈ 277×317 px, 2 MB).
 
 ``Plastic``, ``Baby1`` and ``Bowling1`` (2006; the scenes of the paper's Table 6) and ``Art`` (2005): views
 0, 1, 2 and 5 of the seven-view rail, the ground truth ``disp1.png`` / ``disp5.png`` and ``dmin.txt``, in

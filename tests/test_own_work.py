@@ -1,0 +1,142 @@
+"""Every exercise check FAILs an answer that only calls the kit's or a library's implementation of that
+very exercise, and PASSes the notebooks' own solutions (their solution cells, run as a student would)."""
+import re
+import statistics
+from pathlib import Path
+
+import nbformat
+import numpy as np
+import pytest
+import torch
+from skimage.metrics import mean_squared_error, peak_signal_noise_ratio, structural_similarity
+
+import ddp_lite
+from ddp_lite import exercises
+from ddp_lite.classical import baselines, stereo
+from ddp_lite.classical.kinect import quantise_depth
+from ddp_lite.core import camera
+from ddp_lite.core.camera import Camera
+from ddp_lite.evaluation import metrics
+from ddp_lite.interface.classroom import nbgrader_meta
+from ddp_lite.interface.own_work import call_watched
+from ddp_lite.method.disparity import DisparityTransform
+from ddp_lite.method.warp import warp_to_reference
+from ddp_lite.studies.additions import paired_change
+
+NOTEBOOKS = Path(__file__).resolve().parent.parent / "notebooks"
+
+
+def _rays(d, K):
+    v, u = np.mgrid[0:d.shape[0], 0:d.shape[1]]
+    return (camera.pixel_rays(u.ravel(), v.ravel(), K) * d.reshape(-1, 1)).reshape(*d.shape, 3)
+
+
+# check → the one-line answer that hands the exercise to the kit or a library
+ONE_LINERS = {
+    "check_psnr": lambda a, b: peak_signal_noise_ratio(a, b, data_range=1.0),
+    "check_masked_mse": lambda o, t, m: mean_squared_error(o[m], t[m]) if m.any() else 0.0,
+    "check_disparity_transform": lambda d, a, b, c: DisparityTransform(a, b, c).to_disparity(d),
+    "check_hole_rmse": lambda p, g, i: metrics.hole_rmse(p, g, np.isnan(i)),
+    "check_ssim": lambda x, y: structural_similarity(x, y, gaussian_weights=True, sigma=1.5,
+                                                     use_sample_covariance=False, data_range=1.0),
+    "check_masked_l1": lambda x, y, m: metrics.mae(x, y, m),
+    "check_backproject": _rays,
+    "check_warp": lambda *a: warp_to_reference(*a)[0],
+    "check_fscore": lambda p, r: statistics.harmonic_mean([p, r]),
+    "check_nearest_fill": lambda d: baselines.BASELINES["nearest"](d, None),
+    "check_d1": lambda p, g: 100 * metrics.d1_error(p, g)["d1_all"],
+    "check_depth_from_disparity": lambda d, f, b, o: stereo.disparity_to_depth(d, f, b, o).astype(np.float64),
+    "check_resize_calibration": lambda K, o, sx, sy: (Camera(K, np.eye(4), 741, 500).resized(741, 500).K, o * sx),
+    "check_kinect_quantisation": lambda z, f, b, s: quantise_depth(z, f, b, s).astype(np.float64),
+    "check_paired_change": paired_change,
+}
+# the ones that are right answers by the numbers: without the rule their check would PASS them
+RIGHT_BY_THE_NUMBERS = {"check_psnr", "check_masked_mse", "check_disparity_transform", "check_hole_rmse", "check_ssim",
+                        "check_masked_l1", "check_backproject", "check_warp", "check_fscore", "check_nearest_fill",
+                        "check_d1", "check_paired_change"}
+
+
+def test_every_check_has_a_one_liner_and_names_what_it_forbids():
+    assert set(ONE_LINERS) == set(exercises.__all__)
+    for name in exercises.__all__:
+        assert getattr(exercises, name).forbidden, name
+
+
+@pytest.mark.parametrize("name", sorted(ONE_LINERS))
+def test_a_one_liner_that_calls_an_implementation_fails(name, capsys):
+    check = getattr(exercises, name)
+    with np.errstate(all="ignore"):
+        if name in RIGHT_BY_THE_NUMBERS:  # the numbers alone would pass it: only the rule fails it
+            assert check.__wrapped__(ONE_LINERS[name]) is True
+            capsys.readouterr()
+        assert check(ONE_LINERS[name]) is False
+    out = capsys.readouterr().out
+    assert out.startswith("FAIL") and " calls " in out and "write it yourself" in out, out
+
+
+def test_passing_the_library_function_itself_fails(capsys):
+    assert exercises.check_psnr(peak_signal_noise_ratio) is False
+    assert "skimage.metrics.peak_signal_noise_ratio" in capsys.readouterr().out
+
+
+def test_the_kit_function_through_a_partial_or_a_torch_call_fails(capsys):
+    import functools
+    fill = functools.partial(baselines.BASELINES["nearest"], rgb=None)
+    assert exercises.check_nearest_fill(lambda d: fill(d)) is False
+    assert exercises.check_ssim(lambda x, y: float(ddp_lite.ssim(torch.as_tensor(x)[None, None],
+                                                                  torch.as_tensor(y)[None, None]))) is False
+    assert "ddp_lite.method.losses.ssim" in capsys.readouterr().out
+
+
+def test_a_function_that_switches_off_the_watch_is_caught():
+    import sys
+    seen = set()
+    call_watched(lambda: sys.setprofile(None), (), {}, ("ddp_lite.evaluation.metrics.psnr",), seen)
+    assert any("setprofile" in s for s in seen) and sys.getprofile() is None
+
+
+def _solutions_and_checks(path):
+    """The notebook's solution cells' code (in order) and its check cells' code, as the source holds them."""
+    nb = nbformat.read(path, as_version=4)
+    solutions, checks = [], []
+    for cell in nb.cells:
+        meta = nbgrader_meta(cell)
+        if cell.cell_type != "code":
+            continue
+        if meta.get("solution"):
+            solutions.append(cell.source)
+        elif meta.get("grade"):
+            checks.append(cell.source)
+    return solutions, checks
+
+
+NOTEBOOKS_WITH_CHECKS = [p for p in sorted(NOTEBOOKS.glob("[0-9][0-9]_*.ipynb")) if _solutions_and_checks(p)[1]]
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS_WITH_CHECKS, ids=lambda p: p.stem[:2])
+def test_the_notebooks_solutions_pass(path, capsys):
+    solutions, checks = _solutions_and_checks(path)
+    namespace = {"__name__": "__main__", "np": np, "ddp": ddp_lite}
+    for source in solutions:  # defined as a notebook cell defines them
+        exec(compile(source, f"<{path.stem} solution>", "exec"), namespace)
+    for source in checks:
+        assert re.search(r"assert check_\w+\(", source)
+        exec(compile(source, f"<{path.stem} check>", "exec"), namespace)
+        out = capsys.readouterr().out
+        assert out.startswith("PASS"), out
+
+
+def test_in_grading_the_kernel_watches_and_reports_what_it_saw(tmp_path, capsys):
+    """The grader's path without a kernel: RemoteFunction → answer_call in a namespace standing for the kernel."""
+    from ddp_lite.interface.grading_kernel import RemoteFunction
+    kernel = {"np": np, "peak_signal_noise_ratio": peak_signal_noise_ratio}
+    exec("psnr = lambda a, b: peak_signal_noise_ratio(a, b, data_range=1.0)\n"
+         "mine = lambda a, b: 10 * np.log10(1 / np.mean((a - b) ** 2))", kernel)
+
+    def run(code):
+        exec(code, kernel)
+
+    assert exercises.check_psnr(RemoteFunction("psnr", run, tmp_path)) is False
+    out = capsys.readouterr().out
+    assert out.startswith("FAIL psnr: psnr calls skimage.metrics.peak_signal_noise_ratio"), out
+    assert exercises.check_psnr(RemoteFunction("mine", run, tmp_path)) is True
