@@ -47,7 +47,7 @@ _PACKAGES = {  # sub-package → its modules, each one concern (the sub-package'
     "world": ('scenes', 'render', 'textures', 'photo_texture', 'solids', 'terrain', 'organic', 'neighbors'),
     "classical": ('baselines', 'depth_fills', 'guided_fills', 'stereo', 'holes', 'kinect'),
     "method": ('config', 'variants', 'disparity', 'losses', 'paper_method', 'hole_losses', 'hole_terms', 'nets', 'warp', 'loop',
-               'device', 'fit', 'fit_inputs', 'combine', 'ensemble', 'side_by_side', 'blend', 'visibility', 'warp_confidence', 'warp_cost', 'equation', 'coarse_to_fine', 'dip',
+               'device', 'fit', 'fit_inputs', 'combine', 'ensemble', 'side_by_side', 'blend', 'visibility', 'warp_confidence', 'warp_cost', 'equation', 'coarse_to_fine', 'full_resolution', 'dip',
                'profiles', 'recipes', 'cache', 'cache_entry'),
     "data": ('datasets', 'fileio', 'file_writers', 'formats', 'colmap', 'tum', 'middlebury', 'middlebury_rail', 'samples',
              'textparse', 'resample'),
@@ -55,7 +55,7 @@ _PACKAGES = {  # sub-package → its modules, each one concern (the sub-package'
     "studies": ('real_cases', 'real_suite', 'table6', 'additions', 'mvs_kinect_experiments'),
     "sequences": ('sequence', 'sequence_cost', 'sequence_files', 'sequence_jobs', 'runner', 'working_size'),
     "interface": ('cli', 'cli_classroom', 'cli_complete', 'cli_demo', 'cli_sequence', 'classroom', 'grading', 'grades',
-                  'grading_kernel',
+                  'grading_kernel', 'own_work',
                   'exercises'),
 }
 _PACKAGE_OF = {module: package for package, modules in _PACKAGES.items() for module in modules}

@@ -6,7 +6,7 @@ import pytest
 
 from fill_references import numpy_joint_bilateral
 from ddp_lite.classical.depth_fills import fill_ebi, fill_fbf, fill_linear, fill_nearest
-from ddp_lite.classical.guided_fills import _masked_guided_filter, fill_fast_global_smoother, joint_bilateral_fill
+from ddp_lite.classical.guided_fills import masked_guided_filter, fill_fast_global_smoother, joint_bilateral_fill
 from ddp_lite.studies.real_cases import make_real_case
 
 
@@ -43,7 +43,7 @@ def test_our_guided_filter_with_all_weights_one_is_opencvs(photo):
     known = np.isfinite(truth)
     target = fill_nearest(np.where(known, truth, np.nan)).astype(np.float64)
     for radius, eps in ((2, 1e-4), (4, 1e-3)):
-        ours, _ = _masked_guided_filter(rgb.astype(np.float64), target, np.ones_like(target), radius, eps)
+        ours, _ = masked_guided_filter(rgb.astype(np.float64), target, np.ones_like(target), radius, eps)
         library = cv2.ximgproc.guidedFilter((rgb * 255).astype(np.float32), target.astype(np.float32), radius,
                                             eps * 255 ** 2)
         assert np.max(np.abs(ours - library)) < 0.05  # measured 0.013 px at eps 1e-4 (float32 in OpenCV)
@@ -55,7 +55,7 @@ def test_opencvs_guided_filter_normalised_by_the_mask_is_not_the_masked_fit(phot
     disparity, truth, rgb, scored = photo
     valid = np.isfinite(disparity)
     guide = (rgb * 255).astype(np.float32)
-    ours, reach = _masked_guided_filter(rgb.astype(np.float64), np.where(valid, disparity, 0.0),
+    ours, reach = masked_guided_filter(rgb.astype(np.float64), np.where(valid, disparity, 0.0),
                                         valid.astype(np.float64), 2, 1e-4)
     num = cv2.ximgproc.guidedFilter(guide, np.where(valid, disparity, 0.0).astype(np.float32), 2, 1e-4 * 255 ** 2)
     den = cv2.ximgproc.guidedFilter(guide, valid.astype(np.float32), 2, 1e-4 * 255 ** 2)

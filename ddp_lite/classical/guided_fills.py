@@ -113,7 +113,7 @@ def _box_mean(x: np.ndarray, radius: int) -> np.ndarray:
     return ndimage.uniform_filter(x, size=size, mode="reflect")
 
 
-def _masked_guided_filter(guide: np.ndarray, target: np.ndarray, weight: np.ndarray, radius: int,
+def masked_guided_filter(guide: np.ndarray, target: np.ndarray, weight: np.ndarray, radius: int,
                           eps: float) -> tuple[np.ndarray, np.ndarray]:
     """One guided filter (He et al. 2010, colour guide) fitted to the pixels where ``weight`` > 0.
 
@@ -168,7 +168,7 @@ def fill_guided_filter(depth, rgb=None, radius: int = 2, eps: float = 1e-4) -> n
     if not holes.any():
         return depth.astype(np.float32)
     r = int(radius)
-    q, reach = _masked_guided_filter(image, np.where(valid, depth, 0.0), valid.astype(np.float64), r, float(eps))
+    q, reach = masked_guided_filter(image, np.where(valid, depth, 0.0), valid.astype(np.float64), r, float(eps))
     seen = 4 * r + 1  # the windows covering a pixel together span this square around it
     lo = ndimage.minimum_filter(np.where(valid, depth, np.inf), seen, mode="nearest")
     hi = ndimage.maximum_filter(np.where(valid, depth, -np.inf), seen, mode="nearest")
@@ -185,11 +185,11 @@ def fill_guided_filter(depth, rgb=None, radius: int = 2, eps: float = 1e-4) -> n
     return out.astype(np.float32)
 
 
-def _bilateral_grid(image: np.ndarray, sigma_xy: float, sigma_luma: float, sigma_chroma: float):
+def bilateral_grid(image: np.ndarray, sigma_xy: float, sigma_luma: float, sigma_chroma: float):
     """Barron & Poole's simplified bilateral grid of ``image`` (H, W, 3) in [0, 1]: every pixel falls on
     the vertex at its rounded (x/σ_xy, y/σ_xy, Y/σ_l, U/σ_c, V/σ_c) (YUV on a 0–255 scale). Returns the
     splat matrix S (vertices × pixels, one 1 per column) and the blur B = Σ over the five axes of the
-    ±1-vertex neighbours (a [1 2 1] blur without its centre, which ``_bistochastic`` adds back)."""
+    ±1-vertex neighbours (a [1 2 1] blur without its centre, which ``bistochastic`` adds back)."""
     H, W = image.shape[:2]
     yuv = cv2.cvtColor(image.astype(np.float32), cv2.COLOR_RGB2YUV).reshape(-1, 3) * 255.0  # (N, 3)
     yy, xx = np.mgrid[0:H, 0:W]
@@ -216,7 +216,7 @@ def _bilateral_grid(image: np.ndarray, sigma_xy: float, sigma_luma: float, sigma
     return S, blur
 
 
-def _bistochastic(S, blur, iterations: int = 20):
+def bistochastic(S, blur, iterations: int = 20):
     """Diagonals (m, n) with diag(n)·B̄·diag(n) having row sums m = S·1, B̄ = B + 10·I (Barron & Poole)."""
     m = np.asarray(S.sum(axis=1)).ravel()
     n = np.ones_like(m)
@@ -245,8 +245,8 @@ def fill_bilateral_solver(depth, rgb=None, lam: float = 4.0, sigma_xy: float = 8
             raise ValueError(f"{name} must be a positive number, got {value!r}")
     if valid.all():
         return depth.astype(np.float32)
-    S, blur = _bilateral_grid(np.clip(image, 0.0, 1.0), sigma_xy, sigma_luma, sigma_chroma)
-    _, n = _bistochastic(S, blur)
+    S, blur = bilateral_grid(np.clip(image, 0.0, 1.0), sigma_xy, sigma_luma, sigma_chroma)
+    _, n = bistochastic(S, blur)
     m = np.asarray(S.sum(axis=1)).ravel()
     c = valid.ravel().astype(np.float64)
     t = np.where(valid, depth, 0.0).ravel()

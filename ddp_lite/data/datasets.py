@@ -29,7 +29,8 @@ from ..core.checks import check_bool, report_skipped
 from .file_writers import depth_png_bytes, npy_bytes, pfm_bytes, write_pfm
 from .fileio import (check_same_size, existing_path, read_depth, read_depth_image, read_image_file, read_pfm, read_rgb,
                      read_text_file)
-from .middlebury import (MiddleburyCalib, require_valid_depth, stereo_scene, load_middlebury, load_middlebury2006,
+from .middlebury_rail import load_middlebury2006
+from .middlebury import (MiddleburyCalib, require_valid_depth, stereo_scene, load_middlebury,
                          make_middlebury_fixture, parse_middlebury_calib, read_middlebury_calib)
 from .resample import check_optional_size, scene_depth_range, resize_view, resize_scene
 from ..core.views import Scene, View

@@ -4,7 +4,7 @@
   (px), ``baseline`` (mm), ``width``, ``height``, ``ndisp``; depth Z = f·B / (d + doffs).
   Disparities are PFM (``disp0.pfm``), ``inf`` = unknown → NaN.
 * **2005/2006**: read by ``middlebury_rail`` (seven views on a rail, any of the dataset's sizes);
-  ``load_middlebury2006`` gives its stereo pair alone.
+  its ``load_middlebury2006`` gives the stereo pair alone.
 
 A stereo scene has the left view at the world origin, the rectified right view in ``right``,
 ``meta`` baseline (m), doffs/ndisp/focal (px), d_min/d_max (m). ``MiddleburyCalib`` and
@@ -185,15 +185,6 @@ def load_motorcycle(size=None) -> Scene:
     depth0 = calib.depth(np.where(np.isfinite(disparity), disparity, np.inf))
     rgb0, rgb1 = (np.asarray(image, np.float32) / 255.0 for image in (left, right))
     return stereo_scene("motorcycle", rgb0, rgb1, depth0, np.full_like(depth0, np.nan), calib, size)
-
-
-def load_middlebury2006(folder, size=None, name: str | None = None) -> Scene:
-    """A Middlebury 2005/2006 scene folder (view1.png, view5.png, disp1.png, dmin.txt; disp5.png optional), at
-    any of the dataset's sizes → one-view stereo ``Scene`` (view1 and view5): ``middlebury_rail.load_rail_scene``
-    with no rail neighbours, which gives the calibration (f = 3740 px / size, baseline 160 mm, ``doffs``)."""
-    from .middlebury_rail import load_rail_scene  # it builds on this module's readers
-
-    return load_rail_scene(folder, neighbors=(), size=size, name=name)
 
 
 def make_middlebury_fixture(folder, size=(48, 64), seed: int = 0, scene: str = "desk",

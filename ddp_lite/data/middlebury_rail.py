@@ -41,7 +41,7 @@ from .middlebury import load_middlebury, require_valid_depth
 from .resample import check_optional_size, resize_scene, scene_depth_range
 
 __all__ = ["FULL_FOCAL", "PAIR_BASELINE", "RAIL_STEP", "RAIL_VIEWS", "load_rail_scene", "load_middlebury_scene",
-           "ground_truth_occlusion", "size_scale", "scene_disparity", "is_rail_folder", "is_2014_folder"]
+           "ground_truth_occlusion", "size_scale", "load_middlebury2006", "scene_disparity", "is_rail_folder", "is_2014_folder"]
 
 FULL_FOCAL = 3740.0  # px, at full size
 PAIR_BASELINE = 0.160  # m, view1 to view5
@@ -177,6 +177,13 @@ def load_middlebury_scene(folder, neighbors=(0, 2), size=None, name: str | None 
         return load_middlebury(folder, size, name)
     raise ValueError(f"folder: {folder} is not a Middlebury scene with ground truth: expected view1.png, "
                      f"disp1.png and dmin.txt (2005/2006) or im0.png, calib.txt and disp0GT.pfm (2014)")
+
+
+def load_middlebury2006(folder, size=None, name: str | None = None) -> Scene:
+    """A Middlebury 2005/2006 scene folder (view1.png, view5.png, disp1.png, dmin.txt; disp5.png optional), at
+    any of the dataset's sizes → one-view stereo ``Scene`` (view1 and view5): ``load_rail_scene`` with no
+    rail neighbours, which gives the calibration (f = 3740 px / size, baseline 160 mm, ``doffs``)."""
+    return load_rail_scene(folder, neighbors=(), size=size, name=name)
 
 
 def scene_disparity(scene: Scene, depth) -> np.ndarray:

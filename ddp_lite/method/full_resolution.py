@@ -64,9 +64,9 @@ def _fgs(guide: np.ndarray, values: np.ndarray, confidence: np.ndarray, lam: flo
 
 def _guided(image: np.ndarray, values: np.ndarray, confidence: np.ndarray, radius: int, eps: float):
     """Confidence-weighted guided filter: per window, the affine colour model fitted to c-weighted
-    targets (``guided_fills._masked_guided_filter``), averaged over the windows covering a pixel."""
-    from ..classical.guided_fills import _masked_guided_filter
-    q, _ = _masked_guided_filter(image, values, confidence, int(radius), float(eps))
+    targets (``guided_fills.masked_guided_filter``), averaged over the windows covering a pixel."""
+    from ..classical.guided_fills import masked_guided_filter
+    q, _ = masked_guided_filter(image, values, confidence, int(radius), float(eps))
     return q
 
 
@@ -78,9 +78,9 @@ def _bilateral_solver(image: np.ndarray, values: np.ndarray, confidence: np.ndar
     from scipy import sparse
     from scipy.sparse.linalg import cg
 
-    from ..classical.guided_fills import _bilateral_grid, _bistochastic
-    S, blur = _bilateral_grid(np.clip(image, 0.0, 1.0), sigma_xy, sigma_luma, sigma_chroma)
-    _, n = _bistochastic(S, blur)
+    from ..classical.guided_fills import bilateral_grid, bistochastic
+    S, blur = bilateral_grid(np.clip(image, 0.0, 1.0), sigma_xy, sigma_luma, sigma_chroma)
+    _, n = bistochastic(S, blur)
     c, t = confidence.ravel(), values.ravel()
     Dn = sparse.diags(n)
     affinity = Dn @ blur @ Dn
