@@ -417,6 +417,8 @@ def main() -> None:
     parser.add_argument("--data", metavar="DIR", help="with --suite middlebury: the folder of Middlebury scenes")
     parser.add_argument("--real-size", choices=("eighth", "quarter"), default="eighth",
                         help="with --suite middlebury: ≈ 160×140 to iterate on, ≈ 320×280 to confirm")
+    parser.add_argument("--refill", action="store_true",
+                        help="with --suite middlebury: compute every fill's rows again (after a fill changed)")
     parser.add_argument("--middlebury", nargs="+", default=[], metavar="FOLDER",
                         help="other Middlebury 2014 pairs (im0/im1.png, disp0.pfm, calib.txt): their five real hole "
                              "kinds join the suite")
@@ -442,7 +444,10 @@ def main() -> None:
             torch_threads = max(2, args.threads)  # the recipes of a case fit side by side, one thread each
             profile_from_args(argparse.Namespace(threads=torch_threads, profile=args.profile, size=None))
             recipes = [r for r in args.recipes if r != "default"] or ["kit", "paper", "photo"]
-            bench_real.run(args.data, args.real_size, recipes, args.variants, args.seeds, out, args.profile)
+            if args.refill:
+                bench_real.refill(args.data, args.real_size, out)
+            else:
+                bench_real.run(args.data, args.real_size, recipes, args.variants, args.seeds, out, args.profile)
         bench_real.report(out)
         return
     if args.report:

@@ -32,7 +32,7 @@ from ddp_lite.studies.real_cases import _fit_reusing, _plain_fits
 from ddp_lite.studies.real_suite import SUITE_HOLES, make_suite_case, suite_case_names
 
 RESULTS = Path(__file__).resolve().parent / "results"
-SECONDS_PER_FIT = {"eighth": 45.0, "quarter": 240.0}  # one class fit on one core (AVX-512 Xeon, measured)
+SECONDS_PER_FIT = {"eighth": 45.0, "quarter": 240.0}  # one class fit on one core, nothing else running (Xeon, AMX; eighth measured, quarter estimated)
 _TABLE6_FALLBACK = ("linear", "cubic", "telea", "guided-filter")
 
 
@@ -54,7 +54,7 @@ def run(data, size: str, recipes, variants, seeds, out: Path, profile: str = "cl
     fits_left = sum(1 for n in names for v in variants for s in seeds
                     if any((n, f"DDP {r}", v, s) not in done for r in recipes))
     plain = len([r for r in recipes if r != "photo"])
-    expected = fits_left * plain * SECONDS_PER_FIT[size] / min(2, plain)
+    expected = fits_left * plain * SECONDS_PER_FIT[size] / max(1, min(2, plain))
     print(f"{len(names)} cases, {fits_left} case-variant-seed runs of {plain} fits left: expect about "
           f"{expected / 60:.0f} min on 2 cores (class, {size}); rows to {out}", flush=True)
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -92,6 +92,16 @@ def run(data, size: str, recipes, variants, seeds, out: Path, profile: str = "cl
                     print(f"{name:<24} {variant:<10} seed {seed}: {time.perf_counter() - began:.0f} s "
                           f"({(time.perf_counter() - start) / 60:.1f} min in all)", flush=True)
     print(f"done in {(time.perf_counter() - start) / 60:.1f} min", flush=True)
+
+
+def refill(data, size: str, out: Path) -> None:
+    """Every fill's rows of ``out`` computed again with today's fills (the DDP rows kept): after a fill changed."""
+    rows, _ = _done(out)
+    kept = [r for r in rows if r["variant"] is not None]
+    temporary = out.with_suffix(".tmp")
+    temporary.write_text("".join(json.dumps(r) + "\n" for r in kept))
+    temporary.replace(out)
+    run(data, size, [], [], [], out)
 
 
 def ratios(rows: list[dict]) -> dict:
