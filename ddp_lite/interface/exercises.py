@@ -19,7 +19,7 @@ from skimage.metrics import peak_signal_noise_ratio, structural_similarity
 
 from ..core.camera import Camera, look_at
 from ..evaluation.metrics import d1_error
-from ..method.warp import warp_to_reference
+from ..method.paper.warp import warp_to_reference
 
 __all__ = ["check_psnr", "check_masked_mse", "check_disparity_transform", "check_hole_rmse", "check_ssim",
            "check_masked_l1", "check_backproject", "check_warp", "check_fscore", "check_nearest_fill",

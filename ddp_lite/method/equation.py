@@ -1,13 +1,13 @@
 """The objective a fit's config optimises, written out as one equation for a notebook.
 
-The paper's terms (Eq. 2-5, :mod:`ddp_lite.method.paper_method`) come with the weights the
-variant gives them; the kit's additions (:mod:`ddp_lite.method.hole_terms`, the net inputs of
-:mod:`ddp_lite.method.nets`) are set apart under a brace marked "not in the paper", so a student
+The paper's terms (Eq. 2-5, :mod:`ddp_lite.method.paper.total_loss`) come with the weights the
+variant gives them; the kit's additions (:mod:`ddp_lite.method.kit.hole_terms`, the net inputs of
+:mod:`ddp_lite.method.paper.nets`) are set apart under a brace marked "not in the paper", so a student
 sees at a glance what the recipe in force adds. Reads only the config's fields.
 """
 from __future__ import annotations
 
-from .variants import get_variant
+from .paper.variants import get_variant
 
 __all__ = ["loss_equation"]
 
