@@ -64,9 +64,9 @@ class NetworkConfig(_Section):
     pad: str = "reflect"  # UNet conv padding: "reflect" (DIP) or "zeros"
     noise_channels: int = 16  # channels of the fixed network input
     net_input: str = "noise"  # "noise" (the paper) or "meshgrid" (x, y in the first two channels; nets.make_input)
-    image_input: float = 0.0  # > 0: the colour image × this joins the net input (variants with colour; nets.image_channels)
+    image_input: float = 0.0  # > 0: the colour image × this joins the net input (variants with colour; kit.net_inputs.image_channels)
     image_blur: float = 1.0  # σ in px of the Gaussian blur on that image (0: none)
-    fill_input: float = 0.0  # > 0: a classical fill of the input disparity × this joins the net input (nets.fill_channel)
+    fill_input: float = 0.0  # > 0: a classical fill of the input disparity × this joins the net input (kit.net_inputs.fill_channel)
 
 
 @dataclass(frozen=True)
@@ -95,12 +95,12 @@ class LossConfig(_Section):
     warp_occlusion: bool = False  # L_warp skips pixels a nearer point hides from the neighbour (warp.Warper; not in the paper)
     warp_confidence: bool = False  # L_warp only where the images single out one depth (method.warp_confidence; not in the paper)
     warp_reach: float | None = None  # L_warp only on the unfitted pixels (holes, held-out) and within this many px of
-    # them, off the valid input L_disp pins (paper_method.warp_region; None: every pixel, the paper)
+    # them, off the valid input L_disp pins (kit.warp_terms.warp_region; None: every pixel, the paper)
     warp_cost: str = "intensity"  # what L_warp compares: "intensity" (L1 + SSIM on colour, the paper), "census" (a
     # soft census, no L1/SSIM), "gradient" (L1 on the images' differences + SSIM) or "census+intensity" (half each,
-    # the census at L1 + SSIM's size) (method.warp_cost; not in the paper)
+    # the census at L1 + SSIM's size) (method.kit.warp_cost; not in the paper)
     warp_texture: bool = False  # L_warp weighted per pixel by the reference's change along the epipolar line
-    # (method.warp_cost.texture_weights: flat colour little; not in the paper)
+    # (method.kit.warp_cost.texture_weights: flat colour little; not in the paper)
     disparity_margin: float = 1.25  # transform=None: d_min / margin … d_max × margin around the valid depth
 
 

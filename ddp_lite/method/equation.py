@@ -33,10 +33,10 @@ def loss_equation(config, variant: str) -> str:
         paper.append(_weight(w_rgb) + "L^{\\mathrm{RGB}}")
     if w_warp > 0:
         warp = "L^{\\mathrm{warp}}"
-        cost = getattr(config, "warp_cost", "intensity")  # method.warp_cost; "intensity" is the paper's
+        cost = getattr(config, "warp_cost", "intensity")  # method.kit.warp_cost; "intensity" is the paper's
         where = [name for name, on in (("visible", getattr(config, "warp_occlusion", False)),  # method.visibility
                                        ("confident", getattr(config, "warp_confidence", False)),  # method.warp_confidence
-                                       ("holes", getattr(config, "warp_reach", None) is not None),  # paper_method.warp_region
+                                       ("holes", getattr(config, "warp_reach", None) is not None),  # kit.warp_terms.warp_region
                                        (cost, cost != "intensity"),
                                        ("textured", getattr(config, "warp_texture", False)))
                  if on]

@@ -191,7 +191,7 @@ _INIT_LOCK = threading.Lock()
 def build(config: FitConfig, out_channels: int, height: int, width: int, device, init_state=None, noise=None,
           image=None):
     """The net and its fixed input (1, C, H, W): ``noise`` (made from the config when None), followed
-    by ``image`` (1, 3, H, W) when given (``nets.image_channels``)."""
+    by ``image`` (1, 3, H, W) when given (``kit.net_inputs.image_channels``)."""
     in_channels = config.noise_channels + (0 if image is None else image.shape[1])
     with _INIT_LOCK, torch.random.fork_rng(devices=[]):  # deterministic init without touching the caller's RNG
         torch.manual_seed(config.seed)
