@@ -30,7 +30,7 @@ import torch  # noqa: E402
 from ddp_lite import FitConfig, complete_depth  # noqa: E402
 from ddp_lite.evaluation.experiments import make_case  # noqa: E402
 from ddp_lite.method.loop import PlateauStopper  # noqa: E402
-from ddp_lite.method.variants import VARIANTS, get_variant  # noqa: E402
+from ddp_lite.method.paper.variants import VARIANTS, get_variant  # noqa: E402
 from _common import add_profile_args, profile_from_args  # noqa: E402
 
 SCENES = ("house", "desk", "room", "street")

@@ -41,7 +41,7 @@ CASES = (((48, 64), (16, 32, 64, 128), 10), ((48, 64), (32, 64, 128, 256, 512), 
 
 def stepper(size, channels, K: int, mode: str):
     """A function running n Adam iterations of K members; returns seconds per iteration."""
-    from ddp_lite.method.nets import UNet
+    from ddp_lite.method.paper.nets import UNet
     nets = []
     for k in range(K):
         torch.manual_seed(k)

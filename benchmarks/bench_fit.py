@@ -25,7 +25,7 @@ import time
 import numpy as np
 import torch
 
-from ddp_lite.method.variants import VARIANTS
+from ddp_lite.method.paper.variants import VARIANTS
 from isa import cpu_flags  # benchmarks/ is on the path: the scripts run from there
 
 
@@ -116,7 +116,7 @@ def case(height: int, width: int, seed: int = 0):
 def run_one(variant: str, height: int, width: int, channels, iterations: int, overrides=None) -> dict:
     from torch.utils.flop_counter import FlopCounterMode
     from ddp_lite import FitConfig, complete_depth
-    from ddp_lite.method.variants import get_variant
+    from ddp_lite.method.paper.variants import get_variant
     rgb, depth, ref, nbrs = case(height, width)
     kwargs = dict(camera=ref, neighbors=nbrs) if get_variant(variant).needs_neighbors else {}
     config = FitConfig(channels=tuple(channels), lr=1e-2, progress=False, eval_every=10 ** 9, **(overrides or {}))

@@ -31,7 +31,7 @@ from bench_fit import case, cpu_summary  # noqa: E402
 OPTIONS = {"float32": {}, "bf16": dict(bf16=True), "channels_last": dict(channels_last=True),
            "pad zeros": dict(pad="zeros"), "bf16+zeros": dict(bf16=True, pad="zeros"),
            "bf16+channels_last": dict(bf16=True, channels_last=True),
-           "warp occlusion": dict(warp_occlusion=True)}  # the warp term's occlusion test (method.visibility)
+           "warp occlusion": dict(warp_occlusion=True)}  # the warp term's occlusion test (method.kit.visibility)
 SIZES = {"96x128": ((96, 128), (32, 64, 128, 256, 512), 8), "48x64": ((48, 64), (16, 32, 64, 128), 30)}
 
 

@@ -50,7 +50,7 @@ from ddp_lite.evaluation.experiments import Case, make_case, sgm_depth_at_scale 
 from ddp_lite.classical.holes import random_holes  # noqa: E402
 from ddp_lite.data.middlebury import load_middlebury, make_middlebury_fixture  # noqa: E402
 from ddp_lite.studies.real_cases import REAL_HOLES, factor_for_profile, make_real_case  # noqa: E402
-from ddp_lite.method.recipes import RECIPES as KIT_RECIPES  # noqa: E402
+from ddp_lite.method.kit.recipes import RECIPES as KIT_RECIPES  # noqa: E402
 from ddp_lite.data.resample import resize_scene  # noqa: E402
 from ddp_lite.world.scenes import SCENES  # noqa: E402
 from _common import add_profile_args, profile_from_args  # noqa: E402

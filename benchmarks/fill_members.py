@@ -24,7 +24,7 @@ import numpy as np
 import bench_quality as bq
 from ddp_lite.core.files import atomic_path
 from ddp_lite.classical.baselines import BASELINES
-from ddp_lite.method.blend import FILL_MEMBERS
+from ddp_lite.method.kit.blend import FILL_MEMBERS
 from _common import add_profile_args, profile_from_args
 
 MEMBERS = {

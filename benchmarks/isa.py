@@ -9,7 +9,7 @@ and starts the script again.
     ONEDNN_MAX_CPU_ISA=AVX2        oneDNN's convolutions (its verbose line names the kernel: jit:avx2)
     MKL_ENABLE_INSTRUCTIONS=AVX2   MKL's matrix multiply, which gives the FLOP bound
 
-``ddp_lite.method.device`` sees the cap and runs the net in float32, as a laptop without
+``ddp_lite.method.runtime.device`` sees the cap and runs the net in float32, as a laptop without
 AVX-512 BF16 would. :func:`isa_summary` says what took effect, to print beside every figure.
 
     python benchmarks/bench_fit.py --isa avx2
@@ -81,7 +81,7 @@ def onednn_kernel() -> str:
 def isa_summary() -> str:
     """One line: the CPU, its vector flags, and the kernels torch and oneDNN actually run."""
     import torch
-    from ddp_lite.method.device import use_bf16
+    from ddp_lite.method.runtime.device import use_bf16
     model, flags = cpu_flags()
     marks = " ".join(f"{flag}{'+' if flag in flags else '-'}" for flag in CPU_FLAGS)
     capped = {key: os.environ[key] for key in ISA_ENV["avx2"] if key in os.environ}

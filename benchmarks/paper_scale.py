@@ -34,7 +34,7 @@ import ddp_lite as ddp  # noqa: E402
 from ddp_lite import baselines  # noqa: E402
 from ddp_lite.studies.real_cases import REAL_HOLES, factor_for_profile  # noqa: E402
 from ddp_lite.studies.table6 import TABLE6_SCENES, table6_case  # noqa: E402
-from ddp_lite.method.device import resolve_device  # noqa: E402
+from ddp_lite.method.runtime.device import resolve_device  # noqa: E402
 from _common import add_profile_args, profile_from_args  # noqa: E402
 from bench_quality import build_case, region_errors, report, rmse_px  # noqa: E402
 

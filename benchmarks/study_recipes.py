@@ -1,6 +1,6 @@
 """The quality study's recipes besides the kit's own (``bench_quality.py --recipes NAME``): name → ``FitConfig``
 overrides on top of a profile's ``kit`` config, each with the one line of why it was tried. What each one
-measured: docs/benchmark_history.md and docs/quality_study.md; the kit's recipes: ``ddp_lite.method.recipes``.
+measured: docs/benchmark_history.md and docs/quality_study.md; the kit's recipes: ``ddp_lite.method.kit.recipes``.
 """
 from __future__ import annotations
 
@@ -113,7 +113,7 @@ STUDY = {
     "step3": dict(step_reach=3.0),  # real data: the hole terms off within 3 px of a depth step of the input,
     "step6": dict(step_reach=6.0),  # ... within 6 px (occlusion bands are 2-10 px wide at 125×185)
     "blend-ring": dict(blend_paper=True, blend_weight=None),  # the photo recipe's blend, its weight from a held-out ring
-    "occl": dict(warp_occlusion=True),  # the warp term skips the pixels the neighbour cannot see (method.visibility)
+    "occl": dict(warp_occlusion=True),  # the warp term skips the pixels the neighbour cannot see (method.kit.visibility)
     "fill-chosen": dict(blend_fill=None),  # the fill's share (0-0.5) chosen on held-out blobs of the valid depth
 }
 # every recipe above ran before `class` mixed a share of the colorization fill into its result
@@ -127,7 +127,7 @@ STUDY.update({
     "g96": dict(gammas=(0.96, 0.02)),  # ... rgbd at rgbd+warp's γ (run with rgbd: the warp share is dropped)
     "warp-holes3": dict(warp_reach=3.0),  # the warp term only in the holes and 3 px around them, not on the valid input
     "warp-holes3-conf": dict(warp_reach=3.0, warp_confidence=True),  # ... and there only where the images single out one depth
-    # other photometric costs for the warp term, and a per-pixel weight on it (method.warp_cost) ...
+    # other photometric costs for the warp term, and a per-pixel weight on it (method.kit.warp_cost) ...
     "warp-census": dict(warp_cost="census"),  # ... a soft census of 7×7 patches in place of L1 + SSIM on intensities,
     "warp-gradient": dict(warp_cost="gradient"),  # ... L1 on the images' differences beside SSIM,
     "warp-texture": dict(warp_texture=True),  # ... the paper's cost, each pixel weighted by the image's change along its epipolar line

@@ -5,7 +5,7 @@
 
 As ``study_warp_residual.py`` does for the paper's cost: for each real case (the right view as the
 neighbour), a plane sweep over the fit's depth range, 0.25 px of disparity apart, of each cost of
-``ddp_lite.method.warp_cost`` per pixel (the intensity cost: ``warp_confidence.photometric_cost``; the
+``ddp_lite.method.kit.warp_cost`` per pixel (the intensity cost: ``warp_confidence.photometric_cost``; the
 census: the soft Hamming distance of the two soft censuses, with the kit's constants and with UnFlow's
 (ε = 0.81 on 0-255, 5×5); the gradient cost: ½ L1 of the forward differences + ½ (1 − SSIM), SSIM's map
 padded as ``photometric_cost`` pads it). Printed: the share of pixels whose sweep minimum lies more than
@@ -23,11 +23,11 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 import torch  # noqa: E402
 
-from ddp_lite.method.loop import to_tensor  # noqa: E402
-from ddp_lite.method.visibility import Visibility  # noqa: E402
-from ddp_lite.method.warp import Warper  # noqa: E402
-from ddp_lite.method.warp_confidence import CHUNK, photometric_cost, structure_per_pixel  # noqa: E402
-from ddp_lite.method.warp_cost import forward_differences, census_distance, grey, soft_census  # noqa: E402
+from ddp_lite.method.runtime.tensors import to_tensor  # noqa: E402
+from ddp_lite.method.kit.visibility import Visibility  # noqa: E402
+from ddp_lite.method.paper.warp import Warper  # noqa: E402
+from ddp_lite.method.kit.warp_confidence import CHUNK, photometric_cost, structure_per_pixel  # noqa: E402
+from ddp_lite.method.kit.warp_cost import forward_differences, census_distance, grey, soft_census  # noqa: E402
 from ddp_lite.studies.real_cases import REAL_HOLES  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(__file__))

@@ -23,11 +23,11 @@ import numpy as np  # noqa: E402
 import torch  # noqa: E402
 from scipy import ndimage  # noqa: E402
 
-from ddp_lite.method.disparity import DisparityTransform  # noqa: E402
-from ddp_lite.method.loop import to_tensor  # noqa: E402
-from ddp_lite.method.visibility import Visibility  # noqa: E402
-from ddp_lite.method.warp import Warper  # noqa: E402
-from ddp_lite.method.warp_confidence import cost_volume, photometric_cost, sweep_planes, warp_confidence  # noqa: E402
+from ddp_lite.method.paper.disparity import DisparityTransform  # noqa: E402
+from ddp_lite.method.runtime.tensors import to_tensor  # noqa: E402
+from ddp_lite.method.kit.visibility import Visibility  # noqa: E402
+from ddp_lite.method.paper.warp import Warper  # noqa: E402
+from ddp_lite.method.kit.warp_confidence import cost_volume, photometric_cost, sweep_planes, warp_confidence  # noqa: E402
 from ddp_lite.studies.real_cases import REAL_HOLES, make_real_case  # noqa: E402
 
 WRONG_PX = 2.0  # a minimum this far from the truth pulls the fit wrong

@@ -19,13 +19,14 @@ __version__ = "0.1.0"
 # Names are imported on first use (PEP 562), not with the package: torch and the rest of the stack take
 # seconds to import, and `ddp-lite --help` (whose module lives in this package) must not wait for them.
 # Building blocks stay importable from here as before; new code imports them from their modules
-# (ddp_lite.method.losses, ddp_lite.method.nets, ...), where their documentation lives. The modules sit
-# in sub-packages by concern: core, world, classical, method, data, evaluation, studies, sequences, interface.
+# (ddp_lite.method.paper.losses, ddp_lite.method.paper.nets, ...), where their documentation lives. The modules sit
+# in sub-packages by concern: core, world, classical, method (paper, kit, runtime), data, evaluation, studies,
+# sequences, interface.
 _HOMES = {
     "core.camera": ("Camera", "look_at", "backproject", "pixel_grid", "project", "relative_pose"),
     "method.config": ("FitConfig",),
     "method.dip": ("ImageResult", "fit_image"),
-    "method.disparity": ("DisparityTransform",),
+    "method.paper.disparity": ("DisparityTransform",),
     "method.fit": ("DepthResult", "merge"),
     "method.combine": ("complete_depth",),
     "classical.holes": ("random_holes", "stroke_holes", "edge_band_holes", "kinect_noise"),
@@ -33,24 +34,28 @@ _HOMES = {
     "method.profiles": ("PROFILES", "Profile", "get_profile"),
     "world.scenes": ("list_scenes", "make_scene", "register_scene"),
     "classical.stereo": ("sgm_depth", "sgm_disparity"),
-    "method.variants": ("VARIANTS",),
+    "method.paper.variants": ("VARIANTS",),
     "core.views": ("Scene", "View"),
     "method.coarse_to_fine": ("complete_depth_coarse_to_fine",),
-    "method.losses": ("disparity_loss", "masked_l1", "rgb_loss", "ssim", "warp_loss"),
-    "method.nets": ("SkipNet", "UNet", "build_net", "make_noise"),
+    "method.paper.losses": ("disparity_loss", "masked_l1", "rgb_loss", "ssim", "warp_loss"),
+    "method.paper.nets": ("SkipNet", "UNet", "build_net", "make_noise"),
     "world.neighbors": ("select_neighbors",),
-    "method.warp": ("Warper", "warp_to_reference"),
+    "method.paper.warp": ("Warper", "warp_to_reference"),
 }
 _HOME_OF = {name: module for module, names in _HOMES.items() for name in names}
 _PACKAGES = {  # sub-package → its modules, each one concern (the sub-package's docstring says which)
     "core": ('checks', 'camera', 'views', 'progress', 'outpaths', 'files'),
     "world": ('scenes', 'render', 'textures', 'photo_texture', 'solids', 'terrain', 'organic', 'neighbors'),
     "classical": ('baselines', 'depth_fills', 'guided_fills', 'stereo', 'holes', 'kinect'),
-    "method": ('config', 'variants', 'disparity', 'losses', 'paper_method', 'hole_losses', 'hole_terms', 'nets', 'warp', 'loop',
-               'device', 'fit', 'fit_inputs', 'combine', 'ensemble', 'side_by_side', 'blend', 'visibility', 'warp_confidence', 'warp_cost', 'equation', 'coarse_to_fine', 'full_resolution', 'dip',
-               'profiles', 'recipes', 'cache', 'cache_entry'),
-    "data": ('datasets', 'fileio', 'file_writers', 'formats', 'colmap', 'tum', 'middlebury', 'middlebury_rail', 'samples',
+    "method": ('config', 'profiles', 'fit_inputs', 'loop', 'fit', 'combine', 'side_by_side', 'coarse_to_fine',
+               'full_resolution', 'dip', 'equation'),
+    "method.paper": ('disparity', 'losses', 'warp', 'nets', 'variants', 'total_loss'),
+    "method.kit": ('hole_losses', 'hole_terms', 'visibility', 'warp_confidence', 'warp_cost', 'warp_terms', 'net_inputs',
+                   'blend', 'ensemble', 'recipes'),
+    "method.runtime": ('device', 'tensors', 'cache', 'cache_entry'),
+    "data": ('datasets', 'fileio', 'file_writers', 'formats', 'colmap', 'tum', 'middlebury', 'middlebury_rail',
              'textparse', 'resample'),
+    "data.samples": ('make_samples',),
     "evaluation": ('metrics', 'fusion', 'experiments', 'viz', 'plane_sweep'),
     "studies": ('real_cases', 'real_suite', 'table6', 'additions', 'mvs_kinect_experiments'),
     "sequences": ('sequence', 'sequence_cost', 'sequence_files', 'sequence_jobs', 'runner', 'working_size'),
@@ -76,4 +81,4 @@ def __getattr__(name: str):
 
 
 def __dir__():
-    return sorted(set(globals()) | set(_HOME_OF) | set(_PACKAGES) | set(_PACKAGE_OF))
+    return sorted(set(globals()) | set(_HOME_OF) | {p for p in _PACKAGES if "." not in p} | set(_PACKAGE_OF))

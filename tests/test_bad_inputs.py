@@ -38,7 +38,7 @@ from ddp_lite.classical.stereo import disparity_to_depth  # noqa: E402
 from ddp_lite.core.files import write_bytes_atomic  # noqa: E402
 from ddp_lite.core.camera import Camera, look_at  # noqa: E402
 from ddp_lite.interface.cli import main as cli_main  # noqa: E402
-from ddp_lite.method.disparity import DisparityTransform  # noqa: E402
+from ddp_lite.method.paper.disparity import DisparityTransform  # noqa: E402
 from ddp_lite.method.coarse_to_fine import complete_depth_coarse_to_fine  # noqa: E402
 from ddp_lite.method.config import FitConfig  # noqa: E402
 from ddp_lite.method.dip import fit_image  # noqa: E402

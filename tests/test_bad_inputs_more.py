@@ -30,7 +30,7 @@ from data_fetch import Dataset, FetchError, RemoteFile, fetch  # noqa: E402
 from ddp_lite import fileio  # noqa: E402
 from ddp_lite.core.camera import Camera, look_at  # noqa: E402
 from ddp_lite.core.checks import check_depth  # noqa: E402
-from ddp_lite.method.disparity import DisparityTransform  # noqa: E402
+from ddp_lite.method.paper.disparity import DisparityTransform  # noqa: E402
 from ddp_lite.method.config import FitConfig  # noqa: E402
 from ddp_lite.method.dip import fit_image  # noqa: E402
 from ddp_lite.method.combine import complete_depth  # noqa: E402
@@ -457,7 +457,7 @@ def test_masked_arrays_are_honoured_wherever_depth_is_scored_or_warped():
     """A masked array's mask means unknown everywhere, not only in the fit: every metric, the disparity
     range and the warp give exactly what they give for the same array with NaN under the mask."""
     from ddp_lite import metrics
-    from ddp_lite.method.warp import warp_to_reference
+    from ddp_lite.method.paper.warp import warp_to_reference
     raw = np.full((H, W), 2.0)
     raw[:, W // 2:] = 3.0  # a depth edge, so edge_band and texture_leakage have something to see
     masked = np.ma.masked_array(raw.copy(), mask=np.zeros((H, W), bool))

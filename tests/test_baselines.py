@@ -237,7 +237,7 @@ def test_the_colorization_fill_zeroes_the_affinity_hole_term():
     the fill scipy solves for makes it vanish there, a colour-blind fill does not."""
     import torch
     from ddp_lite.classical.guided_fills import NEIGHBOUR_OFFSETS, colorization_affinities
-    from ddp_lite.method.hole_losses import affinity_loss
+    from ddp_lite.method.kit.hole_losses import affinity_loss
     rgb, depth, gt = _two_regions()
     rgb = rgb + 0.05 * np.random.default_rng(0).random(rgb.shape).astype(np.float32)  # texture on both sides
     holes = np.isnan(depth)

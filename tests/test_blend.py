@@ -5,9 +5,9 @@ import pytest
 import torch
 
 from ddp_lite import FitConfig, complete_depth
-from ddp_lite.method.blend import (BLEND_WEIGHTS, FILL_SHARES, best_fill_share, best_weight, fill_holdout, ring_width,
+from ddp_lite.method.kit.blend import (BLEND_WEIGHTS, FILL_SHARES, best_fill_share, best_weight, fill_holdout, ring_width,
                                   validation_ring)
-from ddp_lite.method.recipes import get_recipe
+from ddp_lite.method.kit.recipes import get_recipe
 from conftest import TINY, tilted_plane
 
 

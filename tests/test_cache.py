@@ -1,4 +1,4 @@
-"""The fit cache (ddp_lite.method.cache): a hit returns what is stored, and every input that decides a fit misses."""
+"""The fit cache (ddp_lite.method.runtime.cache): a hit returns what is stored, and every input that decides a fit misses."""
 import errno
 import io
 import json

@@ -7,9 +7,10 @@ import pytest
 import torch
 
 from ddp_lite.interface.cli import build_parser
-from ddp_lite.method import profiles, recipes
+from ddp_lite.method import profiles
+from ddp_lite.method.kit import recipes
 from ddp_lite.method.config import FitConfig
-from ddp_lite.method.device import resolve_device
+from ddp_lite.method.runtime.device import resolve_device
 
 
 def _options(flag):

@@ -181,7 +181,7 @@ def test_the_written_out_ssim_and_warp_agree_with_scikit_image_and_the_kit():
 
 def test_the_kit_ssim_is_not_the_students_own(capsys):
     assert exercises.check_ssim(lambda x, y: ssim(x, y)) is False
-    assert "ddp_lite.method.losses.ssim" in capsys.readouterr().out
+    assert "ddp_lite.method.paper.losses.ssim" in capsys.readouterr().out
 
 
 def test_d1_cases_agree_with_the_hand_computed_definition():

@@ -237,7 +237,7 @@ def test_bfloat16_and_channels_last_still_fill_the_hole():
 def test_variant_table_is_the_papers():
     """Every per-variant difference comes from one record: γ, output channels, needs, iterations."""
     from ddp_lite.method.profiles import get_profile
-    from ddp_lite.method.variants import VARIANTS, get_variant
+    from ddp_lite.method.paper.variants import VARIANTS, get_variant
     assert VARIANTS == ("d", "rgbd", "rgbd+warp")
     d, rgbd, warp = (get_variant(name) for name in VARIANTS)
     assert d.loss_weights((0.5, 0.5)) == (1.0, 0.0, 0.0) and d.out_channels == 1

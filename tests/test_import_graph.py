@@ -174,6 +174,34 @@ def test_each_sub_package_imports_only_what_its_docstring_allows():
     assert breaches == []
 
 
+def part_of_method(name: str) -> str | None:
+    """The part of ``ddp_lite.method`` a module belongs to: its sub-package (``paper``, ``kit``, ``runtime``),
+    ``"method"`` for the fit's own files in ``method/``, None outside ``method``."""
+    parts = name.split(".")
+    if parts[:2] != ["ddp_lite", "method"] or len(parts) < 3:
+        return None
+    return parts[2] if (PACKAGE / "method" / parts[2] / "__init__.py").exists() else "method"
+
+
+def test_each_part_of_the_method_imports_only_what_its_docstring_allows():
+    """Inside ``method`` the same rule one level down: ``paper`` imports none of the rest of ``method``
+    (and so nothing of the kit), the kit and the runtime what their docstrings name (``method``: the
+    fit's files in ``method/`` itself); outside ``method`` too, each only the parts it names."""
+    subs = {p.parent.name for p in (PACKAGE / "method").glob("*/__init__.py")}
+    assert subs >= {"paper", "kit", "runtime"}
+    breaches = []
+    for importer, out in graph().items():
+        part = part_of_method(importer)
+        if part in (None, "method") or importer.endswith(f".{part}"):
+            continue
+        allowed = allowed_imports(PACKAGE / "method" / part)
+        for target in out:
+            other = part_of_method(target) or target.split(".")[1]
+            if other != part and allowed is not None and other not in allowed:
+                breaches.append(f"{importer} imports {target}")
+    assert breaches == []
+
+
 def _ddp_lite_imports(source: str, importer: str | None = None, is_package: bool = False):
     """(line, absolute module name) of every import of ``ddp_lite`` or one of its modules in ``source``."""
     for node in ast.walk(ast.parse(source)):
@@ -217,9 +245,14 @@ def test_every_import_of_the_package_names_a_module_that_exists():
 
 def test_the_packages_module_list_names_every_module():
     import ddp_lite
-    on_disk = {name.split(".", 1)[1] for name in modules() if name.count(".") == 2}  # "method.fit"
+    on_disk = {name.split(".", 1)[1] for name, path in modules().items()  # "method.fit", "method.paper.losses"
+               if name.count(".") >= 2 and path.name != "__init__.py"}
     listed = {f"{package}.{module}" for package, names in ddp_lite._PACKAGES.items() for module in names}
     assert listed == on_disk
+    packages = {name.split(".", 1)[1] for name, path in modules().items() if path.name == "__init__.py" and "." in name}
+    assert packages == set(ddp_lite._PACKAGES)  # every sub-package listed, and only they
+    flat = [module for names in ddp_lite._PACKAGES.values() for module in names]
+    assert len(flat) == len(set(flat)), "a module's own name must say where it lives (ddp.metrics)"
 
 
 def test_the_fit_does_not_import_its_combiner():
@@ -227,7 +260,7 @@ def test_the_fit_does_not_import_its_combiner():
     edges = graph()
     assert "ddp_lite.method.fit" in edges["ddp_lite.method.combine"]
     assert "ddp_lite.method.combine" not in edges["ddp_lite.method.fit"]
-    assert not {"ddp_lite.method.blend", "ddp_lite.method.ensemble"} & set(edges["ddp_lite.method.fit"])
+    assert not {"ddp_lite.method.kit.blend", "ddp_lite.method.kit.ensemble"} & set(edges["ddp_lite.method.fit"])
 
 
 def test_the_package_never_imports_the_downloader():

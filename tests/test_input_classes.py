@@ -28,7 +28,7 @@ from ddp_lite.data import file_writers, fileio
 from ddp_lite.data.formats import read_colmap, read_colmap_cameras, read_tum, write_colmap, write_tum
 from ddp_lite.evaluation import metrics
 from ddp_lite.interface.cli import main
-from ddp_lite.method.disparity import DisparityTransform
+from ddp_lite.method.paper.disparity import DisparityTransform
 from ddp_lite.world.scenes import make_scene
 
 H, W = 24, 32

@@ -6,7 +6,7 @@ import torch.nn.functional as F
 from skimage.metrics import structural_similarity
 
 from ddp_lite import disparity_loss, rgb_loss, ssim, warp_loss
-from ddp_lite.method.losses import ConstantTarget
+from ddp_lite.method.paper.losses import ConstantTarget
 
 
 def blur(x, sigma=1.5, size=11):  # an independent Gaussian: one 2-D kernel, no separability
@@ -97,7 +97,7 @@ def test_a_prepared_target_refuses_a_second_mask():
 
 
 def test_rgb_loss_takes_its_arguments_in_disparity_loss_order_and_refuses_a_weight_as_mask():
-    from ddp_lite.method.losses import rgb_loss
+    from ddp_lite.method.paper.losses import rgb_loss
     rgb, target = torch.full((1, 3, 16, 16), 0.25), torch.full((1, 3, 16, 16), 0.75)
     mask = torch.zeros(1, 1, 16, 16, dtype=torch.bool)
     mask[..., :8] = True

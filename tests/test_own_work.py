@@ -19,8 +19,8 @@ from ddp_lite.core.camera import Camera
 from ddp_lite.evaluation import metrics
 from ddp_lite.interface.classroom import nbgrader_meta
 from ddp_lite.interface.own_work import call_watched
-from ddp_lite.method.disparity import DisparityTransform
-from ddp_lite.method.warp import warp_to_reference
+from ddp_lite.method.paper.disparity import DisparityTransform
+from ddp_lite.method.paper.warp import warp_to_reference
 from ddp_lite.studies.additions import paired_change
 
 NOTEBOOKS = Path(__file__).resolve().parent.parent / "notebooks"
@@ -85,7 +85,7 @@ def test_the_kit_function_through_a_partial_or_a_torch_call_fails(capsys):
     assert exercises.check_nearest_fill(lambda d: fill(d)) is False
     assert exercises.check_ssim(lambda x, y: float(ddp_lite.ssim(torch.as_tensor(x)[None, None],
                                                                   torch.as_tensor(y)[None, None]))) is False
-    assert "ddp_lite.method.losses.ssim" in capsys.readouterr().out
+    assert "ddp_lite.method.paper.losses.ssim" in capsys.readouterr().out
 
 
 def test_a_function_that_switches_off_the_watch_is_caught():

@@ -9,7 +9,7 @@ from ddp_lite.core.camera import Camera
 from ddp_lite.data.middlebury import load_motorcycle
 from ddp_lite.studies.real_cases import REAL_HOLES, make_real_case, pool_scene
 from ddp_lite.core.views import Scene, View
-from ddp_lite.method.warp import warp_to_reference
+from ddp_lite.method.paper.warp import warp_to_reference
 
 
 @pytest.fixture(scope="module")

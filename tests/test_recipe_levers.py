@@ -11,7 +11,7 @@ import torch
 import torch.nn.functional as F
 
 from ddp_lite import DisparityTransform, FitConfig, UNet, complete_depth
-from ddp_lite.method.nets import _conv
+from ddp_lite.method.paper.nets import _conv
 from conftest import TINY, plane_with_hole, tilted_plane
 
 
@@ -79,7 +79,7 @@ def one_thread():
 
 
 def test_ensemble_members_run_side_by_side_with_the_numbers_of_one_thread_in_turn():
-    from ddp_lite.method.ensemble import parallel_members
+    from ddp_lite.method.kit.ensemble import parallel_members
     _, depth = plane_with_hole()
     rgb = np.random.default_rng(0).random(depth.shape + (3,)).astype(np.float32)
     config = FitConfig(**TINY, iterations=12, ensemble=2, auto_stop=True, patience=20, eval_every=2)
@@ -125,7 +125,7 @@ def test_disparity_margin_sets_the_default_transform_range():
 
 
 def test_smoothness_is_zero_on_a_plane_and_hand_computed_on_a_parabola():
-    from ddp_lite.method.hole_losses import smoothness_loss, smoothness_weights
+    from ddp_lite.method.kit.hole_losses import smoothness_loss, smoothness_weights
     H, W = 12, 16
     v, u = torch.meshgrid(torch.arange(H, dtype=torch.float64), torch.arange(W, dtype=torch.float64), indexing="ij")
     plane = (0.2 + 0.01 * u + 0.02 * v)[None, None]  # disparity affine in (u, v): a plane
@@ -141,7 +141,7 @@ def test_smoothness_is_zero_on_a_plane_and_hand_computed_on_a_parabola():
 
 
 def test_smoothness_weights_relax_at_colour_edges_and_vanish_outside_the_region():
-    from ddp_lite.method.hole_losses import smoothness_weights
+    from ddp_lite.method.kit.hole_losses import smoothness_weights
     image = torch.zeros(1, 3, 6, 8)
     image[..., 4:] = 1.0  # a vertical colour edge between columns 3 and 4
     region = torch.ones(1, 1, 6, 8, dtype=torch.bool)
@@ -155,7 +155,7 @@ def test_smoothness_weights_relax_at_colour_edges_and_vanish_outside_the_region(
 
 
 def test_rgb_edge_guide_sees_an_edge_between_colours_of_equal_brightness_that_grey_misses():
-    from ddp_lite.method.hole_losses import smoothness_weights
+    from ddp_lite.method.kit.hole_losses import smoothness_weights
     image = torch.zeros(1, 3, 5, 8)
     image[0, 0, :, :4] = 0.9  # red left half, green right half: grey 0.3 on both sides
     image[0, 1, :, 4:] = 0.9
@@ -174,7 +174,7 @@ def test_rgb_edge_guide_sees_an_edge_between_colours_of_equal_brightness_that_gr
 def test_structure_edge_guide_ignores_fine_texture_and_keeps_a_strong_edge():
     from skimage.restoration import denoise_tv_chambolle
 
-    from ddp_lite.method.hole_losses import STRUCTURE_TV_WEIGHT, smoothness_weights
+    from ddp_lite.method.kit.hole_losses import STRUCTURE_TV_WEIGHT, smoothness_weights
     rng = np.random.default_rng(0)
     grey = np.where(np.arange(32) < 16, 0.2, 0.8)[None, :].repeat(24, 0)  # a step between columns 15 and 16
     grey = grey + 0.04 * rng.standard_normal(grey.shape)  # fine texture on both surfaces
@@ -193,7 +193,7 @@ def test_structure_edge_guide_ignores_fine_texture_and_keeps_a_strong_edge():
 
 
 def test_flatness_is_zero_on_a_constant_and_hand_computed_on_a_ramp():
-    from ddp_lite.method.hole_losses import flatness_loss, smoothness_weights
+    from ddp_lite.method.kit.hole_losses import flatness_loss, smoothness_weights
     H, W = 12, 16
     v, u = torch.meshgrid(torch.arange(H, dtype=torch.float64), torch.arange(W, dtype=torch.float64), indexing="ij")
     weights = smoothness_weights(torch.zeros(1, 3, H, W, dtype=torch.float64), torch.ones(1, 1, H, W, dtype=torch.bool))
@@ -224,7 +224,7 @@ def test_flatness_continues_a_border_hole_flat_where_curvature_alone_carries_the
 
 
 def test_flatness_region_is_the_border_holes_and_a_rim_of_the_enclosed_ones_by_brute_force():
-    from ddp_lite.method.hole_losses import flatness_region
+    from ddp_lite.method.kit.hole_losses import flatness_region
     rng = np.random.default_rng(3)
     holes = rng.random((20, 24)) < 0.03  # scattered pixels, some at the border
     holes[5:14, 6:17] = True  # enclosed
@@ -301,7 +301,7 @@ def test_smoothness_fills_a_hole_in_a_plane_better_than_without():
 
 
 def test_bf16_none_follows_the_cpu_flags():
-    from ddp_lite.method.device import _cpu_has_native_bf16, use_bf16
+    from ddp_lite.method.runtime.device import _cpu_has_native_bf16, use_bf16
     cpu = torch.device("cpu")
     assert use_bf16(True, cpu) is True and use_bf16(False, cpu) is False
     try:
@@ -346,7 +346,7 @@ def test_bad_holdout_names_the_argument():
 
 
 def test_meshgrid_input_is_the_pixel_coordinates_then_seeded_noise():
-    from ddp_lite.method.nets import make_input
+    from ddp_lite.method.paper.nets import make_input
     H, W = 5, 9
     a, b = make_input("meshgrid", 6, H, W, seed=0), make_input("meshgrid", 6, H, W, seed=1)
     assert a.shape == (1, 6, H, W)
@@ -359,7 +359,7 @@ def test_meshgrid_input_is_the_pixel_coordinates_then_seeded_noise():
 
 
 def test_meshgrid_input_runs_a_fit_and_bad_values_name_the_argument():
-    from ddp_lite.method.nets import make_input
+    from ddp_lite.method.paper.nets import make_input
     depth = tilted_plane(12, 16)
     depth[4:8, 5:11] = np.nan
     result = complete_depth(None, depth, variant="d", config=FitConfig(**TINY, iterations=3, net_input="meshgrid"))
@@ -374,7 +374,7 @@ def test_meshgrid_input_runs_a_fit_and_bad_values_name_the_argument():
 
 def test_image_channels_are_the_image_blurred_like_scipys_gaussian_filter_then_scaled():
     from scipy.ndimage import gaussian_filter
-    from ddp_lite.method.nets import image_channels
+    from ddp_lite.method.kit.net_inputs import image_channels
     image = np.random.default_rng(0).random((1, 3, 9, 13)).astype(np.float32)
     for blur in (1.0, 2.0):
         reference = gaussian_filter(image, sigma=(0, 0, blur, blur), mode="nearest", truncate=3.0)
@@ -385,7 +385,7 @@ def test_image_channels_are_the_image_blurred_like_scipys_gaussian_filter_then_s
 
 def test_image_input_feeds_the_colour_image_to_variants_that_see_it_and_not_to_depth_only():
     from ddp_lite import loop
-    from ddp_lite.method.nets import image_channels
+    from ddp_lite.method.kit.net_inputs import image_channels
     depth = tilted_plane(12, 16)
     depth[4:8, 5:11] = np.nan
     rgb = np.random.default_rng(1).random((12, 16, 3)).astype(np.float32)

@@ -5,7 +5,7 @@ import pytest
 import ddp_lite as ddp
 from ddp_lite.method.config import FitConfig
 from ddp_lite.method.profiles import PROFILES
-from ddp_lite.method.recipes import RECIPES, get_recipe
+from ddp_lite.method.kit.recipes import RECIPES, get_recipe
 
 
 @pytest.mark.parametrize("profile", sorted(PROFILES))

@@ -121,7 +121,7 @@ def test_warping_a_neighbour_with_true_depth_reproduces_the_reference(desk):
 
 
 def test_warp_module_agrees_on_the_scene(desk):
-    from ddp_lite.method.warp import warp_to_reference
+    from ddp_lite.method.paper.warp import warp_to_reference
     ref, nbr = desk[0], desk[2]
     warped, valid = warp_to_reference(nbr.rgb, ref.depth, ref.camera, nbr.camera)
     _, mu, mv, z = _inverse_warp(nbr.rgb, ref.depth, ref.camera, nbr.camera)

@@ -7,7 +7,7 @@ from ddp_lite.core.camera import Camera
 from ddp_lite.core.views import View
 from ddp_lite.data.fileio import check_same_size
 from ddp_lite.interface.cli import main
-from ddp_lite.method.nets import check_input_size
+from ddp_lite.method.paper.nets import check_input_size
 
 H, W = 30, 45  # landscape: a W×H message would read 45×30
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from ddp_lite.evaluation.viz import HOLE_RGB, error_vmax, outline, overlay_holes, show_error, show_errors
-from ddp_lite.method.disparity import DisparityTransform
+from ddp_lite.method.paper.disparity import DisparityTransform
 
 
 def test_error_vmax_is_the_percentile_of_all_maps_together():

@@ -7,8 +7,8 @@ import torch
 from scipy import ndimage
 
 from ddp_lite import FitConfig
-from ddp_lite.method.losses import ssim, warp_loss
-from ddp_lite.method.warp_confidence import cost_volume, photometric_cost, sweep_planes, warp_confidence
+from ddp_lite.method.paper.losses import ssim, warp_loss
+from ddp_lite.method.kit.warp_confidence import cost_volume, photometric_cost, sweep_planes, warp_confidence
 from conftest import rectified_pair
 
 FOCAL, BASELINE, WIDTH, HEIGHT = 60.0, 0.1, 96, 40
@@ -82,8 +82,9 @@ def test_the_sweep_spans_the_range_at_the_step_asked_for():
 
 
 def test_the_fit_gets_no_pull_from_the_warp_term_where_it_is_not_confident():
-    from ddp_lite.method.disparity import DisparityTransform
-    from ddp_lite.method.paper_method import PaperLoss
+    from ddp_lite.method.paper.disparity import DisparityTransform
+    from ddp_lite.method.kit.warp_terms import kit_warp_arguments, kit_warp_term
+    from ddp_lite.method.paper.total_loss import PaperLoss
 
     d = 6
     canvas = texture(WIDTH + d, seed=0)
@@ -92,9 +93,11 @@ def test_the_fit_gets_no_pull_from_the_warp_term_where_it_is_not_confident():
     rgb, nbr = as_tensor(canvas[:, :WIDTH]), as_tensor(canvas[:, d:d + WIDTH])
     transform = DisparityTransform(D_MIN, D_MAX)
     target, mask = torch.zeros(1, 1, HEIGHT, WIDTH), torch.zeros(1, 1, HEIGHT, WIDTH, dtype=torch.bool)
-    loss = PaperLoss("rgbd+warp", FitConfig(warp_confidence=True), transform, target, mask, rgb, left, [(nbr, right)])
-    assert PaperLoss("rgbd+warp", FitConfig(), transform, target, mask, rgb, left, [(nbr, right)]).confident is None
-    confident = loss.confident[0]
+    config = FitConfig(warp_confidence=True)
+    loss = PaperLoss("rgbd+warp", config, transform, target, mask, rgb, left, [(nbr, right)],
+                     **kit_warp_arguments(config, transform, mask, rgb, left, [(nbr, right)], "cpu"))
+    assert kit_warp_term(FitConfig(), transform, mask, rgb, left, [(nbr, right)], "cpu") is None  # the paper's term
+    confident = loss.warp_term.keep[0]
     disparity = torch.full((1, 1, HEIGHT, WIDTH), 0.4, requires_grad=True)
     _, terms = loss(disparity, rgb.clone())
     terms["warp"].backward()

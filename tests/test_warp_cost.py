@@ -1,5 +1,5 @@
 """The warp term's other costs and its texture weights (``FitConfig.warp_cost``, ``FitConfig.warp_texture``,
-``ddp_lite.method.warp_cost``), against references computed by hand: the soft census of a 3×3 patch and
+``ddp_lite.method.kit.warp_cost``), against references computed by hand: the soft census of a 3×3 patch and
 the soft Hamming distance of two sign patterns, costs under a constant brightness offset between the
 views, the epipolar direction of a rectified pair, and where each cost's minimum lies on a pair built
 with a known disparity."""
@@ -9,12 +9,13 @@ import torch
 from scipy import ndimage
 
 from ddp_lite import FitConfig
-from ddp_lite.method.disparity import DisparityTransform
-from ddp_lite.method.losses import ConstantTarget, warp_loss
-from ddp_lite.method.paper_method import PaperLoss
-from ddp_lite.method.recipes import describe_method
-from ddp_lite.method.warp import Warper
-from ddp_lite.method.warp_cost import (CENSUS_SCALE, WARP_COSTS, WarpCost, census_distance, epipolar_directions,
+from ddp_lite.method.paper.disparity import DisparityTransform
+from ddp_lite.method.paper.losses import ConstantTarget, warp_loss
+from ddp_lite.method.kit.warp_terms import kit_warp_arguments, kit_warp_term
+from ddp_lite.method.paper.total_loss import PaperLoss
+from ddp_lite.method.kit.recipes import describe_method
+from ddp_lite.method.paper.warp import Warper
+from ddp_lite.method.kit.warp_cost import (CENSUS_SCALE, WARP_COSTS, WarpCost, census_distance, epipolar_directions,
                                        soft_census, texture_weights)
 from conftest import rectified_pair
 
@@ -116,10 +117,12 @@ def test_paper_loss_with_another_cost_or_the_weights_pulls_the_depth_and_the_def
     mask = torch.ones(1, 1, HEIGHT, WIDTH, dtype=torch.bool)
     mask[..., 10:18, 20:28] = False
     target = torch.full((1, 1, HEIGHT, WIDTH), 0.4)
-    assert PaperLoss("rgbd+warp", FitConfig(), transform, target, mask, reference, left, [(neighbour, right)]).warp_cost is None
+    assert kit_warp_term(FitConfig(), transform, mask, reference, left, [(neighbour, right)], "cpu") is None
     for settings in (dict(warp_cost="census"), dict(warp_cost="gradient"), dict(warp_cost="census+intensity"),
                      dict(warp_texture=True)):
-        loss = PaperLoss("rgbd+warp", FitConfig(**settings), transform, target, mask, reference, left, [(neighbour, right)])
+        config, pairs = FitConfig(**settings), [(neighbour, right)]
+        loss = PaperLoss("rgbd+warp", config, transform, target, mask, reference, left, pairs,
+                         **kit_warp_arguments(config, transform, mask, reference, left, pairs, "cpu"))
         disparity = torch.full((1, 1, HEIGHT, WIDTH), 0.4, requires_grad=True)
         _, terms = loss(disparity, reference.clone())
         terms["warp"].backward()

@@ -1,4 +1,4 @@
-"""The warp's occlusion test (``Visibility``, ``Warper(occlusion=True)``, ``FitConfig.warp_occlusion``)
+"""The warp's occlusion test (``Visibility``, ``Warper(visibility=...)``, ``FitConfig.warp_occlusion``)
 against geometry worked out by hand: a rectified pair with a box in front of a wall, a plane steep
 in depth, and the ordering test of rectified stereo on the real Motorcycle pair's ground truth."""
 import numpy as np
@@ -6,8 +6,8 @@ import pytest
 import torch
 
 from ddp_lite import Camera, FitConfig, look_at
-from ddp_lite.method.visibility import Visibility
-from ddp_lite.method.warp import Warper
+from ddp_lite.method.kit.visibility import Visibility
+from ddp_lite.method.paper.warp import Warper
 
 FOCAL, BASELINE, WIDTH, HEIGHT = 40.0, 0.2, 64, 8
 
@@ -60,21 +60,23 @@ def test_the_test_only_removes_pixels_and_leaves_the_warped_image_alone():
     depth[..., 30:40] = FOCAL * BASELINE / 6.0
     image = torch.rand(1, 3, HEIGHT, WIDTH)
     plain, inside = Warper(left, right)(image, depth)
-    tested, visible = Warper(left, right, occlusion=True)(image, depth)
+    tested, visible = Warper(left, right, visibility=Visibility(left, right))(image, depth)
     assert torch.equal(plain, tested)
     assert bool((visible <= inside).all()) and 3 * HEIGHT <= int((inside & ~visible).sum()) <= 4 * HEIGHT
 
 
 def test_warp_occlusion_reaches_the_fit_and_is_checked():
-    from ddp_lite.method.disparity import DisparityTransform
-    from ddp_lite.method.paper_method import PaperLoss
+    from ddp_lite.method.paper.disparity import DisparityTransform
+    from ddp_lite.method.kit.warp_terms import kit_warp_arguments
+    from ddp_lite.method.paper.total_loss import PaperLoss
 
     left, right = rectified_pair()
     transform = DisparityTransform.from_depth(np.full((HEIGHT, WIDTH), 4.0, np.float32))
     target, mask, rgb = torch.zeros(1, 1, HEIGHT, WIDTH), torch.ones(1, 1, HEIGHT, WIDTH, dtype=torch.bool), torch.rand(1, 3, HEIGHT, WIDTH)
     for flag in (False, True):
-        loss = PaperLoss("rgbd+warp", FitConfig(warp_occlusion=flag), transform, target, mask, rgb, left,
-                         [(torch.rand(1, 3, HEIGHT, WIDTH), right)])
+        config, pairs = FitConfig(warp_occlusion=flag), [(torch.rand(1, 3, HEIGHT, WIDTH), right)]
+        loss = PaperLoss("rgbd+warp", config, transform, target, mask, rgb, left, pairs,
+                         **kit_warp_arguments(config, transform, mask, rgb, left, pairs, "cpu"))
         assert (loss.warpers[0].visibility is not None) is flag
     with pytest.raises(TypeError, match="config.warp_occlusion"):
         FitConfig(warp_occlusion="yes").validate()

@@ -1,4 +1,4 @@
-"""The warp term restricted to the holes (``FitConfig.warp_reach``, ``paper_method.warp_region``), against
+"""The warp term restricted to the holes (``FitConfig.warp_reach``, ``kit.warp_terms.warp_region``), against
 masks and a stereo pair built by hand: which pixels the region holds, and that the fit's disparity gets
 exactly no gradient from the warp term on the valid input outside it, and some inside."""
 import numpy as np
@@ -7,8 +7,9 @@ import torch
 from scipy import ndimage
 
 from ddp_lite import FitConfig
-from ddp_lite.method.disparity import DisparityTransform
-from ddp_lite.method.paper_method import PaperLoss, warp_region
+from ddp_lite.method.paper.disparity import DisparityTransform
+from ddp_lite.method.kit.warp_terms import kit_warp_arguments, warp_region
+from ddp_lite.method.paper.total_loss import PaperLoss
 from conftest import rectified_pair
 
 FOCAL, BASELINE, WIDTH, HEIGHT = 60.0, 0.1, 64, 32
@@ -48,8 +49,10 @@ def test_the_warp_term_passes_no_gradient_to_valid_pixels_outside_the_region():
     target = torch.full((1, 1, HEIGHT, WIDTH), 0.4)
     gradients = {}
     for reach in (None, 2.0):
-        loss = PaperLoss("rgbd+warp", FitConfig(warp_reach=reach), transform, target, mask, rgb, left, [(nbr, right)])
-        assert (loss.region is None) is (reach is None)
+        config = FitConfig(warp_reach=reach)
+        loss = PaperLoss("rgbd+warp", config, transform, target, mask, rgb, left, [(nbr, right)],
+                         **kit_warp_arguments(config, transform, mask, rgb, left, [(nbr, right)], "cpu"))
+        assert (loss.warp_term is None) is (reach is None)
         disparity = torch.full((1, 1, HEIGHT, WIDTH), 0.4, requires_grad=True)
         _, terms = loss(disparity, rgb.clone())
         terms["warp"].backward()
@@ -62,7 +65,7 @@ def test_the_warp_term_passes_no_gradient_to_valid_pixels_outside_the_region():
 
 def test_warp_reach_is_checked_and_marked_as_the_kits():
     from ddp_lite.method.equation import loss_equation
-    from ddp_lite.method.recipes import describe_method
+    from ddp_lite.method.kit.recipes import describe_method
     FitConfig(warp_reach=0.0).validate()
     with pytest.raises(ValueError, match="config.warp_reach"):
         FitConfig(warp_reach=-1.0).validate()

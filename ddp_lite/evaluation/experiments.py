@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core.camera import Camera
-from ..method.disparity import DisparityTransform
+from ..method.paper.disparity import DisparityTransform
 from ..method.config import FitConfig
 from ..method.combine import complete_depth
 from ..method.fit import DepthResult
@@ -25,7 +25,7 @@ from ..method.profiles import Profile, get_profile
 from ..world.neighbors import select_neighbors
 from ..world.scenes import make_scene
 from ..classical.stereo import sgm_depth_subsampled
-from ..method.variants import get_variant
+from ..method.paper.variants import get_variant
 from ..core.views import LABEL_SKY
 
 __all__ = ["Case", "make_case", "sgm_depth_at_scale", "edge_band", "disparity_rmse", "run_variants", "run_cases", "run_jobs", "error_table", "format_table",

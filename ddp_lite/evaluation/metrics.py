@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
-from ..method.disparity import DisparityTransform
+from ..method.paper.disparity import DisparityTransform
 
 __all__ = ["rmse", "mae", "hole_rmse", "d1_error", "psnr", "point_cloud_prf", "cloud_scores", "disparity_rmse",
            "edge_band", "texture_leakage", "texture_leakage_map"]

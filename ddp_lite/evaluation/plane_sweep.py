@@ -32,7 +32,7 @@ import torch.nn.functional as F
 
 from ..core.checks import check_image, check_int, check_real
 from ..core.views import image_and_camera
-from ..method.warp import Warper
+from ..method.paper.warp import Warper
 
 __all__ = ["inverse_depth_planes", "SweepResult", "plane_sweep"]
 

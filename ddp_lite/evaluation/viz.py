@@ -61,7 +61,7 @@ def show_errors(axes, estimates: dict, truth, mask=None, transform=None, percent
     """A row of error maps on one scale with one colour bar: |estimate - truth| of each (H, W) depth
     in ``estimates`` ({title: depth}) on the matching axis of ``axes``, outside ``mask`` grey.
 
-    With ``transform`` (a :class:`~ddp_lite.method.disparity.DisparityTransform`) the error is in
+    With ``transform`` (a :class:`~ddp_lite.method.paper.disparity.DisparityTransform`) the error is in
     the unit of the kit's tables, normalised disparity ×100; without it, in the arrays' own unit
     (metres, or px for disparity maps). The scale stops at the ``percentile`` of all the maps' errors
     (the bar says so), so that a few large errors at the border do not turn every other error

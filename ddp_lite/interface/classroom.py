@@ -30,7 +30,7 @@ import nbformat
 
 from ..core.files import regular_file, write_bytes_atomic
 from ..core.outpaths import check_not_overlapping, check_output_folder
-from ..method.recipes import get_recipe
+from ..method.kit.recipes import get_recipe
 
 __all__ = ["student_copy", "execute", "exercises", "open_answers", "exercise_table", "update_readme_table",
            "build_student", "build_solutions"]

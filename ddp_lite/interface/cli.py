@@ -20,12 +20,12 @@ from .. import __version__
 
 PROFILES = ("ci", "class", "paper")
 PROFILE_SIZES = "size and budget: ci (seconds), class (minutes on a laptop CPU), paper (the paper's sizes, a GPU)"
-RECIPE_NAMES = ("kit", "paper", "photo")  # ddp_lite.method.recipes.RECIPES, without importing the method here
+RECIPE_NAMES = ("kit", "paper", "photo")  # ddp_lite.method.kit.recipes.RECIPES, without importing the method here
 RECIPE_HELP = ("the method: kit = the paper's losses plus the kit's hole terms and net inputs, and (variants with "
                "colour) a share of a colour-guided fill; paper = the paper's method alone; photo = for real "
                "photographs, the mean of a kit fit, a paper fit and a colour-guided fill (two fits) "
                "(default: $DDP_RECIPE, else kit)")
-# ddp_lite.method.device.resolve_device's order for no --device
+# ddp_lite.method.runtime.device.resolve_device's order for no --device
 DEVICE_HELP = "cpu, cuda[:N] or mps (default: cuda when present, else mps when present, else cpu)"
 EXIT_CODES = ("exit codes: 0 done, 1 failed at run time (nothing half-written), 2 usage error "
               "(the message names the option), 130 interrupted (Ctrl-C)")

@@ -28,7 +28,7 @@ def solutions_command(args) -> int:
 
     def log(message):
         print(message, flush=True)
-    from ..method.recipes import get_recipe
+    from ..method.kit.recipes import get_recipe
     recipe = get_recipe(args.recipe).name  # --recipe, else DDP_RECIPE, else kit
     with output_lock([args.out], "--out"):
         written = build_solutions(args.source, args.out, profile=args.profile, timeout=args.timeout,

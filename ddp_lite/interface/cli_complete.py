@@ -239,7 +239,7 @@ def _complete(args, writers, staged, start) -> int:
     from ..core.progress import command_progress
     from ..method.loop import earliest_share, expected_share
     from ..core.checks import check_depth
-    from ..method.nets import check_input_size
+    from ..method.paper.nets import check_input_size
     from ..method.full_resolution import refine_full_resolution
     from ..sequences.working_size import fill_holes_at_full_size, shrink, working_shape
     profile = get_profile(args.profile)

@@ -18,19 +18,19 @@ from matplotlib.figure import Figure  # no pyplot: no backend to choose, no glob
 
 from ..classical.depth_fills import fill_linear
 from ..classical.guided_fills import fill_colorization
-from ..method.device import resolve_device
+from ..method.runtime.device import resolve_device
 from ..evaluation.experiments import error_table, format_table, make_case
 from ..method.config import FitConfig
 from ..method.combine import complete_depth
 from ..method.loop import check_memory, earliest_share, expected_share
-from ..method.nets import check_input_size
+from ..method.paper.nets import check_input_size
 from ..evaluation.metrics import hole_rmse
 from ..core.outpaths import check_output_file
 from ..method.profiles import get_profile
-from ..method.recipes import get_recipe
+from ..method.kit.recipes import get_recipe
 from ..core.progress import command_progress
 from ..world.scenes import SCENES, list_scenes
-from ..method.variants import get_variant
+from ..method.paper.variants import get_variant
 from ..evaluation.viz import save_figure, show_depth, show_error, show_image
 
 VARIANT = "rgbd+warp"

@@ -16,9 +16,9 @@ import numpy as np
 from ..method.config import FitConfig
 from ..data.formats import load_sequence
 from ..core.outpaths import check_output_folder, output_lock
-from ..method.nets import check_input_size
+from ..method.paper.nets import check_input_size
 from ..method.profiles import get_profile
-from ..method.recipes import get_recipe
+from ..method.kit.recipes import get_recipe
 from ..sequences.runner import open_client
 from ..sequences.sequence import run_sequence
 from ..sequences.sequence_files import check_out_folder

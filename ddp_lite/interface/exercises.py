@@ -26,7 +26,7 @@ from skimage.metrics import peak_signal_noise_ratio, structural_similarity
 
 from ..core.camera import Camera, look_at
 from ..evaluation.metrics import d1_error
-from ..method.warp import warp_to_reference
+from ..method.paper.warp import warp_to_reference
 from .own_work import call_watched
 
 __all__ = ["check_psnr", "check_masked_mse", "check_disparity_transform", "check_hole_rmse", "check_ssim",
@@ -164,7 +164,7 @@ def check_masked_mse(student_mse) -> bool:
     return _run("masked mse", student_mse, cases, "a per-pixel loop", _close(1e-9))
 
 
-@_own_work("ddp_lite.method.disparity.DisparityTransform.to_disparity")
+@_own_work("ddp_lite.method.paper.disparity.DisparityTransform.to_disparity")
 def check_disparity_transform(student_to_disparity) -> bool:
     """``student_to_disparity(depth, d_min, d_max, constant)`` → [0, 1], 1 = nearest (paper Sec. 3.2)."""
     cases = []
@@ -201,7 +201,7 @@ def check_hole_rmse(student_hole_rmse) -> bool:
 
 @_own_work("skimage.metrics.structural_similarity",
            "cv2.quality.QualitySSIM_compute",
-           "ddp_lite.method.losses.ssim")
+           "ddp_lite.method.paper.losses.ssim")
 def check_ssim(student_ssim) -> bool:
     """``student_ssim(x, y)`` for grey images in [0, 1] vs scikit-image (Gaussian 11×11, σ = 1.5,
     population covariance, data range 1, mean over the windows that fit inside the image)."""
@@ -220,7 +220,7 @@ def check_ssim(student_ssim) -> bool:
     return _run("ssim", student_ssim, cases, "scikit-image", _close(1e-4))
 
 
-@_own_work("ddp_lite.method.losses.masked_l1",
+@_own_work("ddp_lite.method.paper.losses.masked_l1",
            "ddp_lite.evaluation.metrics.mae")
 def check_masked_l1(student_l1) -> bool:
     """``student_l1(x, y, mask)`` (H, W) arrays: mean |x - y| over mask only."""
@@ -255,8 +255,8 @@ def check_backproject(student_backproject) -> bool:
     return _run("backproject", student_backproject, cases, "the pinhole model, pixel by pixel", _close(1e-9))
 
 
-@_own_work("ddp_lite.method.warp.warp_to_reference",
-           "ddp_lite.method.warp.Warper.forward")
+@_own_work("ddp_lite.method.paper.warp.warp_to_reference",
+           "ddp_lite.method.paper.warp.Warper.forward")
 def check_warp(student_warp) -> bool:
     """``student_warp(nbr_image, ref_depth, ref_cam, nbr_cam)`` → (H, W, 3) vs the kit's tested warp
     (compared where the kit's warp is valid)."""

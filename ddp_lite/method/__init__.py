@@ -1,10 +1,17 @@
-"""Deep Depth Prior itself. The paper's loss in one screen (``paper_method``) and its parts
-(``disparity``, ``losses``, ``warp``, ``nets``, ``variants``); one fit (``fit``, ``fit_inputs``,
-``loop``, ``config``, ``device``); the kit's additions beside it (``hole_losses``, ``hole_terms``, ``visibility``, ``warp_confidence``, ``warp_cost``,
-``coarse_to_fine``) and its combinations of fits, with ``complete_depth``, the entry point
-(``combine``, over ``blend`` and ``ensemble``); independent fits side by side (``side_by_side``); a working-size fit sharpened at a photo's own resolution (``full_resolution``); Deep Image Prior (``dip``); size and method switches
-(``profiles``, ``recipes``) and the loss a config optimises, written out (``equation``); the fit
-cache (``cache``, ``cache_entry``).
+"""Deep Depth Prior itself, in three rooms and the fit between them.
+
+- ``paper/``: the paper's method and nothing else (the disparity transform, losses, warp, nets,
+  variants and L_total, ``total_loss``); it imports nothing of the kit.
+- ``kit/``: what the kit adds, each addition named: hole terms, the warp term's masks and costs,
+  extra net inputs, blends, ensembles, the method switch (recipes). It reaches the paper's loss as
+  arguments (a warp term, occlusion tests, extra terms), never by the paper importing it.
+- ``runtime/``: where and how a fit runs: device, tensors, the fit cache.
+- here, the fit: its config and profiles (``config``, ``profiles``), its inputs (``fit_inputs``), the
+  loop (``loop``), one fit (``fit``, which composes the paper's loss with the kit's terms), the entry
+  point ``complete_depth`` over the kit's combinations (``combine``), independent fits side by side
+  (``side_by_side``), coarse-to-fine (``coarse_to_fine``), a working-size fit sharpened at a photo's
+  own resolution (``full_resolution``), Deep Image Prior (``dip``) and the loss a config optimises,
+  written out (``equation``).
 
 May import: core, classical.
 """

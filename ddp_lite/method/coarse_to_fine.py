@@ -12,11 +12,11 @@ import torch
 
 from ..core.camera import Camera
 from .config import FitConfig
-from .disparity import DisparityTransform
+from .paper.disparity import DisparityTransform
 from .combine import with_fill
 from .fit import DepthResult, fit_once
 from .fit_inputs import check_fit_inputs
-from .nets import make_input
+from .paper.nets import make_input
 
 __all__ = ["complete_depth_coarse_to_fine"]
 

@@ -5,7 +5,7 @@ fill mixed into the result (``blend_fill``, :func:`with_fill`); the blend of thi
 the paper recipe's (``blend_paper``, :func:`fit_blended`); the mean of several fits from other seeds
 (``ensemble``, :func:`fit_ensemble`). The recipe ``photo`` is the first two together. Each member is
 one fit of :func:`ddp_lite.method.fit.run_fit` on the inputs checked once; the weights and shares
-come from :mod:`ddp_lite.method.blend`, the members' scheduling from :mod:`ddp_lite.method.ensemble`.
+come from :mod:`ddp_lite.method.kit.blend`, the members' scheduling from :mod:`ddp_lite.method.kit.ensemble`.
 """
 from __future__ import annotations
 
@@ -13,17 +13,17 @@ from dataclasses import replace
 
 import numpy as np
 
-from .blend import best_fill_share, best_weight, fill_disparity, fill_holdout, validation_ring
-from .cache import cached
+from .kit.blend import best_fill_share, best_weight, fill_disparity, fill_holdout, validation_ring
+from .runtime.cache import cached
 from ..core.camera import Camera
 from ..core.checks import MIN_VALID_PIXELS, check_callback
 from .config import FitConfig
-from .disparity import DisparityTransform
-from .ensemble import mean_outputs, parallel_members
+from .paper.disparity import DisparityTransform
+from .kit.ensemble import mean_outputs, parallel_members
 from .side_by_side import run_side_by_side
 from .fit import DepthResult, FitInputs, check_inputs, run_fit
-from .recipes import get_recipe
-from .variants import get_variant
+from .kit.recipes import get_recipe
+from .paper.variants import get_variant
 
 __all__ = ["complete_depth", "fit_ensemble", "fit_blended", "blend_members", "blended_result", "combined_result",
            "with_fill", "mixed_with_fill"]
@@ -100,7 +100,7 @@ def combined_result(members: list, transform, history: dict, weights=None) -> De
 def fit_blended(inputs: FitInputs, config: FitConfig, callback, init) -> DepthResult:
     """``config.blend_paper``: this config's fit and the paper recipe's, blended with weight
     ``config.blend_weight``, or (None) with the weight that best predicts a ring of valid input held out
-    of both fits (:mod:`ddp_lite.method.blend`). ``history`` is the first fit's plus ``blend_weight`` and,
+    of both fits (:mod:`ddp_lite.method.kit.blend`). ``history`` is the first fit's plus ``blend_weight`` and,
     with the ring, ``blend_ring_errors``."""
     depth, transform = inputs.depth, inputs.transform
     weight, members = config.blend_weight, blend_members(config)
@@ -140,9 +140,9 @@ def blend_members(config: FitConfig) -> tuple[FitConfig, FitConfig]:
 def with_fill(fit, depth: np.ndarray, rgb: np.ndarray, config: FitConfig) -> DepthResult:
     """``fit(depth) -> DepthResult`` with ``config.blend_fill`` f of the colour-guided fill of ``depth`` (H, W)
     metres (NaN holes) mixed in (:func:`mixed_with_fill`). f = None: ``fit`` runs on ``depth`` with
-    blobs of its valid pixels held out (:func:`~ddp_lite.method.blend.fill_holdout`), and f is the share
+    blobs of its valid pixels held out (:func:`~ddp_lite.method.kit.blend.fill_holdout`), and f is the share
     that best predicts them against a fill of the same held-out input
-    (:func:`~ddp_lite.method.blend.best_fill_share`); ``history`` gets ``blend_fill_errors`` (RMSE per
+    (:func:`~ddp_lite.method.kit.blend.best_fill_share`); ``history`` gets ``blend_fill_errors`` (RMSE per
     share, normalised disparity). Too little valid depth to hold any out: the fit alone (f = 0)."""
     share = config.blend_fill
     if share is not None:
@@ -164,7 +164,7 @@ def with_fill(fit, depth: np.ndarray, rgb: np.ndarray, config: FitConfig) -> Dep
 def mixed_with_fill(result: DepthResult, depth: np.ndarray, rgb: np.ndarray, share: float) -> DepthResult:
     """``result`` with ``share`` of the colour-guided fill of the input ``depth`` (H, W) metres (NaN holes),
     guided by ``rgb`` (H, W, 3), mixed into its disparity: (1 − share)·Z + share·Z_fill, in the result's
-    transform (:func:`ddp_lite.method.blend.fill_disparity`). ``history`` gets ``blend_fill``."""
+    transform (:func:`ddp_lite.method.kit.blend.fill_disparity`). ``history`` gets ``blend_fill``."""
     transform = result.transform
     disparity = result.disparity
     if share > 0:  # (share 0 leaves the fit's output as it is, bit for bit)

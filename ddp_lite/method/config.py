@@ -13,7 +13,7 @@ also goes by its own name, as users and recipes write it: ``FitConfig(lr=1e-2, s
 ``config.lr``, ``config.lr = 1e-2`` (a new section with that field changed), ``config.replace(lr=1e-2)``,
 ``FitConfig.for_profile("ci", iterations=50)``. Defaults are the paper's (supplement). A profile's sizes and
 schedules come from :meth:`FitConfig.for_profile`, the one place a :class:`~ddp_lite.method.profiles.Profile`
-becomes a config; what differs between the DDP variants comes from :mod:`ddp_lite.method.variants`.
+becomes a config; what differs between the DDP variants comes from :mod:`ddp_lite.method.paper.variants`.
 """
 from __future__ import annotations
 
@@ -24,13 +24,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.checks import check_bool, check_choice, check_int, check_int_tuple, check_real
-from .device import resolve_device
-from .hole_losses import EDGE_GUIDES
-from .nets import DOWNSAMPLINGS, NET_INPUTS, NETS, PADDINGS, UPSAMPLINGS
+from .runtime.device import resolve_device
+from .kit.hole_losses import EDGE_GUIDES
+from .paper.nets import DOWNSAMPLINGS, NET_INPUTS, NETS, PADDINGS, UPSAMPLINGS
 from .profiles import Profile, get_profile
-from .recipes import get_recipe
-from .warp_cost import WARP_COSTS
-from .variants import get_variant
+from .kit.recipes import get_recipe
+from .kit.warp_cost import WARP_COSTS
+from .paper.variants import get_variant
 
 __all__ = ["FitConfig", "HOLDOUTS", "NetworkConfig", "OptimisationConfig", "LossConfig", "HolesConfig",
            "CombinationConfig", "StoppingConfig", "RuntimeConfig"]
@@ -55,7 +55,7 @@ class _Section:
 
 @dataclass(frozen=True)
 class NetworkConfig(_Section):
-    """The network and its input (:mod:`ddp_lite.method.nets`)."""
+    """The network and its input (:mod:`ddp_lite.method.paper.nets`)."""
 
     net: str = "unet"  # "unet" or "skip"
     channels: tuple | None = None  # encoder widths; None → the paper's
@@ -64,9 +64,9 @@ class NetworkConfig(_Section):
     pad: str = "reflect"  # UNet conv padding: "reflect" (DIP) or "zeros"
     noise_channels: int = 16  # channels of the fixed network input
     net_input: str = "noise"  # "noise" (the paper) or "meshgrid" (x, y in the first two channels; nets.make_input)
-    image_input: float = 0.0  # > 0: the colour image × this joins the net input (variants with colour; nets.image_channels)
+    image_input: float = 0.0  # > 0: the colour image × this joins the net input (variants with colour; kit.net_inputs.image_channels)
     image_blur: float = 1.0  # σ in px of the Gaussian blur on that image (0: none)
-    fill_input: float = 0.0  # > 0: a classical fill of the input disparity × this joins the net input (nets.fill_channel)
+    fill_input: float = 0.0  # > 0: a classical fill of the input disparity × this joins the net input (kit.net_inputs.fill_channel)
 
 
 @dataclass(frozen=True)
@@ -95,18 +95,18 @@ class LossConfig(_Section):
     warp_occlusion: bool = False  # L_warp skips pixels a nearer point hides from the neighbour (warp.Warper; not in the paper)
     warp_confidence: bool = False  # L_warp only where the images single out one depth (method.warp_confidence; not in the paper)
     warp_reach: float | None = None  # L_warp only on the unfitted pixels (holes, held-out) and within this many px of
-    # them, off the valid input L_disp pins (paper_method.warp_region; None: every pixel, the paper)
+    # them, off the valid input L_disp pins (kit.warp_terms.warp_region; None: every pixel, the paper)
     warp_cost: str = "intensity"  # what L_warp compares: "intensity" (L1 + SSIM on colour, the paper), "census" (a
     # soft census, no L1/SSIM), "gradient" (L1 on the images' differences + SSIM) or "census+intensity" (half each,
-    # the census at L1 + SSIM's size) (method.warp_cost; not in the paper)
+    # the census at L1 + SSIM's size) (method.kit.warp_cost; not in the paper)
     warp_texture: bool = False  # L_warp weighted per pixel by the reference's change along the epipolar line
-    # (method.warp_cost.texture_weights: flat colour little; not in the paper)
+    # (method.kit.warp_cost.texture_weights: flat colour little; not in the paper)
     disparity_margin: float = 1.25  # transform=None: d_min / margin … d_max × margin around the valid depth
 
 
 @dataclass(frozen=True)
 class HolesConfig(_Section):
-    """The kit's terms on the disparity in the holes (:mod:`ddp_lite.method.hole_losses`; 0: off, the paper)."""
+    """The kit's terms on the disparity in the holes (:mod:`ddp_lite.method.kit.hole_losses`; 0: off, the paper)."""
 
     smoothness: float = 0.0  # weight of an edge-aware second-order smoothness of disparity in the holes (0: the paper)
     smoothness_edge: float = 10.0  # how strongly colour edges relax both hole terms: exp(-edge · |∇I|)
@@ -229,14 +229,14 @@ class FitConfig:
     @classmethod
     def for_profile(cls, profile=None, variant: str = "rgbd+warp", recipe=None, **overrides) -> "FitConfig":
         """The config of a profile (name, :class:`Profile` or None for ``DDP_PROFILE``) for ``variant``,
-        running ``recipe`` (name, :class:`~ddp_lite.method.recipes.Recipe` or None for ``DDP_RECIPE``; ``"kit"``,
+        running ``recipe`` (name, :class:`~ddp_lite.method.kit.recipes.Recipe` or None for ``DDP_RECIPE``; ``"kit"``,
         the default, is the paper's losses plus the kit's additions at that profile, ``"paper"`` the
         paper's method), then ``overrides``.
 
         The profile gives size and budget: every :class:`Profile` field that is also a FitConfig field
         is copied, and three are derived: ``channels`` (the UNet's or the SkipNet's widths, by ``net``),
         ``iterations`` (the variant's count) and ``lr_milestones`` (those the variant's run reaches).
-        The recipe gives the method: its :meth:`~ddp_lite.method.recipes.Recipe.settings` at the profile's name.
+        The recipe gives the method: its :meth:`~ddp_lite.method.kit.recipes.Recipe.settings` at the profile's name.
 
         Example:
             >>> config = FitConfig.for_profile("ci", variant="rgbd", recipe="paper")

@@ -10,12 +10,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import loop
-from .cache import cached
+from .runtime.cache import cached
 from ..core.checks import MIN_VALID_PIXELS, check_callback, check_image
 from .config import FitConfig
-from .device import resolve_device
-from .loop import check_finite_output, check_memory, holdout_mask, to_tensor
-from .nets import check_input_size
+from .runtime.device import resolve_device
+from .loop import check_finite_output, check_memory, holdout_mask
+from .runtime.tensors import to_tensor
+from .paper.nets import check_input_size
 
 __all__ = ["ImageResult", "fit_image"]
 

@@ -1,13 +1,13 @@
 """The objective a fit's config optimises, written out as one equation for a notebook.
 
-The paper's terms (Eq. 2-5, :mod:`ddp_lite.method.paper_method`) come with the weights the
-variant gives them; the kit's additions (:mod:`ddp_lite.method.hole_terms`, the net inputs of
-:mod:`ddp_lite.method.nets`) are set apart under a brace marked "not in the paper", so a student
+The paper's terms (Eq. 2-5, :mod:`ddp_lite.method.paper.total_loss`) come with the weights the
+variant gives them; the kit's additions (:mod:`ddp_lite.method.kit.hole_terms`, the net inputs of
+:mod:`ddp_lite.method.paper.nets`) are set apart under a brace marked "not in the paper", so a student
 sees at a glance what the recipe in force adds. Reads only the config's fields.
 """
 from __future__ import annotations
 
-from .variants import get_variant
+from .paper.variants import get_variant
 
 __all__ = ["loss_equation"]
 
@@ -33,10 +33,10 @@ def loss_equation(config, variant: str) -> str:
         paper.append(_weight(w_rgb) + "L^{\\mathrm{RGB}}")
     if w_warp > 0:
         warp = "L^{\\mathrm{warp}}"
-        cost = getattr(config, "warp_cost", "intensity")  # method.warp_cost; "intensity" is the paper's
+        cost = getattr(config, "warp_cost", "intensity")  # method.kit.warp_cost; "intensity" is the paper's
         where = [name for name, on in (("visible", getattr(config, "warp_occlusion", False)),  # method.visibility
                                        ("confident", getattr(config, "warp_confidence", False)),  # method.warp_confidence
-                                       ("holes", getattr(config, "warp_reach", None) is not None),  # paper_method.warp_region
+                                       ("holes", getattr(config, "warp_reach", None) is not None),  # kit.warp_terms.warp_region
                                        (cost, cost != "intensity"),
                                        ("textured", getattr(config, "warp_texture", False)))
                  if on]

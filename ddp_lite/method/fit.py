@@ -1,8 +1,9 @@
 """Deep Depth Prior: fill the holes of one depth map by fitting a net from fixed noise (paper Sec. 3).
 
 One fit, on inputs checked once (:func:`check_inputs`): :func:`run_fit` builds the paper's loss
-(:mod:`ddp_lite.method.paper_method`) plus, when the config asks for them, the kit's hole terms
-(:mod:`ddp_lite.method.hole_terms`) and net inputs (:mod:`ddp_lite.method.nets`), and hands it to the
+(:mod:`ddp_lite.method.paper.total_loss`) with, when the config asks for them, the kit's hole terms
+(:mod:`ddp_lite.method.kit.hole_terms`) and warp term (:mod:`ddp_lite.method.kit.warp_terms`) as its
+arguments, joins the kit's net inputs (:mod:`ddp_lite.method.kit.net_inputs`), and hands it to the
 loop (:func:`ddp_lite.method.loop.run`). :func:`fit_once` is the two steps in one call. The kit's
 combinations of fits (an ensemble, the blend with the paper recipe's fit, a share of a classical fill)
 and :func:`~ddp_lite.method.combine.complete_depth`, the entry point, live in :mod:`ddp_lite.method.combine`,
@@ -20,14 +21,16 @@ from . import loop
 from ..core.camera import Camera
 from ..core.checks import MIN_VALID_PIXELS, check_depth, unmask
 from .config import FitConfig
-from .device import resolve_device
-from .disparity import DisparityTransform
+from .runtime.device import resolve_device
+from .paper.disparity import DisparityTransform
 from .fit_inputs import check_fit_inputs
-from .hole_terms import HoleTerms
-from .loop import check_finite_output, check_memory, holdout_mask, to_tensor
-from .nets import fill_channel, image_channels
-from .paper_method import PaperLoss
-from .variants import Variant, get_variant
+from .kit.hole_terms import HoleTerms
+from .kit.net_inputs import fill_channel, image_channels
+from .kit.warp_terms import kit_warp_arguments
+from .loop import check_finite_output, check_memory, holdout_mask
+from .runtime.tensors import to_tensor
+from .paper.total_loss import PaperLoss
+from .paper.variants import Variant, get_variant
 
 __all__ = ["DepthResult", "FitInputs", "merge", "check_inputs", "run_fit", "fit_once"]
 
@@ -125,15 +128,16 @@ def run_fit(inputs: FitInputs, config: FitConfig, *, callback=None, init: DepthR
     target = to_tensor(np.nan_to_num(disparity_in, nan=0.0), device)  # (1, 1, H, W)
     rgb_t = to_tensor(rgb, device) if rgb is not None and w_rgb + w_warp > 0 else None  # (1, 3, H, W)
     nbrs = [(to_tensor(img, device), cam) for img, cam in neighbors] if w_warp > 0 else []
-    paper_loss = PaperLoss(spec, config, transform, target, to_tensor(valid & ~heldout, device).bool(), rgb_t,
-                           camera, nbrs, device)
-    # the unconstrained pixels: holes, and the held-out pixels, which must behave like holes
-    hole_terms = HoleTerms(config, ~(valid & ~heldout), rgb_t, rgb, device, disparity_in)
+    fit_mask = to_tensor(valid & ~heldout, device).bool()
+    # the paper's loss, with the kit's warp term, occlusion tests and hole terms (each None or off unless asked
+    # for) as its arguments; the hole terms act on the unconstrained pixels: holes, and the held-out pixels
+    paper_loss = PaperLoss(spec, config, transform, target, fit_mask, rgb_t, camera, nbrs, device,
+                           **kit_warp_arguments(config, transform, fit_mask, rgb_t, camera, nbrs, device),
+                           extra_terms=[HoleTerms(config, ~(valid & ~heldout), rgb_t, rgb, device, disparity_in)])
 
     def loss_fn(output):  # (1, 1 or 4, H, W): Z_out, then I_out
         disparity = output[:, :1]  # one view for every term: the gradients add up in the same order
-        total, terms = paper_loss(disparity, output[:, 1:4] if spec.uses_rgb else None)
-        return hole_terms.add(disparity, total, terms), terms
+        return paper_loss(disparity, output[:, 1:4] if spec.uses_rgb else None)
 
     heldout_error = loop.heldout_error_fn(target, heldout, device) if heldout.any() else None
     evaluate = loop.hole_errors_fn(gt_depth, valid, transform, device) if gt_depth is not None else None

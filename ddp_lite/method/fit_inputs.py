@@ -14,9 +14,9 @@ import torch
 from ..core.camera import Camera, view_overlap, view_parallax
 from ..core.checks import check_depth, check_image
 from .config import FitConfig
-from .disparity import DisparityTransform
-from .nets import check_input_size
-from .variants import get_variant
+from .paper.disparity import DisparityTransform
+from .paper.nets import check_input_size
+from .paper.variants import get_variant
 from ..core.views import image_and_camera
 
 __all__ = ["check_fit_inputs", "MIN_PARALLAX_PX"]  # a Camera checks its own K (core.camera.check_intrinsics)

@@ -21,19 +21,13 @@ import torch
 from scipy import ndimage
 
 from .config import FitConfig
-from .device import use_bf16
-from .nets import SKIP_CHANNELS, UNET_CHANNELS, build_net, count_parameters, make_input
+from .runtime.device import use_bf16
+from .runtime.tensors import to_tensor
+from .paper.nets import SKIP_CHANNELS, UNET_CHANNELS, build_net, count_parameters, make_input
 from ..core.progress import progress as tqdm
 
 __all__ = ["PlateauStopper", "EXPECTED_STOP_SHARE", "EARLIEST_STOP_SHARE", "RUN_AFTER_CUT_SHARE", "expected_share", "earliest_share", "run", "build", "holdout_mask", "estimate_peak_memory_gb", "check_memory",
-           "check_finite_output", "to_tensor", "memory_limit_gb", "heldout_error_fn", "hole_errors_fn"]
-
-
-def to_tensor(array: np.ndarray, device) -> torch.Tensor:
-    """(H, W) → (1, 1, H, W); (H, W, C) → (1, C, H, W)."""
-    tensor = torch.from_numpy(np.ascontiguousarray(array, dtype=np.float32))
-    tensor = tensor[None, None] if tensor.ndim == 2 else tensor.permute(2, 0, 1)[None]
-    return tensor.contiguous().to(device)
+           "check_finite_output", "memory_limit_gb", "heldout_error_fn", "hole_errors_fn"]
 
 
 class PlateauStopper:
@@ -197,7 +191,7 @@ _INIT_LOCK = threading.Lock()
 def build(config: FitConfig, out_channels: int, height: int, width: int, device, init_state=None, noise=None,
           image=None):
     """The net and its fixed input (1, C, H, W): ``noise`` (made from the config when None), followed
-    by ``image`` (1, 3, H, W) when given (``nets.image_channels``)."""
+    by ``image`` (1, 3, H, W) when given (``kit.net_inputs.image_channels``)."""
     in_channels = config.noise_channels + (0 if image is None else image.shape[1])
     with _INIT_LOCK, torch.random.fork_rng(devices=[]):  # deterministic init without touching the caller's RNG
         torch.manual_seed(config.seed)

@@ -6,7 +6,7 @@
   iterations; depth-only 6000), meant for a GPU.
 
 A profile sets size and budget only: image size, net widths, iterations, learning-rate schedule,
-auto-stop, views per scene, seeds. What a fit optimises is the recipe (:mod:`ddp_lite.method.recipes`).
+auto-stop, views per scene, seeds. What a fit optimises is the recipe (:mod:`ddp_lite.method.kit.recipes`).
 The paper's rate fills nothing in 1000 iterations at our small sizes, so ``ci`` and ``class`` use
 1e-2: ``ci`` cuts it ×0.3 at iterations 90 and 128 of a fixed 150; ``class`` cuts it at the first
 plateau of a held-out error and stops at the second (:class:`~ddp_lite.method.loop.PlateauStopper`).
@@ -17,8 +17,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..core.checks import env_choice, named_choice
-from .recipes import describe_method, get_recipe
-from .variants import get_variant
+from .kit.recipes import describe_method, get_recipe
+from .paper.variants import get_variant
 
 __all__ = ["Profile", "PROFILES", "get_profile", "current_profile_name"]
 
@@ -56,7 +56,7 @@ class Profile:
     eval_every: int
 
     def iterations_for(self, variant) -> int:
-        """The iteration count of ``variant`` (a name or :class:`~ddp_lite.method.variants.Variant`) here."""
+        """The iteration count of ``variant`` (a name or :class:`~ddp_lite.method.paper.variants.Variant`) here."""
         return self.iterations_depth_only if get_variant(variant).depth_only else self.iterations
 
     def milestones(self, iterations: int) -> tuple[int, ...]:

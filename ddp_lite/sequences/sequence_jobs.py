@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core.camera import Camera
-from ..method.disparity import DisparityTransform
+from ..method.paper.disparity import DisparityTransform
 from ..method.config import FitConfig
 from ..method.combine import complete_depth
 from ..method.side_by_side import torch_threads

@@ -1,6 +1,6 @@
 """Beyond the paper: the kit's additions put on the paper's recipe one at a time, and what each buys.
 
-The ``kit`` recipe is the paper's method plus a few pieces (``ddp_lite.method.recipes.KIT_AT``).
+The ``kit`` recipe is the paper's method plus a few pieces (``ddp_lite.method.kit.recipes.KIT_AT``).
 :func:`addition_steps` orders them into a cumulative path from the ``paper`` recipe to the ``kit``
 recipe at a profile; :func:`run_additions` fits every step on real and synthetic cases over several
 seeds and scores each fit against the best classical fill of its case, so a step's gain is read
@@ -17,7 +17,7 @@ from ..method.config import FitConfig
 from ..method.combine import complete_depth, mixed_with_fill
 from ..method.side_by_side import run_side_by_side
 from ..method.profiles import get_profile
-from ..method.recipes import get_recipe
+from ..method.kit.recipes import get_recipe
 from ..evaluation.experiments import Case, make_case
 from .real_cases import RealCase, factor_for_profile, make_real_case
 

@@ -25,7 +25,7 @@ from ..evaluation.metrics import cloud_scores, psnr
 from ..world.neighbors import select_neighbors
 from ..evaluation.plane_sweep import plane_sweep
 from ..core.views import Scene
-from ..method.warp import warp_to_reference
+from ..method.paper.warp import warp_to_reference
 
 __all__ = ["sweep_views", "scene_neighbors", "complete_views", "fused_scores",
            "reprojection_psnr", "fill_table", "nyu_fill_table"]

@@ -1,15 +1,14 @@
 """The kit's hole terms of one fit, ready to add to the paper's loss each iteration: their weights
-and regions are computed once from the input (the formulas: :mod:`ddp_lite.method.hole_losses`).
+and regions are computed once from the input (the formulas: :mod:`ddp_lite.method.kit.hole_losses`).
 """
 from __future__ import annotations
 
 import numpy as np
 import torch
 
-from ..classical.guided_fills import NEIGHBOUR_OFFSETS, colorization_affinities
-from .config import FitConfig
+from ...classical.guided_fills import NEIGHBOUR_OFFSETS, colorization_affinities
 from .hole_losses import affinity_loss, flatness_loss, flatness_region, smoothness_loss, smoothness_weights, step_region
-from .loop import to_tensor
+from ..runtime.tensors import to_tensor
 
 __all__ = ["HoleTerms"]
 
@@ -17,13 +16,14 @@ __all__ = ["HoleTerms"]
 class HoleTerms:
     """The kit's hole terms of one fit: ``add(disparity, total, terms)`` adds each that is on.
 
+    ``config``: a :class:`~ddp_lite.method.config.FitConfig` (its hole-term fields);
     ``free`` (H, W) bool: the pixels no data term constrains (holes and held-out pixels);
     ``disparity`` (H, W) the input disparity, read outside ``free`` (only for ``step_reach``);
     ``rgb_t`` (1, 3, H, W) the colour the edges are measured on (None: no edges); ``rgb``
     (H, W, 3) NumPy, for the colorization affinities (None: no affinity term).
     """
 
-    def __init__(self, config: FitConfig, free: np.ndarray, rgb_t: torch.Tensor | None, rgb: np.ndarray | None,
+    def __init__(self, config, free: np.ndarray, rgb_t: torch.Tensor | None, rgb: np.ndarray | None,
                  device, disparity: np.ndarray | None = None):
         self.config = config
         H, W = free.shape

@@ -9,7 +9,7 @@ the pixels where SGBM failed (docs/real_data.md, "Where the warp term can be tru
 
 The test asks the images alone, once per fit, before the loop (it does not depend on the fit's
 depth): a plane sweep of the term's own per-pixel cost (:func:`photometric_cost`, through the same
-:class:`~ddp_lite.method.warp.Warper`) over fronto-parallel planes uniform in inverse depth over the
+:class:`~ddp_lite.method.paper.warp.Warper`) over fronto-parallel planes uniform in inverse depth over the
 fit's range, then three classical stereo checks on the cost curve:
 
 - **uniqueness** (SGM's uniqueness ratio): ``1 - c_best / c_second ≥ UNIQUENESS``, with c_second
@@ -30,9 +30,9 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-from ..core.camera import Camera
-from .losses import ssim
-from .warp import Warper
+from ...core.camera import Camera
+from ..paper.losses import ssim
+from ..paper.warp import Warper
 
 __all__ = ["photometric_cost", "structure_per_pixel", "sweep_planes", "cost_volume", "warp_confidence",
            "UNIQUENESS", "EXCLUSION_PX", "LR_TOLERANCE_PX", "ERODE_PX", "STEP_PX"]

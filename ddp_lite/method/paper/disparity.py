@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from ..core.checks import check_real
+from ...core.checks import check_real
 
 __all__ = ["DisparityTransform", "TNT_DEPTH_RANGES"]
 

@@ -10,20 +10,19 @@ from __future__ import annotations
 
 import numpy as np
 
-from .config import FitConfig
-from .side_by_side import side_by_side_workers
+from ..side_by_side import side_by_side_workers
 
 __all__ = ["parallel_members", "mean_outputs"]
 
 
-def parallel_members(config: FitConfig, variant: str, shape, n_neighbors: int, callback) -> int:
+def parallel_members(config, variant: str, shape, n_neighbors: int, callback) -> int:
     """How many of ``config.ensemble`` members run at once (:func:`side_by_side.side_by_side_workers`)."""
     return side_by_side_workers(config, variant, shape, n_neighbors, int(config.ensemble), callback)
 
 
 def mean_outputs(members: list, weights=None) -> tuple[np.ndarray, np.ndarray | None]:
     """(Z (H, W), I (H, W, 3) or None): the members' mean disparity and colour output, float32;
-    with ``weights`` (one per member, summing to 1) their weighted sum (a blend, ``ddp_lite.method.blend``)."""
+    with ``weights`` (one per member, summing to 1) their weighted sum (a blend, ``ddp_lite.method.kit.blend``)."""
     def combine(arrays):
         if weights is None:
             return np.mean(arrays, axis=0).astype(np.float32)

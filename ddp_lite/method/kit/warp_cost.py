@@ -34,7 +34,7 @@ costs for the warp term").
 
 Conventions: images (B, C, H, W) in [0, 1]; masks (B, 1, H, W) bool, True = the pixel counts; a pixel
 that does not count gets the reference's value in the warped image before any patch is compared (as
-:mod:`ddp_lite.method.losses` does for SSIM), so it agrees exactly and passes no gradient.
+:mod:`ddp_lite.method.paper.losses` does for SSIM), so it agrees exactly and passes no gradient.
 """
 from __future__ import annotations
 
@@ -42,8 +42,8 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-from ..core.camera import Camera, pixel_grid, relative_pose
-from .losses import ConstantTarget, ssim, warp_loss
+from ...core.camera import Camera, pixel_grid, relative_pose
+from ..paper.losses import ConstantTarget, ssim, warp_loss
 
 __all__ = ["WARP_COSTS", "CENSUS_RADIUS", "CENSUS_SCALE", "grey", "soft_census", "census_distance",
            "forward_differences", "epipolar_directions", "texture_weights", "WarpCost"]
@@ -106,7 +106,7 @@ def epipolar_directions(ref_cam: Camera, nbr_cam: Camera) -> torch.Tensor:
     """(1, 2, H, W) float64: per reference pixel, the unit direction (x, y) in which its match moves
     along its epipolar line as its depth changes: towards or away from the epipole ``e = K C`` (C the
     neighbour's centre in the reference frame), ``e_xy − p·e_z``, the same at every depth
-    (as :class:`~ddp_lite.method.visibility.Visibility` marches). A rectified pair: ±x everywhere."""
+    (as :class:`~ddp_lite.method.kit.visibility.Visibility` marches). A rectified pair: ±x everywhere."""
     centre = torch.tensor(np.linalg.inv(relative_pose(ref_cam, nbr_cam))[:3, 3], dtype=torch.float64)
     epipole = torch.tensor(ref_cam.K, dtype=torch.float64) @ centre
     pixels = pixel_grid(ref_cam.height, ref_cam.width, torch.float64)[:2].reshape(2, ref_cam.height, ref_cam.width)
@@ -139,7 +139,7 @@ class WarpCost:
     and its valid pixels (1, 1, H, W) bool; ``weights`` (1, 1, H, W) scale each pixel's share.
 
     ``kind="intensity"`` without weights is exactly the paper's ``λw (1 − SSIM) + (1 − λw) L1``
-    (:func:`~ddp_lite.method.losses.warp_loss`'s per-neighbour term). With weights, L1 (or the gradient
+    (:func:`~ddp_lite.method.paper.losses.warp_loss`'s per-neighbour term). With weights, L1 (or the gradient
     L1) is a weighted mean over the valid pixels and SSIM a weighted mean over the 11×11 windows, each
     weighted by its centre pixel's weight; census is a weighted mean over the valid pixels.
     ``kind="census+intensity"`` is ``0.5 · intensity + 0.5 · CENSUS_SCALE · census``, each half as above.

@@ -12,8 +12,9 @@ maps -1 and +1 to the *centres* of the first and last pixel, matching the conven
 pixel (0, 0) is the centre of the top-left pixel. A pixel is invalid when the point is behind
 the neighbour (q_z ≤ 0) or lands outside its image; invalid pixels are excluded from the loss.
 
-With ``occlusion=True`` (the kit's, not the paper's) a pixel is also invalid where the reference
-surface hides it from the neighbour (:class:`~ddp_lite.method.visibility.Visibility`).
+An occlusion test passed in as ``visibility`` (the kit's, not the paper's:
+:class:`~ddp_lite.method.kit.visibility.Visibility`) also marks invalid the pixels where the reference
+surface hides the point from the neighbour.
 """
 from __future__ import annotations
 
@@ -21,9 +22,8 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-from ..core.camera import Camera, pixel_grid, relative_pose
-from ..core.checks import unmask
-from .visibility import Visibility
+from ...core.camera import Camera, pixel_grid, relative_pose
+from ...core.checks import unmask
 
 __all__ = ["Warper", "warp_to_reference"]
 
@@ -39,9 +39,12 @@ class Warper(torch.nn.Module):
         (True, True)
     """
 
-    def __init__(self, ref_cam: Camera, nbr_cam: Camera, dtype=torch.float32, device=None, occlusion: bool = False):
+    def __init__(self, ref_cam: Camera, nbr_cam: Camera, dtype=torch.float32, device=None,
+                 visibility: torch.nn.Module | None = None):
+        """``visibility``: None (the paper's warp), or an occlusion test, depth (B, 1, H, W) → hidden (B, 1, H, W)
+        bool, applied every ``VISIBILITY_EVERY`` calls."""
         super().__init__()
-        self.visibility = Visibility(ref_cam, nbr_cam, dtype, device) if occlusion else None
+        self.visibility = visibility
         self.hidden, self.calls = None, 0  # the last occlusion mask and the calls since (see VISIBILITY_EVERY)
         nbr_from_ref = relative_pose(ref_cam, nbr_cam)
         K_nbr = torch.tensor(nbr_cam.K, dtype=torch.float64)

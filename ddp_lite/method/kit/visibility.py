@@ -24,7 +24,7 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-from ..core.camera import Camera, pixel_grid, relative_pose
+from ...core.camera import Camera, pixel_grid, relative_pose
 
 __all__ = ["Visibility"]
 

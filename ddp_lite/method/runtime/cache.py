@@ -19,7 +19,7 @@ wait; ``seconds`` is the time the fit took when it ran. A fit with a ``callback`
 (the callback is what the caller wants to see), nor is a call whose arguments cannot be hashed,
 nor one that raises. Hashing is ``joblib.hash`` (MD5 of a pickle, arrays by their bytes).
 
-An entry cannot run code and cannot stand in for another call (:mod:`ddp_lite.method.cache_entry`):
+An entry cannot run code and cannot stand in for another call (:mod:`ddp_lite.method.runtime.cache_entry`):
 it is one ``.npz`` file read with ``allow_pickle=False`` (the result's arrays, and its structure as
 JSON naming only the kit's own result types), and it holds the key of the call that made it. On
 read the key, the function and the result type must match the call, and the result's images must
@@ -43,11 +43,11 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from ..core.files import describe_kind, regular_file, write_bytes_atomic
+from ...core.files import describe_kind, regular_file, write_bytes_atomic
 from .cache_entry import BadEntry, Unstorable, entry_bytes, read_entry
-from .config import FitConfig
-from .profiles import current_profile_name
-from .recipes import current_recipe_name
+from ..config import FitConfig
+from ..profiles import current_profile_name
+from ..kit.recipes import current_recipe_name
 
 __all__ = ["ENV_VAR", "cache_folder", "cached"]
 

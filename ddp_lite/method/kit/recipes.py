@@ -4,16 +4,16 @@ A profile (``ci``, ``class``, ``paper``; ``DDP_PROFILE``) sets the size and the 
 (``DDP_RECIPE``, or ``recipe=`` of :meth:`FitConfig.for_profile`) says what is optimised:
 
 - ``paper``: the paper's method and nothing else: L_disp, L_rgb, L_warp (Eq. 2-5,
-  :mod:`ddp_lite.method.paper_method`) with their weights, from the fixed noise input; no hole terms, no
+  :mod:`ddp_lite.method.paper.total_loss`) with their weights, from the fixed noise input; no hole terms, no
   coordinates or image in the input.
 - ``kit`` (the default): the paper's losses *plus* what the kit found to help at laptop sizes, per
   profile (:data:`KIT_AT`): the curvature and flatness terms in the holes, relaxed at colour edges
-  (:mod:`ddp_lite.method.hole_terms`); the pixel coordinates and the blurred colour image as the net's
-  input (:mod:`ddp_lite.method.nets`); a share of a colour-guided fill of the input mixed into the result
-  where the variant sees colour (:mod:`ddp_lite.method.blend`). At ``paper`` it is the
+  (:mod:`ddp_lite.method.kit.hole_terms`); the pixel coordinates and the blurred colour image as the net's
+  input (:mod:`ddp_lite.method.paper.nets`); a share of a colour-guided fill of the input mixed into the result
+  where the variant sees colour (:mod:`ddp_lite.method.kit.blend`). At ``paper`` it is the
   paper's method.
 - ``photo``: for real photographs, the mean of a ``kit`` fit, a ``paper`` fit and the input's
-  colour-guided fill (two fits, :mod:`ddp_lite.method.blend`): ahead of each on the real Middlebury
+  colour-guided fill (two fits, :mod:`ddp_lite.method.kit.blend`): ahead of each on the real Middlebury
   pair, behind ``kit`` on the rendered scenes.
 
 Every profile runs with every recipe, so ``FitConfig.for_profile("ci", recipe="paper")`` is the
@@ -25,7 +25,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from ..core.checks import env_choice, named_choice
+from ...core.checks import env_choice, named_choice
 
 __all__ = ["Recipe", "RECIPES", "KIT_AT", "ENV_VAR", "DEFAULT", "current_recipe_name", "get_recipe",
            "describe_method"]

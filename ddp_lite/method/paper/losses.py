@@ -9,7 +9,7 @@ is compared and which pixels count:
   the warp lands inside the neighbour.
 
 The kit's own terms on the disparity in the holes, not the paper's, live in
-:mod:`ddp_lite.method.hole_losses`.
+:mod:`ddp_lite.method.kit.hole_losses`.
 
 Masking SSIM needs care: an 11×11 window centred on a valid pixel next to a hole would see the
 hole's values. So before SSIM both images get the *same* value wherever a pixel does not count

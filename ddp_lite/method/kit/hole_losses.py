@@ -1,7 +1,7 @@
 """The kit's terms in the holes: not in the paper, added to its loss by the ``kit`` recipe
-(:class:`~ddp_lite.method.hole_terms.HoleTerms` adds them to one fit).
+(:class:`~ddp_lite.method.kit.hole_terms.HoleTerms` adds them to one fit).
 
-    L = L_total (paper, :mod:`ddp_lite.method.paper_method`) + s·L_curv + f·L_flat + a·L_aff
+    L = L_total (paper, :mod:`ddp_lite.method.paper.total_loss`) + s·L_curv + f·L_flat + a·L_aff
 
 on the disparity Z in the *free* pixels (holes and held-out pixels), each relaxed at colour edges:
 
@@ -17,7 +17,7 @@ on the disparity Z in the *free* pixels (holes and held-out pixels), each relaxe
 - L_aff = Σ |Z_p - Σ_q w_pq Z_q| / #free, Levin et al.'s colorization energy
   (``FitConfig.affinity`` = a; :func:`affinity_loss`).
 
-On in the ``kit`` recipe at ``ci`` and ``class`` (:data:`ddp_lite.method.recipes.KIT_AT` says why), but
+On in the ``kit`` recipe at ``ci`` and ``class`` (:data:`ddp_lite.method.kit.recipes.KIT_AT` says why), but
 the affinity term, tried and off by default; the ``paper`` recipe has none. Why these weights and what
 they bought on the quality suite: ``docs/tuning_history.md``.
 """

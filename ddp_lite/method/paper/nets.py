@@ -3,8 +3,8 @@
 Both map a fixed input tensor (B, C_in, H, W) to an output (B, C_out, H, W) in [0, 1] (sigmoid):
 16 channels of uniform noise, as in the paper, or the pixel coordinates, alone or followed by
 noise channels (``make_input``; Deep Image Prior's input for large holes); optionally followed by
-the (blurred) colour image of the view (``image_channels``) and a classical fill of the input
-(``fill_channel``).
+extra input channels the caller gives (the kit's colour image and classical fill:
+:mod:`ddp_lite.method.kit.net_inputs`).
 Nothing is pretrained: the architecture itself is the prior. Each network pads its input to a
 multiple of its total down-sampling factor (reflection padding) and crops the output back, so
 any image size works.
@@ -16,11 +16,8 @@ import torch
 import torch.nn as nn
 import torch.nn.functional as F
 
-from ..classical.depth_fills import fill_linear
-from ..classical.guided_fills import fill_colorization
-from .losses import blur_valid, gaussian_kernel_1d  # SSIM's separable Gaussian, reused for the image input
 
-__all__ = ["UNet", "SkipNet", "make_noise", "make_input", "image_channels", "fill_channel", "build_net", "count_parameters"]
+__all__ = ["UNet", "SkipNet", "make_noise", "make_input", "build_net", "count_parameters"]
 
 UNET_CHANNELS = (32, 64, 128, 256, 512)  # the paper's encoder
 SKIP_CHANNELS = (128, 128, 128, 128, 128)  # DIP's inpainting "skip" net
@@ -60,45 +57,6 @@ def make_input(kind: str, channels: int, height: int, width: int, seed: int = 0)
     x, y = torch.linspace(0.0, 1.0, width), torch.linspace(0.0, 1.0, height)  # one pixel: [0.]
     grid = torch.stack(torch.meshgrid(x, y, indexing="xy"))[None]  # (1, 2, H, W): x, then y
     return torch.cat([grid, make_noise(channels - 2, height, width, seed=seed)], dim=1)
-
-
-def image_channels(image: torch.Tensor, scale: float = 1.0, blur: float = 1.0) -> torch.Tensor:
-    """The colour image as extra input channels: ``scale ×`` ``image`` (1, 3, H, W) in [0, 1],
-    Gaussian-blurred with σ = ``blur`` px (kernel radius round(3σ); the border pixel repeated;
-    ``blur=0``: not blurred). Same shape as ``image``.
-
-    With the view's colours in its input the net can put depth edges exactly where the colour
-    edges are, which a function of the coordinates alone draws blurred. The blur keeps fine
-    texture (grass, bark) out: inside a hole, whatever the input varies with, the output can too.
-
-    Example:
-        >>> step = torch.zeros(1, 3, 1, 6); step[..., 3:] = 1.0  # a colour edge between pixels 2 and 3
-        >>> [round(v, 3) for v in image_channels(step, 1.0, 1.0)[0, 0, 0].tolist()]
-        [0.004, 0.058, 0.3, 0.7, 0.942, 0.996]
-    """
-    if blur > 0:
-        radius = int(3 * blur + 0.5)
-        kernel = gaussian_kernel_1d(2 * radius + 1, float(blur), image.dtype, str(image.device))  # (2r + 1,)
-        image = blur_valid(F.pad(image, (radius,) * 4, mode="replicate"), kernel)  # (1, 3, H, W)
-    return scale * image
-
-
-def fill_channel(disparity: np.ndarray, rgb: np.ndarray | None, scale: float = 1.0) -> np.ndarray:
-    """A classical fill of the input as one more input channel: ``disparity`` (H, W) in [0, 1] with NaN
-    holes → (H, W) float32, ``scale ×`` its colorization fill (``guided_fills.fill_colorization``, guided by
-    ``rgb`` (H, W, 3)), or its linear fill without colour.
-
-    From this input the net starts close to a fill that already follows the colour, and its prior
-    has to explain only what that fill gets wrong; from the coordinates and the image alone, a
-    hole's depth is whatever function of them fits the valid pixels best.
-
-    Example:
-        >>> fill_channel(np.array([[0.2, np.nan, 0.6], [0.2, 0.4, 0.6]]), None).astype(float).round(3).tolist()
-        [[0.2, 0.4, 0.6], [0.2, 0.4, 0.6]]
-    """
-    shifted = disparity + 1.0  # the fills take positive values (they are written for metres); 0 is a valid disparity
-    filled = fill_colorization(shifted, rgb) if rgb is not None else fill_linear(shifted)
-    return (scale * (filled - 1.0)).astype(np.float32)
 
 
 PADDINGS = ("reflect", "zeros")

@@ -38,7 +38,7 @@ is mostly the network's. The blobs, unlike a ring around the holes, cost the fit
 measured, the choice does not tell the photograph from the rendered scenes: the held-out valid depth
 prefers the fill on both, so it only buys a larger share with its cost (``docs/real_data.md``). It
 stays a study lever (recipe ``fill-chosen``); the ``kit`` recipe takes a fixed share where the variant
-sees colour (:data:`~ddp_lite.method.recipes.KIT_AT`).
+sees colour (:data:`~ddp_lite.method.kit.recipes.KIT_AT`).
 """
 from __future__ import annotations
 
@@ -116,14 +116,14 @@ def fill_disparity(depth: np.ndarray, rgb: np.ndarray, transform) -> np.ndarray:
     their value.
 
     Example:
-        >>> from ddp_lite.method.disparity import DisparityTransform
+        >>> from ddp_lite.method.paper.disparity import DisparityTransform
         >>> depth = np.array([[1.0, np.nan, 0.5]] * 3, np.float32)
         >>> transform = DisparityTransform.from_depth(depth)
         >>> z = fill_disparity(depth, np.zeros((3, 3, 3), np.float32), transform)
         >>> bool(np.allclose(transform.to_depth(z[:, 1]), 1 / 1.5, rtol=1e-3))  # the mean of 1/1 and 1/0.5, inverted
         True
     """
-    from ..classical.baselines import BASELINES
+    from ...classical.baselines import BASELINES
 
     inverse = 1.0 / np.asarray(depth, np.float64)  # (H, W) 1/m, NaN in the holes
     filled = np.mean([BASELINES[name](inverse, rgb) for name in FILL_MEMBERS], axis=0, dtype=np.float64)
@@ -141,7 +141,7 @@ def fill_holdout(valid: np.ndarray, seed: int = 0) -> np.ndarray:
         >>> bool((held & ~valid).any()), round(float(held.sum() / valid.sum()), 2)
         (False, 0.05)
     """
-    from .loop import holdout_mask
+    from ..loop import holdout_mask
 
     return holdout_mask(np.asarray(valid, bool), FILL_HOLDOUT, seed + 777, "blobs")
 

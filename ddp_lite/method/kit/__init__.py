@@ -1,0 +1,12 @@
+"""What the kit adds to the paper, each named and off in the ``paper`` recipe: terms in the holes
+(``hole_losses``, ``hole_terms``), the warp term's occlusion test (``visibility``), its confidence
+mask (``warp_confidence``), its other costs and texture weights (``warp_cost``), all of them built
+into one warp term the paper's loss takes as an argument (``warp_terms``), extra net inputs (the
+colour image, a classical fill: ``net_inputs``), blends with a fill or the paper recipe's fit
+(``blend``), ensembles (``ensemble``) and the method switch (``recipes``).
+
+Blends and ensembles combine whole fits, so they use two of the fit's own files in ``method/``: its
+held-out pixels (``loop.holdout_mask``) and its side-by-side runs (``side_by_side``).
+
+May import: core, classical, paper, runtime, method.
+"""

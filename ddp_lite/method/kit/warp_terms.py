@@ -1,0 +1,107 @@
+"""The kit's warp term of one fit, handed to the paper's loss as its ``warp_term`` (and its occlusion
+tests as its ``visibility``): the masks and costs are built here once per fit, from the config and the
+images, and applied each iteration. Each is off unless the config asks for it; with all off
+:func:`kit_warp_term` is None and the paper's Eq. 5 runs unchanged.
+
+- ``warp_confidence``: per neighbour, the pixels whose photometric match singles out one depth
+  (:mod:`ddp_lite.method.kit.warp_confidence`), from the images alone;
+- ``warp_reach``: only the holes and a ring around them, off the valid input L_disp pins (:func:`warp_region`);
+- ``warp_cost`` / ``warp_texture``: another photometric cost, or per-pixel weights from the reference's
+  change along each neighbour's epipolar line (:mod:`ddp_lite.method.kit.warp_cost`);
+- ``warp_occlusion``: a pixel the reference surface hides from the neighbour does not count
+  (:mod:`ddp_lite.method.kit.visibility`).
+"""
+from __future__ import annotations
+
+import numpy as np
+import torch
+from scipy import ndimage
+
+from ..paper.disparity import DisparityTransform
+from ..paper.losses import warp_loss
+from .visibility import Visibility
+from .warp_confidence import warp_confidence
+from .warp_cost import WarpCost, epipolar_directions, texture_weights
+
+__all__ = ["WarpTerm", "kit_warp_term", "occlusion_tests", "kit_warp_arguments", "warp_region"]
+
+
+def warp_region(fit_mask: torch.Tensor, reach: float) -> torch.Tensor:
+    """(1, 1, H, W) bool: the pixels the warp term keeps with ``FitConfig.warp_reach`` (the kit's, not the
+    paper's): those ``fit_mask`` (1, 1, H, W) bool leaves unfitted (holes, held-out pixels) and every pixel
+    within ``reach`` px of one (Euclidean distance between pixel centres, so ``reach`` 0 is the holes alone,
+    1 adds their 4-neighbours).
+
+    Where the input depth is valid L_disp pins it, and on real data that depth came from the same kind
+    of photometric matching the warp term redoes; outside this region the term passes no gradient at all.
+
+    Example:
+        >>> mask = torch.ones(1, 1, 1, 7, dtype=torch.bool); mask[..., 3] = False
+        >>> warp_region(mask, 1.0)[0, 0, 0].tolist()
+        [False, False, True, True, True, False, False]
+    """
+    free = ~fit_mask[0, 0].cpu().numpy()
+    if not free.any():
+        return torch.zeros_like(fit_mask)
+    near = ndimage.distance_transform_edt(~free) <= reach  # distance to the nearest unfitted pixel, 0 on them
+    return torch.from_numpy(np.asarray(near))[None, None].to(fit_mask.device)
+
+
+class WarpTerm:
+    """The kit's warp term: ``term(reference, warped, valid)`` → scalar, the mean over the N neighbours of
+    the cost of each warped image (1, 3, H, W) where its ``valid`` (1, 1, H, W) bool and its ``keep`` mask
+    (None: every valid pixel) agree; ``cost`` None is the paper's intensity cost, else a
+    :class:`~ddp_lite.method.kit.warp_cost.WarpCost` of ``kind`` with per-neighbour ``weights``.
+    """
+
+    def __init__(self, lambda_w: float, keep: list | None = None, kind: str | None = None, weights: list | None = None):
+        self.lambda_w, self.keep, self.kind, self.weights = lambda_w, keep, kind, weights
+        self.cost = None  # the WarpCost against the paper's reference, made at the first call
+
+    def __call__(self, reference, warped: list, valid: list) -> torch.Tensor:
+        if self.keep is not None:
+            valid = [v & keep for v, keep in zip(valid, self.keep)]
+        if self.kind is None:
+            return warp_loss(reference, warped, valid, self.lambda_w)  # Eq. 5, mean over the N neighbours
+        if self.cost is None:  # the reference is the paper's I_in, prepared once (its SSIM moments, census)
+            self.cost = WarpCost(reference, self.kind, self.lambda_w)
+        weights = self.weights or [None] * len(warped)
+        return torch.stack([self.cost(w, v, t) for w, v, t in zip(warped, valid, weights)]).mean()
+
+
+def kit_warp_term(config, transform: DisparityTransform, fit_mask: torch.Tensor, rgb: torch.Tensor | None,
+                  camera, neighbors, device) -> WarpTerm | None:
+    """The warp term ``config`` (a :class:`~ddp_lite.method.config.FitConfig`) asks for, for the paper's
+    loss (same arguments as :class:`~ddp_lite.method.paper.total_loss.PaperLoss`; no ``neighbors``: no
+    warp term); None where it asks for none of the kit's (the paper's Eq. 5)."""
+    if not neighbors:
+        return None
+    # per neighbour, the pixels whose photometric match singles out one depth (1, 1, H, W) bool,
+    # from the images alone, once per fit (it does not depend on the fit's depth)
+    keep = ([warp_confidence(rgb, image, camera, cam, transform.d_min, transform.d_max, config.lambda_w)
+             for image, cam in neighbors] if config.warp_confidence else None)
+    if config.warp_reach is not None:  # the warp term only in the holes and a ring around them
+        region = warp_region(fit_mask, config.warp_reach)
+        keep = [region & c for c in keep] if keep else [region] * len(neighbors)
+    kind = config.warp_cost if config.warp_cost != "intensity" or config.warp_texture else None
+    weights = ([texture_weights(rgb, epipolar_directions(camera, cam).to(device)) for _, cam in neighbors]
+               if config.warp_texture else None)
+    if keep is None and kind is None:
+        return None
+    return WarpTerm(config.lambda_w, keep, kind, weights)
+
+
+def occlusion_tests(config, camera, neighbors, device) -> list | None:
+    """One occlusion test per neighbour for the paper's warpers (``FitConfig.warp_occlusion``); None: none."""
+    if not config.warp_occlusion or not neighbors:
+        return None
+    return [Visibility(camera, cam, torch.float32, device) for _, cam in neighbors]
+
+
+def kit_warp_arguments(config, transform: DisparityTransform, fit_mask: torch.Tensor, rgb: torch.Tensor | None,
+                       camera, neighbors, device) -> dict:
+    """The kit's share of the paper's warp term as :class:`~ddp_lite.method.paper.total_loss.PaperLoss`'s
+    keyword arguments: ``warp_term`` (:func:`kit_warp_term`) and ``visibility`` (:func:`occlusion_tests`),
+    each None where ``config`` asks for none (the paper's)."""
+    return {"warp_term": kit_warp_term(config, transform, fit_mask, rgb, camera, neighbors, device),
+            "visibility": occlusion_tests(config, camera, neighbors, device)}
