@@ -159,4 +159,23 @@ def report(path: Path) -> None:
         if parts:
             print(f"  {holes:<10} " + " | ".join(parts))
     seconds = sum(r.get("seconds", 0.0) for r in rows if r["variant"] is not None)
-    print(f"\n{len(rows)} rows; the fits' own time {seconds / 60:.0f} fit-minutes")
+    print(f"\n{len(rows)} rows; the fits' own time {seconds / 60:.0f} fit-minutes\n")
+    print(markdown_means(path))
+
+
+def markdown_means(path: Path) -> str:
+    """The means per hole kind as a Markdown table (for the README and docs): each DDP row's ratio to the best
+    fill and, after the slash, to the best of the paper's Table 6 methods; n = cases."""
+    rows, _ = _done(path)
+    table = ratios(rows)
+    columns = sorted({(m, v) for _, m, v in table}, key=lambda mv: (mv[1], mv[0]))
+    lines = ["| DDP | " + " | ".join(SUITE_HOLES) + " | all |", "|---" * (len(SUITE_HOLES) + 2) + "|"]
+    for m, v in columns:
+        cells = []
+        for holes in SUITE_HOLES + ("all",):
+            chosen = [x for (c, mm, vv), x in table.items() if (mm, vv) == (m, v) and (holes == "all" or c.endswith("/" + holes))]
+            cells.append(f"{np.mean([x[0] for x in chosen]):.2f} / {np.mean([x[1] for x in chosen]):.2f} (n={len(chosen)})"
+                         if chosen else "–")
+        lines.append(f"| `{m[4:]}`, {v} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
