@@ -447,7 +447,8 @@ def main() -> None:
             if args.refill:
                 bench_real.refill(args.data, args.real_size, out)
             else:
-                bench_real.run(args.data, args.real_size, recipes, args.variants, args.seeds, out, args.profile)
+                bench_real.run(args.data, args.real_size, recipes, args.variants, args.seeds, out, args.profile,
+                               args.cases)
         bench_real.report(out)
         return
     if args.report:

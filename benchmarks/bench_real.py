@@ -3,6 +3,8 @@
     python benchmarks/bench_quality.py --suite middlebury --data DIR                    # eighth size, seed 0
     python benchmarks/bench_quality.py --suite middlebury --data DIR --size quarter --seeds 0 1 2
     python benchmarks/bench_quality.py --suite middlebury --data DIR --report           # the tables only
+    python benchmarks/bench_quality.py --suite middlebury --data DIR --variants rgbd+warp \
+        --recipes kit kit:warp_combine=min --cases Art/sgbm Art/occlusion                  # a lever, on some cases
 
 ``DIR`` is a folder of Middlebury scenes with ground truth (what ``python -m data_fetch fetch
 middlebury2006 --from …`` and its siblings install, or a folder laid out like it); the cases are
@@ -19,6 +21,7 @@ Then the per-scene table, the means per hole kind and over all cases, and how lo
 """
 from __future__ import annotations
 
+import ast
 import json
 import time
 from collections import defaultdict
@@ -47,9 +50,29 @@ def _done(path: Path) -> tuple[list[dict], set]:
     return rows, {(r["case"], r["method"], r["variant"], r["seed"]) for r in rows}
 
 
-def run(data, size: str, recipes, variants, seeds, out: Path, profile: str = "class") -> None:
-    """Fill and fit every case of the suite under ``data`` not yet in ``out``; rows appended as they finish."""
+def recipe_config(profile: str, variant: str, recipe: str, seed: int) -> FitConfig:
+    """The config of one fit: ``recipe`` a kit recipe's name (kit, paper, photo) or that name with
+    ``FitConfig`` overrides, ``kit:warp_combine='min',lr=0.005`` (bare words are read as strings)."""
+    name, _, body = recipe.partition(":")
+    overrides = {}
+    for item in filter(None, body.split(",")):
+        key, _, value = item.partition("=")
+        try:
+            overrides[key.strip()] = ast.literal_eval(value.strip())
+        except (ValueError, SyntaxError):
+            overrides[key.strip()] = value.strip()
+    return FitConfig.for_profile(profile, variant=variant, recipe=name, seed=seed, progress=False, **overrides)
+
+
+def run(data, size: str, recipes, variants, seeds, out: Path, profile: str = "class", cases=None) -> None:
+    """Fill and fit every case of the suite under ``data`` (or those named in ``cases``) not yet in ``out``;
+    rows appended as they finish. ``recipes``: see :func:`recipe_config`."""
     names = suite_case_names(data)
+    if cases:
+        unknown = sorted(set(cases) - set(names))
+        if unknown:
+            raise SystemExit(f"cases not in the suite under {data}: {unknown}")
+        names = [n for n in names if n in set(cases)]
     rows, done = _done(out)
     fits_left = sum(1 for n in names for v in variants for s in seeds
                     if any((n, f"DDP {r}", v, s) not in done for r in recipes))
@@ -80,8 +103,7 @@ def run(data, size: str, recipes, variants, seeds, out: Path, profile: str = "cl
                         continue
                     case = case or make_suite_case(data, name, size)
                     began = time.perf_counter()
-                    configs = [FitConfig.for_profile(profile, variant=variant, recipe=r, seed=seed, progress=False)
-                               for r in wanted]
+                    configs = [recipe_config(profile, variant, r, seed) for r in wanted]
                     fitted = _plain_fits(case, variant, configs)
                     seconds = (time.perf_counter() - began) / max(1, len(fitted))
                     for recipe, config in zip(wanted, configs):

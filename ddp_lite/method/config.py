@@ -30,6 +30,7 @@ from .paper.nets import DOWNSAMPLINGS, NET_INPUTS, NETS, PADDINGS, UPSAMPLINGS
 from .profiles import Profile, get_profile
 from .kit.recipes import get_recipe
 from .kit.warp_cost import WARP_COSTS
+from .kit.warp_terms import WARP_COMBINATIONS
 from .paper.variants import get_variant
 
 __all__ = ["FitConfig", "HOLDOUTS", "NetworkConfig", "OptimisationConfig", "LossConfig", "HolesConfig",
@@ -101,6 +102,8 @@ class LossConfig(_Section):
     # the census at L1 + SSIM's size) (method.kit.warp_cost; not in the paper)
     warp_texture: bool = False  # L_warp weighted per pixel by the reference's change along the epipolar line
     # (method.kit.warp_cost.texture_weights: flat colour little; not in the paper)
+    warp_combine: str = "mean"  # over the N neighbours: "mean" (the paper's Eq. 5) or "min": per pixel the neighbour
+    # that agrees best (kit.warp_terms.minimum_over_neighbours; not in the paper)
     disparity_margin: float = 1.25  # transform=None: d_min / margin … d_max × margin around the valid depth
 
 
@@ -162,7 +165,7 @@ SECTION_OF = {f.name: section for section, cls in SECTIONS.items() for f in data
 FIELDS = ("net", "channels", "down", "up", "pad", "noise_channels", "net_input", "image_input", "image_blur",
           "fill_input", "lr", "schedule", "iterations", "lr_milestones", "lr_gamma", "lambda_z", "lambda_i",
           "lambda_w", "gammas", "warp_occlusion", "warp_confidence", "warp_reach",
-          "warp_cost", "warp_texture", "reg_noise_std", "average_outputs", "ensemble", "blend_paper",
+          "warp_cost", "warp_texture", "warp_combine", "reg_noise_std", "average_outputs", "ensemble", "blend_paper",
           "blend_weight", "blend_fill", "smoothness", "smoothness_edge", "edge_guide", "flatness", "affinity",
           "flatness_reach", "step_reach", "disparity_margin", "auto_stop", "holdout_fraction", "holdout", "patience",
           "plateau_decays", "eval_every", "seed", "device", "bf16", "channels_last", "progress", "callback_every",
@@ -277,7 +280,8 @@ class FitConfig:
             check_int_tuple(self.channels, "config.channels", minimum=1, min_length=2 if self.net == "unet" else 1)
         for name, choices in (("down", DOWNSAMPLINGS), ("up", UPSAMPLINGS), ("pad", PADDINGS),
                               ("schedule", ("step", "cosine")), ("holdout", HOLDOUTS), ("net_input", NET_INPUTS),
-                              ("edge_guide", EDGE_GUIDES), ("warp_cost", WARP_COSTS)):
+                              ("edge_guide", EDGE_GUIDES), ("warp_cost", WARP_COSTS),
+                              ("warp_combine", WARP_COMBINATIONS)):
             check_choice(getattr(self, name), f"config.{name}", choices)
         for name, minimum in (("noise_channels", 1), ("ensemble", 1), ("patience", 1), ("plateau_decays", 0),
                               ("eval_every", 1), ("callback_every", 0)):
@@ -321,6 +325,9 @@ class FitConfig:
             check_real(self.flatness_reach, "config.flatness_reach", 0.0, None)
         if self.step_reach is not None:
             check_real(self.step_reach, "config.step_reach", 0.0, None)
+        if self.warp_combine == "min" and self.warp_texture:
+            raise ValueError("config.warp_texture weights each neighbour's cost over the image; with "
+                             "config.warp_combine='min' use one or the other")
         if self.warp_reach is not None:
             check_real(self.warp_reach, "config.warp_reach", 0.0, None)
         if self.max_memory_gb is not None:

@@ -38,7 +38,8 @@ def loss_equation(config, variant: str) -> str:
                                        ("confident", getattr(config, "warp_confidence", False)),  # method.warp_confidence
                                        ("holes", getattr(config, "warp_reach", None) is not None),  # kit.warp_terms.warp_region
                                        (cost, cost != "intensity"),
-                                       ("textured", getattr(config, "warp_texture", False)))
+                                       ("textured", getattr(config, "warp_texture", False)),
+                                       ("min over views", getattr(config, "warp_combine", "mean") == "min"))
                  if on]
         if where:  # the kit's masks, costs and weights on the warp term
             warp = f"\\underbrace{{L^{{\\mathrm{{warp}}}}_{{\\mathrm{{{', '.join(where)}}}}}}}_{{\\text{{not in the paper}}}}"

@@ -140,6 +140,8 @@ def describe_method(settings: dict) -> str:
                 settings.get("warp_cost", "intensity"), ""))
             + (", the warp term weighted by the image's change along each pixel's epipolar line"
                if settings.get("warp_texture") else "")
+            + (", the warp term per pixel from the neighbour that agrees best (not their mean)"
+               if settings.get("warp_combine", "mean") == "min" else "")
             + (f", mean of {ensemble} fits" if ensemble > 1 else "")
             + ((", blended with the paper recipe's fit, " + ("weight from a held-out ring" if settings.get("blend_weight", 0.5) is None
                else f"weight {settings.get('blend_weight', 0.5):g}")) if settings.get("blend_paper") else "")

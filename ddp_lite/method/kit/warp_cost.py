@@ -32,6 +32,11 @@ dominate), then divided by its image mean, so the term keeps the paper's overall
 Tried on the real pair and on rendered scenes, none of them kept (docs/real_data.md, "Other photometric
 costs for the warp term").
 
+``FitConfig.warp_combine = "min"`` needs each neighbour's cost per pixel (:meth:`WarpCost.pixel_costs`):
+``(1 − λw) · L1 + λw · (1 − SSIM)`` at each pixel, the L1 averaged over the colour channels and the SSIM
+that of the 11×11 window centred on the pixel (the images mirrored at the border, so every pixel has
+one), or the census distance at the pixel.
+
 Conventions: images (B, C, H, W) in [0, 1]; masks (B, 1, H, W) bool, True = the pixel counts; a pixel
 that does not count gets the reference's value in the warped image before any patch is compared (as
 :mod:`ddp_lite.method.paper.losses` does for SSIM), so it agrees exactly and passes no gradient.
@@ -45,10 +50,11 @@ import torch.nn.functional as F
 from ...core.camera import Camera, pixel_grid, relative_pose
 from ..paper.losses import ConstantTarget, ssim, warp_loss
 
-__all__ = ["WARP_COSTS", "CENSUS_RADIUS", "CENSUS_SCALE", "grey", "soft_census", "census_distance",
+__all__ = ["WARP_COSTS", "SSIM_WINDOW", "CENSUS_RADIUS", "CENSUS_SCALE", "grey", "soft_census", "census_distance",
            "forward_differences", "epipolar_directions", "texture_weights", "WarpCost"]
 
 WARP_COSTS = ("intensity", "census", "gradient", "census+intensity")  # "intensity": the paper's
+SSIM_WINDOW = 11  # the paper's SSIM window (method.paper.losses); per pixel, the one centred on it
 CENSUS_RADIUS = 3  # 7×7 patches, UnFlow's
 # UnFlow's soft sign, on grey levels 0-255, is d / sqrt(0.81 + d²): ±0.74 at one grey level, so in a pooled
 # photograph's flat colour the signs are noise. Here ε = (10 grey levels)², on [0, 1]: on the real pair's valid
@@ -158,6 +164,7 @@ class WarpCost:
         image = self.target.image
         self.census = soft_census(grey(image)) if kind in ("census", "census+intensity") else None  # the reference's, once
         self.differences = forward_differences(image) if kind == "gradient" else None
+        self._mirrored = None  # the reference mirrored by half a window, for per-pixel SSIM (made when first needed)
 
     def __call__(self, warped: torch.Tensor, valid: torch.Tensor, weights: torch.Tensor | None = None) -> torch.Tensor:
         if self.kind == "census+intensity":  # half the paper's cost, half the census at its size
@@ -188,3 +195,35 @@ class WarpCost:
             centre = weights[..., half:half + ssim_map.shape[-2], half:half + ssim_map.shape[-1]]
             structure = (ssim_map * centre).sum() / (centre.sum() * ssim_map.shape[1]).clamp(min=1e-12)
         return (1.0 - self.lambda_w) * l1 + self.lambda_w * (1.0 - structure)
+
+    def pixel_costs(self, warped: torch.Tensor, valid: torch.Tensor) -> torch.Tensor:
+        """(1, 1, H, W): the cost of ``warped`` (1, C, H, W) against the reference at each pixel (module
+        docstring), where ``valid`` (1, 1, H, W) bool; elsewhere the warped image takes the reference's
+        values before any window is compared, so an invalid pixel costs 0 and its neighbours' windows
+        see agreement there (as in the paper's term). The cost at a pixel that does not count is
+        meaningless: mask it.
+
+        Example:
+            >>> ref = torch.rand(1, 3, 16, 16); valid = torch.ones(1, 1, 16, 16, dtype=torch.bool)
+            >>> float(WarpCost(ref).pixel_costs(ref.clone(), valid).abs().max())
+            0.0
+        """
+        reference = self.target.image
+        warped = torch.where(valid, warped, reference)
+        if self.kind == "census":
+            return census_distance(soft_census(grey(warped)), self.census)
+        if self.kind == "census+intensity":
+            return (0.5 * self._intensity_pixel_costs(warped, warped - reference)
+                    + 0.5 * CENSUS_SCALE * census_distance(soft_census(grey(warped)), self.census))
+        error = forward_differences(warped) - self.differences if self.kind == "gradient" else warped - reference
+        return self._intensity_pixel_costs(warped, error)
+
+    def _intensity_pixel_costs(self, warped: torch.Tensor, error: torch.Tensor) -> torch.Tensor:
+        """``(1 − λw) · mean_channels |error| + λw · (1 − SSIM of the window centred on each pixel)``."""
+        half = SSIM_WINDOW // 2
+        if self._mirrored is None:  # the reference's moments over the mirrored image, once
+            self._mirrored = ConstantTarget(F.pad(self.target.image, (half,) * 4, mode="reflect"), window_size=SSIM_WINDOW)
+        structure = ssim(F.pad(warped, (half,) * 4, mode="reflect"), self._mirrored, window_size=SSIM_WINDOW,
+                         reduction="none")  # (1, C, H, W)
+        return ((1.0 - self.lambda_w) * error.abs().mean(dim=1, keepdim=True)
+                + self.lambda_w * (1.0 - structure.mean(dim=1, keepdim=True)))

@@ -9,7 +9,15 @@ images, and applied each iteration. Each is off unless the config asks for it; w
 - ``warp_cost`` / ``warp_texture``: another photometric cost, or per-pixel weights from the reference's
   change along each neighbour's epipolar line (:mod:`ddp_lite.method.kit.warp_cost`);
 - ``warp_occlusion``: a pixel the reference surface hides from the neighbour does not count
-  (:mod:`ddp_lite.method.kit.visibility`).
+  (:mod:`ddp_lite.method.kit.visibility`);
+- ``warp_combine="min"``: at each pixel only the neighbour that agrees best counts, not the mean over the
+  N (:func:`minimum_over_neighbours`).
+
+Why the minimum: a pixel of the reference that one neighbour cannot see (occluded there, or out of its
+frame) warps to the wrong surface in that neighbour, and the mean then pulls the depth towards whatever
+makes the wrong surface match; with the rail's neighbours on either side, a pixel hidden on one side is
+usually seen on the other, and its cost there is low at the true depth. Monodepth2's per-pixel minimum
+reprojection (Godard et al., ICCV 2019) does the same for self-supervised depth.
 """
 from __future__ import annotations
 
@@ -23,7 +31,9 @@ from .visibility import Visibility
 from .warp_confidence import warp_confidence
 from .warp_cost import WarpCost, epipolar_directions, texture_weights
 
-__all__ = ["WarpTerm", "kit_warp_term", "occlusion_tests", "kit_warp_arguments", "warp_region"]
+WARP_COMBINATIONS = ("mean", "min")  # over the N neighbours: "mean" the paper's (Eq. 5), "min" per pixel
+
+__all__ = ["WARP_COMBINATIONS", "WarpTerm", "minimum_over_neighbours", "kit_warp_term", "occlusion_tests", "kit_warp_arguments", "warp_region"]
 
 
 def warp_region(fit_mask: torch.Tensor, reach: float) -> torch.Tensor:
@@ -47,20 +57,46 @@ def warp_region(fit_mask: torch.Tensor, reach: float) -> torch.Tensor:
     return torch.from_numpy(np.asarray(near))[None, None].to(fit_mask.device)
 
 
+def minimum_over_neighbours(costs: list, valid: list) -> torch.Tensor:
+    """Scalar: the mean over the pixels some neighbour sees of the smallest cost among the neighbours that
+    see it; ``costs`` N maps (1, 1, H, W) of one neighbour's cost per pixel, ``valid`` N masks (1, 1, H, W)
+    bool. The gradient reaches, at each pixel, the neighbour with the smallest cost only. No pixel seen:
+    0 (with the graph kept, so a fit's backward pass still runs).
+
+    Example:
+        >>> costs = [torch.tensor([[[[0.2, 0.9, 0.5]]]]), torch.tensor([[[[0.4, 0.1, 0.7]]]])]
+        >>> valid = [torch.tensor([[[[True, True, False]]]]), torch.tensor([[[[True, True, False]]]])]
+        >>> round(float(minimum_over_neighbours(costs, valid)), 6)  # (0.2 + 0.1) / 2: the third pixel is seen by none
+        0.15
+    """
+    stacked = torch.cat(costs, dim=1)  # (1, N, H, W)
+    seen = torch.cat(valid, dim=1)  # (1, N, H, W) bool
+    smallest = torch.where(seen, stacked, torch.full_like(stacked, float("inf"))).amin(dim=1, keepdim=True)
+    counted = seen.any(dim=1, keepdim=True)  # (1, 1, H, W)
+    total = torch.where(counted, smallest, torch.zeros_like(smallest)).sum()
+    return total / counted.sum().clamp(min=1).to(total.dtype)
+
+
 class WarpTerm:
-    """The kit's warp term: ``term(reference, warped, valid)`` → scalar, the mean over the N neighbours of
-    the cost of each warped image (1, 3, H, W) where its ``valid`` (1, 1, H, W) bool and its ``keep`` mask
-    (None: every valid pixel) agree; ``cost`` None is the paper's intensity cost, else a
+    """The kit's warp term: ``term(reference, warped, valid)`` → scalar, over the N neighbours (``combine``
+    "mean": the mean of each one's cost, "min": per pixel the smallest, :func:`minimum_over_neighbours`)
+    of the cost of each warped image (1, 3, H, W) where its ``valid`` (1, 1, H, W) bool and its ``keep``
+    mask (None: every valid pixel) agree; ``kind`` None is the paper's intensity cost, else a
     :class:`~ddp_lite.method.kit.warp_cost.WarpCost` of ``kind`` with per-neighbour ``weights``.
     """
 
-    def __init__(self, lambda_w: float, keep: list | None = None, kind: str | None = None, weights: list | None = None):
-        self.lambda_w, self.keep, self.kind, self.weights = lambda_w, keep, kind, weights
+    def __init__(self, lambda_w: float, keep: list | None = None, kind: str | None = None, weights: list | None = None,
+                 combine: str = "mean"):
+        self.lambda_w, self.keep, self.kind, self.weights, self.combine = lambda_w, keep, kind, weights, combine
         self.cost = None  # the WarpCost against the paper's reference, made at the first call
 
     def __call__(self, reference, warped: list, valid: list) -> torch.Tensor:
         if self.keep is not None:
             valid = [v & keep for v, keep in zip(valid, self.keep)]
+        if self.combine == "min":
+            if self.cost is None:
+                self.cost = WarpCost(reference, self.kind or "intensity", self.lambda_w)
+            return minimum_over_neighbours([self.cost.pixel_costs(w, v) for w, v in zip(warped, valid)], valid)
         if self.kind is None:
             return warp_loss(reference, warped, valid, self.lambda_w)  # Eq. 5, mean over the N neighbours
         if self.cost is None:  # the reference is the paper's I_in, prepared once (its SSIM moments, census)
@@ -86,9 +122,10 @@ def kit_warp_term(config, transform: DisparityTransform, fit_mask: torch.Tensor,
     kind = config.warp_cost if config.warp_cost != "intensity" or config.warp_texture else None
     weights = ([texture_weights(rgb, epipolar_directions(camera, cam).to(device)) for _, cam in neighbors]
                if config.warp_texture else None)
-    if keep is None and kind is None:
+    combine = getattr(config, "warp_combine", "mean")
+    if keep is None and kind is None and combine == "mean":
         return None
-    return WarpTerm(config.lambda_w, keep, kind, weights)
+    return WarpTerm(config.lambda_w, keep, kind, weights, combine)
 
 
 def occlusion_tests(config, camera, neighbors, device) -> list | None:
