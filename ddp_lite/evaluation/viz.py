@@ -116,7 +116,8 @@ def show_errors(axes, estimates: dict, truth, mask=None, transform=None, percent
         image = ax.imshow(np.ma.masked_invalid(error), cmap=colours, vmin=0, vmax=top, interpolation="nearest")
         ax.set_title(name)
         ax.axis("off")
-    shared_colorbar(image, axes, label=f"{label}, top: {percentile:g}th pct.", extend="max")
+    # two lines: on one, a long label outgrows a short panel
+    shared_colorbar(image, axes, label=f"{label}\ntop: {percentile:g}th pct.", extend="max")
     return top
 
 
