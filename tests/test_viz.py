@@ -71,7 +71,9 @@ def test_show_errors_draws_a_row_in_the_tables_unit_on_one_clipped_scale_with_on
 def _colorbar_axes(fig) -> list:
     """Every colour bar's axis in ``fig``, an inset one (a child of a panel) included."""
     every = list(fig.axes) + [child for ax in fig.axes for child in ax.child_axes]
-    return [ax for ax in every if hasattr(ax, "_colorbar")]
+    bars = [ax for ax in every if hasattr(ax, "_colorbar")]
+    assert all(ax.get_label() == "<colorbar>" for ax in bars)  # as matplotlib labels the bars it places
+    return bars
 
 
 def test_a_row_on_one_scale_gets_one_colour_bar_and_keeps_its_panels_equal():

@@ -30,6 +30,7 @@ def shared_colorbar(image, axes, label: str = "", **options):
         raise ValueError("axes must hold at least one axis")
     rightmost = max(axes, key=lambda ax: ax.get_position().x1)
     bar_axis = rightmost.inset_axes([1.04, 0.0, 0.05, 1.0])  # axes fraction: a bar 5 % as wide as a panel
+    bar_axis.set_label("<colorbar>")  # the label matplotlib gives the bars it places itself
     return rightmost.figure.colorbar(image, cax=bar_axis, label=label, **options)
 
 
