@@ -56,7 +56,7 @@ _PACKAGES = {  # sub-package → its modules, each one concern (the sub-package'
     "data": ('datasets', 'fileio', 'file_writers', 'formats', 'colmap', 'tum', 'middlebury', 'middlebury_rail',
              'textparse', 'resample'),
     "data.samples": ('make_samples',),
-    "evaluation": ('metrics', 'fusion', 'experiments', 'viz', 'plane_sweep'),
+    "evaluation": ('metrics', 'fusion', 'experiments', 'standing', 'viz', 'plane_sweep'),
     "studies": ('real_cases', 'real_suite', 'table6', 'additions', 'mvs_kinect_experiments'),
     "sequences": ('sequence', 'sequence_cost', 'sequence_files', 'sequence_jobs', 'runner', 'working_size'),
     "interface": ('cli', 'cli_classroom', 'cli_complete', 'cli_demo', 'cli_sequence', 'classroom', 'grading', 'grades',

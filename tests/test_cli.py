@@ -523,7 +523,8 @@ def test_complete_preview_titles_overlap_nothing(shape, with_gt, monkeypatch):
     legend = panels[2].get_legend()
     assert [t.get_text() for t in legend.get_texts()] == ["valid", "hole"]
     boxes = [(f"title {ax.get_title()!r}", ax.title.get_window_extent(renderer)) for ax in fig.axes if ax.get_title()]
-    boxes += [("colour bar", ax.get_tightbbox(renderer)) for ax in fig.axes if ax.get_label() == "<colorbar>"]
+    every = list(fig.axes) + [child for ax in fig.axes for child in ax.child_axes]  # a shared bar is a panel's inset
+    boxes += [("colour bar", ax.get_tightbbox(renderer)) for ax in every if ax.get_label() == "<colorbar>"]
     boxes += [("legend", legend.get_window_extent(renderer)), ("summary", fig._suptitle.get_window_extent(renderer))]
     assert len(boxes) == (4 + 3 + 2 if with_gt else 3 + 2 + 2)
     assert [(a, b) for (a, box_a), (b, box_b) in itertools.combinations(boxes, 2) if box_a.overlaps(box_b)] == []

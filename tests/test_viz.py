@@ -3,7 +3,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 
-from ddp_lite.evaluation.viz import HOLE_RGB, error_vmax, outline, overlay_holes, show_error, show_errors
+from ddp_lite.evaluation.viz import (HOLE_RGB, error_vmax, outline, overlay_holes, shared_colorbar, show_depth, show_error,
+                                     show_errors)
 from ddp_lite.method.paper.disparity import DisparityTransform
 
 
@@ -60,8 +61,34 @@ def test_show_errors_draws_a_row_in_the_tables_unit_on_one_clipped_scale_with_on
     errors = np.array([abs(to_z(1.5) - to_z(2.0)), abs(to_z(4.0) - to_z(2.0))])
     assert top == pytest.approx(np.percentile(np.repeat(errors, 20), 99))
     assert axes[0].images[0].get_clim() == axes[1].images[0].get_clim() == (0, pytest.approx(top))
-    assert len(fig.axes) == 3  # the two maps and one colour bar
-    assert "×100" in fig.axes[-1].get_ylabel()
+    bars = _colorbar_axes(fig)
+    assert len(bars) == 1 and "×100" in bars[0].get_ylabel()  # the two maps share one colour bar
     with pytest.raises(ValueError, match="estimates"):
         show_errors(axes, {"only one": near}, truth)
+    plt.close(fig)
+
+
+def _colorbar_axes(fig) -> list:
+    """Every colour bar's axis in ``fig``, an inset one (a child of a panel) included."""
+    every = list(fig.axes) + [child for ax in fig.axes for child in ax.child_axes]
+    bars = [ax for ax in every if hasattr(ax, "_colorbar")]
+    assert all(ax.get_label() == "<colorbar>" for ax in bars)  # as matplotlib labels the bars it places
+    return bars
+
+
+def test_a_row_on_one_scale_gets_one_colour_bar_and_keeps_its_panels_equal():
+    fig, axes = plt.subplots(2, 3, figsize=(9, 5))
+    depth = np.linspace(1.0, 5.0, 12).reshape(3, 4)
+    images = [show_depth(ax, depth, f"panel {i}", vmin=1.0, vmax=5.0, colorbar=False) for i, ax in enumerate(axes[0])]
+    shared_colorbar(images[-1], axes[0], label="depth (m)")
+    show_errors(axes[1], {f"map {i}": depth + i for i in range(3)}, depth)
+    fig.tight_layout()
+    bars = _colorbar_axes(fig)
+    assert len(bars) == 2  # one per shared scale: the depths' and the errors'
+    widths = [ax.get_position().width for ax in axes.ravel()]
+    assert max(widths) - min(widths) < 1e-9 * max(widths)  # no panel gave width to a bar
+    for bar, row in zip(sorted(bars, key=lambda b: -b.get_position().y0), axes):
+        assert bar.get_position().x0 > row[-1].get_position().x1  # beside the row, right of its last panel
+    with pytest.raises(ValueError, match="axes"):
+        shared_colorbar(images[0], [])
     plt.close(fig)

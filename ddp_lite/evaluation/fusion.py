@@ -249,7 +249,7 @@ def _default_camera(points: np.ndarray) -> Camera:
 
 
 def render_point_cloud(cloud, camera=None, ax=None, point_size: int = 1, background=(1.0, 1.0, 1.0),
-                       depth_range=None):
+                       depth_range=None, colorbar: bool = True):
     """Render a point cloud through a pinhole camera with a z-buffer → (H, W, 3) float32 image in [0, 1].
 
     Each point is splatted as a ``point_size`` × ``point_size`` square; where splats overlap the
@@ -258,7 +258,8 @@ def render_point_cloud(cloud, camera=None, ax=None, point_size: int = 1, backgro
     renders compare (default: the cloud's own 1st-99th percentile). ``camera``: default a 96×128 (H×W),
     60° view along +z (the kit's scenes are seen along +z), centred on the cloud and just far
     enough back to frame all of it. With ``ax``, the image is also drawn there, with a depth colour
-    bar when the colours are depths. No OpenGL: works headless.
+    bar when the colours are depths (``colorbar=False``: none, for renders that share one
+    ``depth_range`` and so one :func:`~ddp_lite.evaluation.viz.shared_colorbar`). No OpenGL: works headless.
     """
     o3d = _open3d()
 
@@ -304,7 +305,7 @@ def render_point_cloud(cloud, camera=None, ax=None, point_size: int = 1, backgro
     if ax is not None:
         ax.imshow(image, interpolation="nearest")
         ax.axis("off")
-        if by_depth:
+        if by_depth and colorbar:
             scale = matplotlib.cm.ScalarMappable(matplotlib.colors.Normalize(lo, hi), matplotlib.colormaps["viridis_r"])
             ax.figure.colorbar(scale, ax=ax, fraction=0.046, pad=0.04, label="depth along the view (m)")
     return image

@@ -1,7 +1,8 @@
 """Figures: depth with holes in a distinct colour, images, error maps.
 
 Every depth panel has a colour bar (metres or disparity) and draws holes (NaN) in magenta, so a
-hole is never mistaken for a far or near value.
+hole is never mistaken for a far or near value. Panels that share one scale share one colour bar
+(:func:`shared_colorbar`), drawn beside the row so that every panel keeps its width.
 """
 from __future__ import annotations
 
@@ -12,15 +13,33 @@ import numpy as np
 
 from ..core.files import atomic_path
 
-__all__ = ["show_depth", "show_image", "show_error", "show_errors", "error_vmax", "outline", "overlay_holes", "save_figure",
-           "HOLE_COLOUR", "HOLE_RGB"]
+__all__ = ["show_depth", "show_image", "show_error", "show_errors", "shared_colorbar", "error_vmax", "outline",
+           "overlay_holes", "save_figure", "HOLE_COLOUR", "HOLE_RGB"]
 
 HOLE_COLOUR = "magenta"
 HOLE_RGB = matplotlib.colors.to_rgb(HOLE_COLOUR)  # (1.0, 0.0, 1.0)
 
 
-def show_depth(ax, depth, title: str = "", vmin=None, vmax=None, cmap: str = "viridis_r", label: str = "depth (m)"):
-    """Draw (H, W) depth on ``ax`` with a colour bar; NaN holes in magenta. Returns the image."""
+def shared_colorbar(image, axes, label: str = "", **options):
+    """One colour bar for a row of panels drawn on one scale (``image``: any of their images), in its
+    own thin axis just right of the right-most of ``axes``: unlike ``fig.colorbar(image, ax=ax)`` it
+    takes no width from any panel, so the panels stay equal (and ``tight_layout`` makes room for it).
+    ``options`` go to ``Figure.colorbar`` (e.g. ``extend="max"``). Returns the colour bar."""
+    axes = list(np.ravel(axes))
+    if not axes:
+        raise ValueError("axes must hold at least one axis")
+    rightmost = max(axes, key=lambda ax: ax.get_position().x1)
+    bar_axis = rightmost.inset_axes([1.04, 0.0, 0.05, 1.0])  # axes fraction: a bar 5 % as wide as a panel
+    bar_axis.set_label("<colorbar>")  # the label matplotlib gives the bars it places itself
+    return rightmost.figure.colorbar(image, cax=bar_axis, label=label, **options)
+
+
+def show_depth(ax, depth, title: str = "", vmin=None, vmax=None, cmap: str = "viridis_r", label: str = "depth (m)",
+               colorbar: bool = True):
+    """Draw (H, W) depth on ``ax`` with a colour bar; NaN holes in magenta. Returns the image.
+
+    ``colorbar=False`` for a row of panels on one ``vmin``/``vmax``: give the row one
+    :func:`shared_colorbar` instead of a copy beside every panel."""
     depth = np.asarray(depth, dtype=np.float32)
     colours = matplotlib.colormaps[cmap].copy()
     colours.set_bad(HOLE_COLOUR)
@@ -28,7 +47,8 @@ def show_depth(ax, depth, title: str = "", vmin=None, vmax=None, cmap: str = "vi
     vmin = float(finite.min()) if vmin is None and finite.size else vmin
     vmax = float(finite.max()) if vmax is None and finite.size else vmax
     image = ax.imshow(np.ma.masked_invalid(depth), cmap=colours, vmin=vmin, vmax=vmax, interpolation="nearest")
-    ax.figure.colorbar(image, ax=ax, fraction=0.046, pad=0.04, label=label)
+    if colorbar:
+        ax.figure.colorbar(image, ax=ax, fraction=0.046, pad=0.04, label=label)
     ax.set_title(title)
     ax.axis("off")
     return image
@@ -59,7 +79,8 @@ def show_error(ax, estimate, truth, title: str = "", vmax=None, mask=None, label
 def show_errors(axes, estimates: dict, truth, mask=None, transform=None, percentile: float = 99.0,
                 label: str | None = None) -> float:
     """A row of error maps on one scale with one colour bar: |estimate - truth| of each (H, W) depth
-    in ``estimates`` ({title: depth}) on the matching axis of ``axes``, outside ``mask`` grey.
+    in ``estimates`` ({title: depth}) on the matching axis of ``axes``, outside ``mask`` grey. The bar
+    is a :func:`shared_colorbar`: every map keeps the same width.
 
     With ``transform`` (a :class:`~ddp_lite.method.paper.disparity.DisparityTransform`) the error is in
     the unit of the kit's tables, normalised disparity ×100; without it, in the arrays' own unit
@@ -96,8 +117,8 @@ def show_errors(axes, estimates: dict, truth, mask=None, transform=None, percent
         image = ax.imshow(np.ma.masked_invalid(error), cmap=colours, vmin=0, vmax=top, interpolation="nearest")
         ax.set_title(name)
         ax.axis("off")
-    ax.figure.colorbar(image, ax=ax, fraction=0.046, pad=0.04, extend="max",
-                       label=f"{label}, top: {percentile:g}th pct.")
+    # two lines: on one, a long label outgrows a short panel
+    shared_colorbar(image, axes, label=f"{label}\ntop: {percentile:g}th pct.", extend="max")
     return top
 
 

@@ -18,7 +18,7 @@ from .loop import check_finite_output, check_memory, holdout_mask
 from .runtime.tensors import to_tensor
 from .paper.nets import check_input_size
 
-__all__ = ["ImageResult", "fit_image"]
+__all__ = ["ImageResult", "fit_image", "describe_image_fit"]
 
 
 @dataclass
@@ -30,6 +30,19 @@ class ImageResult:
     iterations: int
     best_iteration: int
     seconds: float
+
+
+def describe_image_fit(config: FitConfig, height: int, width: int) -> str:
+    """One line for a notebook's first cell: what :func:`fit_image` runs with ``config`` on an
+    ``height``×``width`` image (size, net, iterations, schedule, input). Only what an image fit uses:
+    a depth recipe's hole terms and fills do not apply to a photo."""
+    extra = config.noise_channels - 2  # a meshgrid input is (u, v) and then noise channels
+    inputs = (("the pixel coordinates" + (f" + {extra} noise channels" if extra > 0 else ""))
+              if config.net_input == "meshgrid" else f"{config.noise_channels} channels of fixed noise")
+    jitter = f", input jitter σ {config.reg_noise_std:.3g}" if config.reg_noise_std else ""
+    return (f"Deep Image Prior: {height}×{width} (H×W) image, {'UNet' if config.net == 'unet' else 'SkipNet'} "
+            f"{'-'.join(map(str, config.channels))}, {config.resolved_iterations('rgbd')} iterations, lr {config.lr:g}, "
+            f"auto-stop {'on' if config.auto_stop else 'off'}, input: {inputs}{jitter}")
 
 
 @cached(like="image", types=(ImageResult,))

@@ -19,7 +19,7 @@ from ..data.file_writers import depth_png_bytes, npy_bytes
 from ..data.fileio import load_npy
 from ..evaluation.fusion import fuse_depths, save_ply
 from .sequence_jobs import ViewJob
-from ..evaluation.viz import save_figure, show_depth, show_image
+from ..evaluation.viz import save_figure, shared_colorbar, show_depth, show_image
 from ..core.views import Scene
 
 MANIFEST = "manifest.json"
@@ -122,8 +122,9 @@ def _write_preview(path: Path, job: ViewJob, completed: np.ndarray) -> None:
     fig = Figure(figsize=(11, 3.2))
     axes = fig.subplots(1, 3)
     show_image(axes[0], job.rgb, f"view {job.name}")
-    show_depth(axes[1], job.depth, f"input ({np.isnan(job.depth).mean():.0%} holes)", vmin, vmax)
-    show_depth(axes[2], completed, "SGM+DDP\n(input kept, DDP in holes)", vmin, vmax)
+    show_depth(axes[1], job.depth, f"input ({np.isnan(job.depth).mean():.0%} holes)", vmin, vmax, colorbar=False)
+    image = show_depth(axes[2], completed, "SGM+DDP\n(input kept, DDP in holes)", vmin, vmax, colorbar=False)
+    shared_colorbar(image, axes[1:], label="depth (m)")  # both depths on one scale
     fig.tight_layout()
     save_figure(fig, path, dpi=80)
 
