@@ -1,4 +1,4 @@
-"""Peak resident memory of one-iteration fits against ``fit.estimate_peak_memory_gb``.
+"""Peak resident memory of one-iteration fits against ``ddp_lite.method.runtime.memory.estimate_peak_memory_gb``.
 
     OMP_NUM_THREADS=1 python benchmarks/calibrate_memory.py
 
@@ -34,7 +34,7 @@ def one(H: int, W: int, variant: str, channels) -> dict:
 
 def main() -> None:
     from ddp_lite.method.config import FitConfig
-    from ddp_lite.method.loop import estimate_peak_memory_gb
+    from ddp_lite.method.runtime.memory import estimate_peak_memory_gb
     print(f"{'size':>9} {'variant':>7} {'net':>20} {'measured GiB':>12} {'estimate':>9}")
     for H, W, variant, channels in CASES:
         out = subprocess.run([sys.executable, __file__, json.dumps([H, W, variant, channels])], check=True,

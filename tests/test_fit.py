@@ -6,7 +6,7 @@ from scipy.interpolate import griddata
 
 from ddp_lite import (Camera, FitConfig, SkipNet, UNet, complete_depth, disparity_loss, fit_image, look_at, merge,
                       warp_loss, warp_to_reference)
-from ddp_lite.method.loop import PlateauStopper
+from ddp_lite.method.stopping import PlateauStopper
 from conftest import TINY, tilted_plane
 
 
@@ -128,27 +128,27 @@ def test_plateau_stopper_events_by_hand(decays, expected):
 
 
 def test_the_stoppers_earliest_and_expected_stop_count_the_plateaus_still_to_come():
-    from ddp_lite.method.loop import EXPECTED_STOP_SHARE, RUN_AFTER_CUT_SHARE
+    from ddp_lite.method.time_left import EXPECTED_STOP_SHARE, RUN_AFTER_CUT_SHARE, earliest_stop, expected_stop
     assert (EXPECTED_STOP_SHARE, RUN_AFTER_CUT_SHARE) == (0.8, 0.4)  # the figures below are worked out with these
     stopper = PlateauStopper(patience=50, eval_every=10, decays=1)
     stopper.update(1.0)  # a new best at iteration 10: a plateau needs 50 more, then the cut, then 50 more
-    assert stopper.earliest_stop(10, 600) == 110
-    assert stopper.expected_stop(10, 600) == 480  # before the cut: the usual share, 0.8 × 600
+    assert earliest_stop(stopper, 10, 600) == 110
+    assert expected_stop(stopper, 10, 600) == 480  # before the cut: the usual share, 0.8 × 600
     for error in (2.0, 2.0, 2.0, 2.0):  # 40 without a best: 10 to the plateau, then 50 after the cut
         stopper.update(error)
-    assert stopper.earliest_stop(50, 600) == 110
+    assert earliest_stop(stopper, 50, 600) == 110
     assert stopper.update(2.0) == "decay"  # iteration 60: the cut
-    assert stopper.earliest_stop(60, 600) == 110  # the next plateau could stop it at 110 ...
-    assert stopper.expected_stop(60, 600) == 300  # ... fits usually run 0.4 × 600 = 240 past the cut
+    assert earliest_stop(stopper, 60, 600) == 110  # the next plateau could stop it at 110 ...
+    assert expected_stop(stopper, 60, 600) == 300  # ... fits usually run 0.4 × 600 = 240 past the cut
     assert [stopper.update(0.9 - 0.01 * k) for k in range(30)] == ["improved"] * 30  # a new best up to iteration 360
-    assert stopper.expected_stop(360, 600) == 410  # past the cut + 240: the next plateau, 50 on
-    assert stopper.earliest_stop(60, 100) == stopper.expected_stop(60, 100) == 100  # never past the cap
+    assert expected_stop(stopper, 360, 600) == 410  # past the cut + 240: the next plateau, 50 on
+    assert earliest_stop(stopper, 60, 100) == expected_stop(stopper, 60, 100) == 100  # never past the cap
     late = PlateauStopper(patience=50, eval_every=10, decays=1)
     late.update(1.0)  # a best at 400 with no cut yet: the cut at 450 at the earliest, then 240 on: the cap
-    assert late.expected_stop(400, 600) == 600
+    assert expected_stop(late, 400, 600) == 600
     plain = PlateauStopper(patience=50, eval_every=10, decays=0)
     plain.update(1.0)  # no cut to come: the next plateau is the stop, at 450 at the earliest; the usual share, 480
-    assert plain.expected_stop(400, 600) == 480 and plain.expected_stop(500, 600) == 550
+    assert expected_stop(plain, 400, 600) == 480 and expected_stop(plain, 500, 600) == 550
 
 
 def test_plateau_decay_continues_the_same_run_and_cuts_the_rate():

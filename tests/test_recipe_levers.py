@@ -318,7 +318,7 @@ def test_bf16_none_follows_the_cpu_flags():
 
 @pytest.mark.parametrize("shape", ["pixels", "blobs"])
 def test_holdout_takes_its_share_of_valid_pixels_only(shape):
-    from ddp_lite.method.loop import holdout_mask
+    from ddp_lite.method.stopping import holdout_mask
     valid = np.ones((48, 64), bool)
     valid[:, :20] = False  # a hole: never held out
     held = holdout_mask(valid, 0.05, seed=3, shape=shape)
@@ -329,7 +329,7 @@ def test_holdout_takes_its_share_of_valid_pixels_only(shape):
 
 def test_holdout_blobs_are_patches_not_scattered_pixels():
     from scipy import ndimage
-    from ddp_lite.method.loop import holdout_mask
+    from ddp_lite.method.stopping import holdout_mask
     valid = np.ones((96, 128), bool)
     pixels, blobs = (holdout_mask(valid, 0.05, seed=0, shape=s) for s in ("pixels", "blobs"))
     # 4-connected components: ~600 scattered pixels are mostly alone; blobs are a handful of patches

@@ -5,7 +5,7 @@
     loss          the paper's loss: L1/SSIM shares, γ1, γ2, the warp term, the disparity range
     holes         the kit's hole terms and their edge weights (hole_losses.py, hole_terms.py)
     combination   what is averaged or blended into the answer: an ensemble, the paper's fit, a classical fill
-    stopping      auto-stop on held-out pixels (loop.PlateauStopper)
+    stopping      auto-stop on held-out pixels (stopping.PlateauStopper)
     runtime       seed, device, precision, memory, progress: where and how it runs, not what it computes
 
 Each section is a frozen dataclass; ``config.holes.smoothness`` names a field by its section. Every field

@@ -6,7 +6,7 @@ colour image, a classical fill: ``net_inputs``), blends with a fill or the paper
 (``blend``), ensembles (``ensemble``) and the method switch (``recipes``).
 
 Blends and ensembles combine whole fits, so they use two of the fit's own files in ``method/``: its
-held-out pixels (``loop.holdout_mask``) and its side-by-side runs (``side_by_side``).
+held-out pixels (``stopping.holdout_mask``) and its side-by-side runs (``side_by_side``).
 
 May import: core, classical, paper, runtime, method.
 """
