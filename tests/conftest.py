@@ -14,7 +14,7 @@ torch.set_num_threads(1 if os.environ.get("PYTEST_XDIST_WORKER") else max(1, min
 
 
 def pytest_configure(config):
-    """One fresh fit cache (``ddp_lite.method.runtime.cache``) per test session, shared by its xdist workers (they start
+    """One fresh fit cache (``ddp_lite.method.fit_cache``) per test session, shared by its xdist workers (they start
     after this hook and inherit the environment) and the notebook kernels they start. The notebooks
     run first and fill it; the student copies and graded solutions run the same notebooks again and
     read their fits back (they test the notebooks' flow and checks, not the fits). Python tests run

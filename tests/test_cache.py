@@ -1,4 +1,4 @@
-"""The fit cache (ddp_lite.method.runtime.cache): a hit returns what is stored, and every input that decides a fit misses."""
+"""The fit cache (ddp_lite.method.fit_cache): a hit returns what is stored, and every input that decides a fit misses."""
 import errno
 import io
 import json
@@ -15,7 +15,7 @@ import torch
 from conftest import TINY, plane_with_hole, tilted_plane
 
 import ddp_lite as ddp
-from ddp_lite import cache
+from ddp_lite.method import fit_cache
 
 H, W = 24, 32
 
@@ -97,7 +97,7 @@ def test_each_input_that_decides_a_fit_gets_its_own_entry(folder, monkeypatch):
     _fit(rgb, one_pixel)  # an array by value
     _fit(rgb, depth, seed=1)  # a config field
     ddp.complete_depth(rgb, depth, None, (), "d", _config(), tilted_plane(H, W))  # gt_depth, positionally
-    monkeypatch.setattr(cache, "_library_digest", lambda: "an edited ddp_lite")
+    monkeypatch.setattr(fit_cache, "_library_digest", lambda: "an edited ddp_lite")
     _fit(rgb, depth)  # the library's source
     assert len(list(folder.iterdir())) == 5
 
@@ -106,7 +106,7 @@ def test_the_profile_decides_a_call_without_a_config(monkeypatch):
     keys = []
     for profile in ("ci", "class", "ci"):
         monkeypatch.setenv("DDP_PROFILE", profile)
-        keys.append(cache._key(ddp.complete_depth, {"config": None}))
+        keys.append(fit_cache._key(ddp.complete_depth, {"config": None}))
     assert keys[0] == keys[2] != keys[1]
 
 
@@ -248,9 +248,9 @@ def test_deep_image_prior_fits_are_cached_too(folder):
 def test_a_warm_start_hashes_the_same_in_another_process():
     # pickled tensors differ from process to process; the key hashes their values
     state = {"w": torch.arange(6.0).reshape(2, 3)}
-    here = cache._key(ddp.complete_depth, {"init": state})
-    code = (f"import torch, ddp_lite as ddp; from ddp_lite import cache; torch.set_num_threads({torch.get_num_threads()}); "
-            "print(cache._key(ddp.complete_depth, {'init': {'w': torch.arange(6.0).reshape(2, 3)}}))")
+    here = fit_cache._key(ddp.complete_depth, {"init": state})
+    code = (f"import torch, ddp_lite as ddp; from ddp_lite.method import fit_cache; torch.set_num_threads({torch.get_num_threads()}); "
+            "print(fit_cache._key(ddp.complete_depth, {'init': {'w': torch.arange(6.0).reshape(2, 3)}}))")
     there = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
     assert here == there and here is not None
-    assert cache._key(ddp.complete_depth, {"init": {"w": torch.arange(6.0).reshape(3, 2)}}) != here
+    assert fit_cache._key(ddp.complete_depth, {"init": {"w": torch.arange(6.0).reshape(3, 2)}}) != here

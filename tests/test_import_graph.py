@@ -202,6 +202,20 @@ def test_each_part_of_the_method_imports_only_what_its_docstring_allows():
     assert breaches == []
 
 
+def test_the_methods_rooms_import_only_downward():
+    """paper below runtime below kit below the fit's own files: the paper imports none of the rest, the
+    runtime only the paper, the kit of ``method/`` itself only the held-out pixels (``stopping``), which
+    import nothing of the kit and nothing of the fit above them."""
+    edges = graph()
+    up = {"paper": {"runtime", "kit", "method"}, "runtime": {"kit", "method"}, "kit": {"method"}}
+    breaches = [f"{importer} imports {target}" for importer, out in edges.items() for target in out
+                if part_of_method(importer) in up and part_of_method(target) in up[part_of_method(importer)]
+                and target != "ddp_lite.method.stopping"]
+    assert breaches == []
+    below_kit = {"ddp_lite.method.stopping"} | set(edges["ddp_lite.method.stopping"])
+    assert all(part_of_method(module) in ("paper", "runtime", None) for module in below_kit - {"ddp_lite.method.stopping"})
+
+
 def _ddp_lite_imports(source: str, importer: str | None = None, is_package: bool = False):
     """(line, absolute module name) of every import of ``ddp_lite`` or one of its modules in ``source``."""
     for node in ast.walk(ast.parse(source)):

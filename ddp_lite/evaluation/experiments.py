@@ -17,7 +17,7 @@ from ..method.paper.disparity import DisparityTransform
 from ..method.config import FitConfig
 from ..method.combine import complete_depth
 from ..method.fit import DepthResult
-from ..method.side_by_side import run_fits
+from ..method.runtime.side_by_side import run_fits
 from .fusion import points_from_depth
 from ..classical.holes import edge_band_holes, random_holes
 from .metrics import cloud_scores, disparity_rmse, edge_band, texture_leakage  # re-exported: notebooks import them here
@@ -122,7 +122,7 @@ def make_case(scene_name: str = "house", profile: Profile | str | None = None, r
 def run_variants(case: Case, variants=("d", "rgbd", "rgbd+warp"), profile=None, net: str = "unet",
                  **config_overrides) -> dict[str, DepthResult]:
     """Fit each DDP variant on ``case`` with the profile's config; {variant: DepthResult}. The fits are
-    independent and run side by side (:mod:`ddp_lite.method.side_by_side`)."""
+    independent and run side by side (:mod:`ddp_lite.method.runtime.side_by_side`)."""
     results = run_jobs([(case, variant, net, config_overrides) for variant in variants], profile)
     return dict(zip(variants, results))
 
@@ -136,7 +136,7 @@ def run_jobs(jobs, profile=None) -> list[DepthResult]:
     """Each ``(case, variant, net, {FitConfig field: value})`` of ``jobs`` fitted with the profile's config
     (the case's ground truth for the fit's history) → DepthResults in the same order. The fits are
     independent: on a CPU they run side by side, one torch thread each, as many at once as torch has
-    threads (:mod:`ddp_lite.method.side_by_side`); a fit gives the numbers of one thread."""
+    threads (:mod:`ddp_lite.method.runtime.side_by_side`); a fit gives the numbers of one thread."""
     configs = [FitConfig.for_profile(profile, variant=variant, net=net, **options) for _, variant, net, options in jobs]
     partners = [case.neighbors if get_variant(variant).needs_neighbors else () for case, variant, *_ in jobs]
 

@@ -14,7 +14,7 @@ from ..core.checks import MIN_VALID_PIXELS, check_callback, check_finite_output,
 from ..core.progress import FitBar
 from .config import FitConfig
 from .paper.nets import check_input_size
-from .runtime.cache import cached
+from .fit_cache import cached
 from .runtime.device import resolve_device
 from .runtime.memory import check_memory
 from .runtime.tensors import to_tensor

@@ -37,7 +37,7 @@ import time
 import numpy as np
 
 from ..method.config import FitConfig
-from ..method.side_by_side import side_by_side_workers, torch_threads
+from ..method.runtime.side_by_side import side_by_side_workers, torch_threads
 from ..core.progress import CommandClock
 from .runner import run_jobs
 from .sequence_cost import estimate_sequence, format_estimate, measure_fit_cost

@@ -21,7 +21,7 @@ from ..core.camera import Camera
 from ..method.paper.disparity import DisparityTransform
 from ..method.config import FitConfig
 from ..method.combine import complete_depth
-from ..method.side_by_side import torch_threads
+from ..method.runtime.side_by_side import torch_threads
 from ..method.fit_inputs import check_fit_inputs
 from ..world.neighbors import select_neighbors
 from ..core.views import Scene

@@ -16,7 +16,7 @@ valid input around the holes is held out of both fits, and the weight that best 
 Measured on the real pair, the ring costs more than it tells: both fits lose the valid pixels that
 matter most (beside an occlusion, the far surface), and its choice is no better than the fixed mean.
 It stays a study lever. The two fits run side by side on a CPU with two threads
-(:func:`ddp_lite.method.side_by_side.run_side_by_side`).
+(:func:`ddp_lite.method.runtime.side_by_side.run_side_by_side`).
 
 ``blend_fill`` f mixes in a third estimate that errs in yet other places: a colour-guided fill of the
 input (:func:`fill_disparity`), the mean of Levin et al.'s colorization fill and Barron & Poole's fast
