@@ -44,7 +44,7 @@ _HOMES = {
 }
 _HOME_OF = {name: module for module, names in _HOMES.items() for name in names}
 _PACKAGES = {  # sub-package → its modules, each one concern (the sub-package's docstring says which)
-    "core": ('checks', 'camera', 'views', 'progress', 'outpaths', 'files'),
+    "core": ('checks', 'camera', 'views', 'progress', 'outpaths', 'files', 'array_archive'),
     "world": ('scenes', 'render', 'textures', 'photo_texture', 'solids', 'terrain', 'organic', 'neighbors'),
     "classical": ('baselines', 'depth_fills', 'guided_fills', 'stereo', 'holes', 'kinect'),
     "method": ('config', 'profiles', 'fit_inputs', 'stopping', 'time_left', 'loop', 'fit', 'fit_cache', 'combine', 'coarse_to_fine',
