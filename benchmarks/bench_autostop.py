@@ -27,7 +27,8 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 import torch  # noqa: E402
 
-from ddp_lite import FitConfig, complete_depth  # noqa: E402
+from ddp_lite.method.config import FitConfig  # noqa: E402
+from ddp_lite.method.complete import complete_depth  # noqa: E402
 from ddp_lite.evaluation.experiments import make_case  # noqa: E402
 from ddp_lite.method.stopping import PlateauStopper  # noqa: E402
 from ddp_lite.method.paper.variants import VARIANTS, get_variant  # noqa: E402

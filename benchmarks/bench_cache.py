@@ -17,7 +17,7 @@ from pathlib import Path
 
 import nbformat
 
-from ddp_lite import classroom
+from ddp_lite.interface import classroom
 from ddp_lite.interface.classroom import _environment
 
 NOTEBOOKS = Path(__file__).resolve().parent.parent / "notebooks"

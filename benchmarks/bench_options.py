@@ -91,7 +91,8 @@ ERROR_OPTIONS = ("float32", "bf16", "pad zeros", "bf16+zeros")
 
 def hole_errors(scenes=("house", "desk"), seeds=(0, 1, 2)) -> None:
     """Print hole RMSE ×100 per scene, seed and option, and each fit's s/it (options run in turn)."""
-    from ddp_lite import FitConfig, complete_depth
+    from ddp_lite.method.config import FitConfig
+    from ddp_lite.method.complete import complete_depth
     from ddp_lite.evaluation.experiments import make_case
     print(f"\n== hole RMSE ×100 (final iteration), rgbd, ci profile 48×64, UNet 16-32-64-128, holes='sgm'")
     print(f"{'scene':<7} {'seed':>4} " + " ".join(f"{o:>11}" for o in ERROR_OPTIONS) + "   s/it per option")

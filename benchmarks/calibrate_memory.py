@@ -23,7 +23,7 @@ def one(H: int, W: int, variant: str, channels) -> dict:
     import numpy as np
 
     from ddp_lite.method.config import FitConfig
-    from ddp_lite.method.combine import complete_depth
+    from ddp_lite.method.complete import complete_depth
     depth = np.full((H, W), 2.0, np.float32)
     depth[H // 4:H // 2, W // 4:W // 2] = np.nan
     rgb = np.random.default_rng(0).random((H, W, 3)).astype(np.float32)

@@ -26,7 +26,8 @@ ROWS = Path(__file__).parent / "results" / "time_left_class.jsonl"
 
 def record(lane: int, lanes: int, out: str) -> None:
     import torch
-    import ddp_lite as ddp
+    from ddp_lite.method.complete import complete_depth
+    from ddp_lite.method.config import FitConfig
     from bench_quality import build_case, suite  # benchmarks/ is on the path: the scripts run from there
     from ddp_lite.method.profiles import get_profile
     torch.set_num_threads(1)
@@ -38,9 +39,9 @@ def record(lane: int, lanes: int, out: str) -> None:
             case, _ = build_case(name, profile)
             if variant == "rgbd+warp" and not case.neighbors:
                 continue
-            config = ddp.FitConfig.for_profile(profile, variant=variant, progress=False, seed=seed)
+            config = FitConfig.for_profile(profile, variant=variant, progress=False, seed=seed)
             start = time.perf_counter()
-            result = ddp.complete_depth(case.rgb, case.depth, case.camera,
+            result = complete_depth(case.rgb, case.depth, case.camera,
                                         case.neighbors if variant == "rgbd+warp" else (), variant=variant, config=config)
             history = result.history
             rows.write(json.dumps(dict(case=name, variant=variant, seed=seed, cap=config.iterations,

@@ -4,8 +4,14 @@ import pytest
 import torch
 from scipy.interpolate import griddata
 
-from ddp_lite import (Camera, FitConfig, SkipNet, UNet, complete_depth, disparity_loss, fit_image, look_at, merge,
-                      warp_loss, warp_to_reference)
+from ddp_lite.core.camera import Camera, look_at
+from ddp_lite.method.config import FitConfig
+from ddp_lite.method.paper.nets import SkipNet, UNet
+from ddp_lite.method.complete import complete_depth
+from ddp_lite.method.paper.losses import disparity_loss, warp_loss
+from ddp_lite.method.dip import fit_image
+from ddp_lite.method.fit import merge
+from ddp_lite.method.paper.warp import warp_to_reference
 from ddp_lite.method.stopping import PlateauStopper
 from conftest import TINY, tilted_plane
 
@@ -270,10 +276,15 @@ def test_for_profile_copies_every_shared_field_and_derives_the_rest():
     assert FitConfig.for_profile("ci", lr=0.5).lr == 0.5  # overrides win
 
 
-def test_public_face_lists_what_users_call_and_keeps_the_building_blocks():
+def test_the_front_door_lists_what_users_call_and_hands_on_nothing_else():
+    import importlib
+
     import ddp_lite
-    assert all(hasattr(ddp_lite, name) for name in ddp_lite.__all__)
-    assert {"complete_depth", "FitConfig", "get_profile", "make_scene", "Camera"} <= set(ddp_lite.__all__)
-    assert not {"pixel_grid", "make_noise", "masked_l1", "build_net"} & set(ddp_lite.__all__)  # building blocks
-    for name in ("pixel_grid", "make_noise", "masked_l1", "build_net", "ssim", "complete_depth_coarse_to_fine"):
-        assert hasattr(ddp_lite, name)  # still importable from the package, as before
+    assert {"complete_depth", "FitConfig", "get_profile", "get_recipe", "make_scene", "Camera"} <= set(ddp_lite.__all__)
+    for name in ddp_lite.__all__:  # each is its own module's object, importable from there
+        module = importlib.import_module(f"ddp_lite.{ddp_lite._FRONT_DOOR[name]}")
+        assert getattr(ddp_lite, name) is getattr(module, name) and name in module.__all__
+    # building blocks and modules by their own names no longer pass through the package
+    for name in ("pixel_grid", "make_noise", "masked_l1", "build_net", "ssim", "complete_depth_coarse_to_fine",
+                 "metrics", "baselines", "recipes", "loop"):
+        assert not hasattr(ddp_lite, name), name

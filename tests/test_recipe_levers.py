@@ -10,7 +10,10 @@ import pytest
 import torch
 import torch.nn.functional as F
 
-from ddp_lite import DisparityTransform, FitConfig, UNet, complete_depth
+from ddp_lite.method.paper.disparity import DisparityTransform
+from ddp_lite.method.config import FitConfig
+from ddp_lite.method.paper.nets import UNet
+from ddp_lite.method.complete import complete_depth
 from ddp_lite.method.paper.nets import _conv
 from conftest import TINY, plane_with_hole, tilted_plane
 
@@ -384,7 +387,7 @@ def test_image_channels_are_the_image_blurred_like_scipys_gaussian_filter_then_s
 
 
 def test_image_input_feeds_the_colour_image_to_variants_that_see_it_and_not_to_depth_only():
-    from ddp_lite import loop
+    from ddp_lite.method import loop
     from ddp_lite.method.kit.net_inputs import image_channels
     depth = tilted_plane(12, 16)
     depth[4:8, 5:11] = np.nan

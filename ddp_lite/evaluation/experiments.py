@@ -15,12 +15,12 @@ import numpy as np
 from ..core.camera import Camera
 from ..method.paper.disparity import DisparityTransform
 from ..method.config import FitConfig
-from ..method.combine import complete_depth
+from ..method.complete import complete_depth
 from ..method.fit import DepthResult
 from ..method.runtime.side_by_side import run_fits
 from .fusion import points_from_depth
 from ..classical.holes import edge_band_holes, random_holes
-from .metrics import cloud_scores, disparity_rmse, edge_band, texture_leakage  # re-exported: notebooks import them here
+from .metrics import cloud_scores, disparity_rmse, edge_band
 from ..method.profiles import Profile, get_profile
 from ..world.neighbors import select_neighbors
 from ..world.scenes import make_scene
@@ -28,8 +28,8 @@ from ..classical.stereo import sgm_depth_subsampled
 from ..method.paper.variants import get_variant
 from ..core.views import LABEL_SKY
 
-__all__ = ["Case", "make_case", "sgm_depth_at_scale", "edge_band", "disparity_rmse", "run_variants", "run_cases", "run_jobs", "error_table", "format_table",
-           "format_ranking", "texture_leakage", "format_mean_spread", "cloud_scores", "ablation", "TABLE2_CONFIGS"]
+__all__ = ["Case", "make_case", "sgm_depth_at_scale", "run_variants", "run_cases", "run_jobs", "error_table",
+           "format_table", "format_ranking", "format_mean_spread", "ablation", "TABLE2_CONFIGS"]
 
 
 @dataclass

@@ -234,7 +234,7 @@ def complete_command(args) -> int:
 
 def _complete(args, writers, staged, start) -> int:
     from ..method.config import FitConfig
-    from ..method.combine import complete_depth
+    from ..method.complete import complete_depth
     from ..method.profiles import get_profile
     from ..core.progress import command_progress
     from ..method.time_left import earliest_share, expected_share

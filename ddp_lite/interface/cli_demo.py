@@ -21,7 +21,7 @@ from ..classical.guided_fills import fill_colorization
 from ..method.runtime.device import resolve_device
 from ..evaluation.experiments import error_table, format_table, make_case
 from ..method.config import FitConfig
-from ..method.combine import complete_depth
+from ..method.complete import complete_depth
 from ..method.runtime.memory import check_memory
 from ..method.time_left import earliest_share, expected_share
 from ..method.paper.nets import check_input_size

@@ -10,9 +10,9 @@
   arguments (a warp term, occlusion tests, extra terms), never by the paper importing it.
 - here, the fit: ground-truth-free stopping (``stopping``; the one file here the kit uses) and the
   time a fit still needs (``time_left``), its config and profiles (``config``, ``profiles``), its
-  inputs (``fit_inputs``), the loop (``loop``), one fit (``fit``, which composes the paper's loss
+  inputs checked (``input_checks``), the loop (``loop``), one fit (``fit``, which composes the paper's loss
   with the kit's terms), fits done once (``fit_cache``), the entry point ``complete_depth`` over the
-  kit's combinations (``combine``), coarse-to-fine (``coarse_to_fine``), a working-size fit sharpened
+  kit's combinations (``complete``), coarse-to-fine (``coarse_to_fine``), a working-size fit sharpened
   at a photo's own resolution (``full_resolution``), Deep Image Prior (``dip``) and the loss a config
   optimises, written out (``equation``).
 

@@ -119,7 +119,7 @@ class HolesConfig(_Section):
 
 @dataclass(frozen=True)
 class CombinationConfig(_Section):
-    """What goes into the answer besides one fit (:mod:`ddp_lite.method.combine`): more seeds, the
+    """What goes into the answer besides one fit (:mod:`ddp_lite.method.complete`): more seeds, the
     paper's fit, a classical fill."""
 
     ensemble: int = 1  # fits with seeds seed, seed+1, ...; their disparities are averaged

@@ -6,7 +6,7 @@ One fit, on inputs checked once (:func:`check_inputs`): :func:`run_fit` builds t
 arguments, joins the kit's net inputs (:mod:`ddp_lite.method.kit.net_inputs`), and hands it to the
 loop (:func:`ddp_lite.method.loop.run`). :func:`fit_once` is the two steps in one call. The kit's
 combinations of fits (an ensemble, the blend with the paper recipe's fit, a share of a classical fill)
-and :func:`~ddp_lite.method.combine.complete_depth`, the entry point, live in :mod:`ddp_lite.method.combine`,
+and :func:`~ddp_lite.method.complete.complete_depth`, the entry point, live in :mod:`ddp_lite.method.complete`,
 which calls this module, never the reverse.
 """
 from __future__ import annotations
@@ -22,7 +22,7 @@ from ..core.camera import Camera
 from ..core.checks import MIN_VALID_PIXELS, check_depth, check_finite_output, unmask
 from ..core.progress import FitBar
 from .config import FitConfig
-from .fit_inputs import check_fit_inputs
+from .input_checks import check_fit_inputs
 from .kit.hole_terms import HoleTerms
 from .kit.net_inputs import fill_channel, image_channels
 from .kit.warp_terms import kit_warp_arguments
@@ -39,7 +39,7 @@ __all__ = ["DepthResult", "FitInputs", "merge", "check_inputs", "run_fit", "fit_
 
 @dataclass
 class DepthResult:
-    """What :func:`~ddp_lite.method.combine.complete_depth` returns. Arrays are NumPy, (H, W) or (H, W, 3).
+    """What :func:`~ddp_lite.method.complete.complete_depth` returns. Arrays are NumPy, (H, W) or (H, W, 3).
 
     For the mean of several fits (``config.ensemble > 1``, ``fits`` of them) ``iterations`` and
     ``seconds`` are totals over the fits; ``history``, ``best_iteration`` and ``state`` are the
@@ -91,7 +91,7 @@ class FitInputs:
 
 def check_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth=None, transform=None, init=None
                  ) -> tuple[FitInputs, FitConfig]:
-    """Check a fit's inputs once, before any work (:func:`~ddp_lite.method.fit_inputs.check_fit_inputs`):
+    """Check a fit's inputs once, before any work (:func:`~ddp_lite.method.input_checks.check_fit_inputs`):
     (:class:`FitInputs`, the config). ``init`` must be None or a :class:`DepthResult`."""
     spec = get_variant(variant)
     config, depth, rgb, neighbors, gt_depth, transform = check_fit_inputs(rgb, depth, camera, neighbors, spec,

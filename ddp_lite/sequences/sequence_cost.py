@@ -13,7 +13,7 @@ import torch
 from torch.utils.flop_counter import FlopCounterMode
 
 from ..method.config import FitConfig
-from ..method.combine import complete_depth
+from ..method.complete import complete_depth
 from ..method.runtime.memory import estimate_peak_memory_gb
 from ..world.scenes import make_scene
 from .sequence_jobs import N_NEIGHBORS, VARIANT

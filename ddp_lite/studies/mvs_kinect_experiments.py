@@ -18,7 +18,7 @@ import numpy as np
 
 from ..classical.baselines import fill
 from ..method.config import FitConfig
-from ..method.combine import complete_depth
+from ..method.complete import complete_depth
 from ..method.runtime.side_by_side import run_fits
 from ..evaluation.fusion import fuse_depths, points_from_depth
 from ..evaluation.metrics import cloud_scores, psnr

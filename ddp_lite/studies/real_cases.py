@@ -31,7 +31,7 @@ from scipy import ndimage
 from ..classical.baselines import BASELINES
 from ..evaluation.experiments import Case
 from ..method.config import FitConfig
-from ..method.combine import blend_members, blended_result, complete_depth, mixed_with_fill
+from ..method.complete import blend_members, blended_result, complete_depth, mixed_with_fill
 from ..classical.holes import random_holes
 from ..data.middlebury import load_middlebury, load_motorcycle
 from ..method.profiles import get_profile

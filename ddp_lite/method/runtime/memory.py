@@ -65,5 +65,5 @@ def check_memory(config, out_channels: int, height: int, width: int, n_neighbors
         raise ValueError(
             f"depth: a {height}×{width} (H×W) fit with this config needs about {estimate:.1f} GB at its peak, more than "
             f"the limit of {limit:.1f} GB ({source}). Downscale the inputs (e.g. cv2.resize, or "
-            f"datasets.resize_scene for a Scene), use smaller config.channels, or a GPU; or raise the limit with "
+            f"ddp_lite.data.resample.resize_scene for a Scene), use smaller config.channels, or a GPU; or raise the limit with "
             f"config.max_memory_gb (CLI: --max-memory-gb) if you know it fits.")

@@ -1,4 +1,4 @@
-"""The kit's combinations of DDP fits, and :func:`complete_depth`, the entry point that applies them.
+""":func:`complete_depth`, the entry point: one DDP fit, or the kit's combinations of fits a config asks for.
 
 A config asks for at most three, applied from the outside in: a share of the input's colour-guided
 fill mixed into the result (``blend_fill``, :func:`with_fill`); the blend of this config's fit with
