@@ -6,7 +6,7 @@ import dataclasses
 
 import torch
 
-from ddp_lite import get_profile
+from ddp_lite.method.profiles import get_profile
 
 
 def add_profile_args(parser: argparse.ArgumentParser) -> None:

@@ -8,7 +8,7 @@ For each named scene and DDP variant (holes="edge"), ONE long fit runs for ``--i
 with the profile's recipe (held-out pixels, lr cut on every held-out plateau) but is never
 allowed to stop. Because a fit is deterministic (same seed, same thread count), the run with
 the profile's ``plateau_decays`` would have followed the same curve up to its stop; the stop
-rule (:class:`ddp_lite.method.loop.PlateauStopper`) is therefore replayed exactly on the recorded
+rule (:class:`ddp_lite.method.stopping.PlateauStopper`) is therefore replayed exactly on the recorded
 held-out curve. "kept" is the hole error of the output auto-stop returns, "oracle" the lowest
 hole error of the whole long run (known only through the ground truth), "final" the error at
 its end (drift). "plain" replays the same curve with no lr cut (stop at the first plateau).
@@ -27,9 +27,10 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 import torch  # noqa: E402
 
-from ddp_lite import FitConfig, complete_depth  # noqa: E402
+from ddp_lite.method.config import FitConfig  # noqa: E402
+from ddp_lite.method.complete import complete_depth  # noqa: E402
 from ddp_lite.evaluation.experiments import make_case  # noqa: E402
-from ddp_lite.method.loop import PlateauStopper  # noqa: E402
+from ddp_lite.method.stopping import PlateauStopper  # noqa: E402
 from ddp_lite.method.paper.variants import VARIANTS, get_variant  # noqa: E402
 from _common import add_profile_args, profile_from_args  # noqa: E402
 

@@ -1,4 +1,4 @@
-"""What the fit cache (``DDP_CACHE``, ``ddp_lite/method/runtime/cache.py``) saves: each notebook run twice at a profile,
+"""What the fit cache (``DDP_CACHE``, ``ddp_lite/method/fit_cache.py``) saves: each notebook run twice at a profile,
 in a fresh kernel each time, first with an empty cache folder, then with the folder the first run
 filled. Prints the wall seconds of both runs, the cache entries, and whether the second run printed
 the same text (lines that report a time are left out of that comparison, temporary folders' names
@@ -17,7 +17,7 @@ from pathlib import Path
 
 import nbformat
 
-from ddp_lite import classroom
+from ddp_lite.interface import classroom
 from ddp_lite.interface.classroom import _environment
 
 NOTEBOOKS = Path(__file__).resolve().parent.parent / "notebooks"

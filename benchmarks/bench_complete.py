@@ -30,7 +30,7 @@ from ddp_lite.classical import baselines  # noqa: E402
 from ddp_lite.classical.holes import random_holes  # noqa: E402
 from ddp_lite.data.middlebury import load_motorcycle  # noqa: E402
 from ddp_lite.method.config import FitConfig  # noqa: E402
-from ddp_lite.method.combine import complete_depth  # noqa: E402
+from ddp_lite.method.complete import complete_depth  # noqa: E402
 from ddp_lite.sequences.working_size import fill_holes_at_full_size, shrink, working_shape  # noqa: E402
 
 FILLS = ("linear", "navier-stokes", "colorization", "bilateral-solver")

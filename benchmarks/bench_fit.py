@@ -102,7 +102,7 @@ def convolution_seconds(run, repeats: int = 10) -> float:
 
 def case(height: int, width: int, seed: int = 0):
     """A slanted plane with a textured image, 20 % holes and two shifted neighbours."""
-    from ddp_lite import Camera, look_at
+    from ddp_lite.core.camera import Camera, look_at
     rng = np.random.default_rng(seed)
     ref = Camera.from_fov(width, height, 60.0)
     u = np.arange(width, dtype=np.float32)
@@ -115,7 +115,8 @@ def case(height: int, width: int, seed: int = 0):
 
 def run_one(variant: str, height: int, width: int, channels, iterations: int, overrides=None) -> dict:
     from torch.utils.flop_counter import FlopCounterMode
-    from ddp_lite import FitConfig, complete_depth
+    from ddp_lite.method.config import FitConfig
+    from ddp_lite.method.complete import complete_depth
     from ddp_lite.method.paper.variants import get_variant
     rgb, depth, ref, nbrs = case(height, width)
     kwargs = dict(camera=ref, neighbors=nbrs) if get_variant(variant).needs_neighbors else {}

@@ -89,7 +89,7 @@ def make_cases(data: str | None, scenes, sgbm: bool = True) -> list:
 
 def fit_small(case: Case, profile, seed: int, cache: str | None, isa: str):
     """DDP at the working size as ``complete`` fits it → (working-size completed depth, fit seconds, shape)."""
-    from ddp_lite.method.combine import complete_depth
+    from ddp_lite.method.complete import complete_depth
     from ddp_lite.method.config import FitConfig
     from ddp_lite.sequences.working_size import shrink, working_shape
     shape = working_shape(case.depth.shape, max(profile.size))

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
+import inspect
 import os
 import statistics
 import sys
@@ -72,9 +73,14 @@ def prepare(package, size, channels, variant: str, options: dict, compile_mode=N
     if compile_mode is not None:
         net = torch.compile(net, mode=compile_mode)
 
+    # the loop takes its progress hook from its caller (older packages made their own bar)
+    hook = (sys.modules[package.__name__ + ".core.progress"].FitBar
+            if "progress" in inspect.signature(run).parameters else None)
+
     def step(n: int) -> float:
+        quiet = {} if hook is None else {"progress": hook(n, enabled=False)}
         start = time.perf_counter()
-        run(net, pieces["noise"], pieces["loss_fn"], pieces["config"], n)
+        run(net, pieces["noise"], pieces["loss_fn"], pieces["config"], n, **quiet)
         return (time.perf_counter() - start) / n
 
     return step
@@ -85,7 +91,8 @@ ERROR_OPTIONS = ("float32", "bf16", "pad zeros", "bf16+zeros")
 
 def hole_errors(scenes=("house", "desk"), seeds=(0, 1, 2)) -> None:
     """Print hole RMSE ×100 per scene, seed and option, and each fit's s/it (options run in turn)."""
-    from ddp_lite import FitConfig, complete_depth
+    from ddp_lite.method.config import FitConfig
+    from ddp_lite.method.complete import complete_depth
     from ddp_lite.evaluation.experiments import make_case
     print(f"\n== hole RMSE ×100 (final iteration), rgbd, ci profile 48×64, UNet 16-32-64-128, holes='sgm'")
     print(f"{'scene':<7} {'seed':>4} " + " ".join(f"{o:>11}" for o in ERROR_OPTIONS) + "   s/it per option")

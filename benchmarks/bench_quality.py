@@ -44,8 +44,11 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
 
-import ddp_lite as ddp  # noqa: E402
-from ddp_lite import baselines  # noqa: E402
+from ddp_lite.classical.stereo import sgm_depth  # noqa: E402
+from ddp_lite.method.complete import complete_depth  # noqa: E402
+from ddp_lite.method.config import FitConfig  # noqa: E402
+from ddp_lite.method.paper.disparity import DisparityTransform  # noqa: E402
+from ddp_lite.classical import baselines  # noqa: E402
 from ddp_lite.evaluation.experiments import Case, make_case, sgm_depth_at_scale  # noqa: E402
 from ddp_lite.classical.holes import random_holes  # noqa: E402
 from ddp_lite.data.middlebury import load_middlebury, make_middlebury_fixture  # noqa: E402
@@ -112,10 +115,10 @@ def build_case(name: str, profile) -> tuple[Case, float]:
         with tempfile.TemporaryDirectory(prefix="ddp-quality-") as tmp:
             full = load_middlebury(make_middlebury_fixture(Path(tmp) / "Fixture-perfect", size=(3 * H, 3 * W), seed=0))
         scene, matching = resize_scene(full, profile.size), resize_scene(full, (3 * H, 3 * W))
-        depth = np.ascontiguousarray(ddp.sgm_depth(matching, 0, holes.split("-")[1])[0][1::3, 1::3])
+        depth = np.ascontiguousarray(sgm_depth(matching, 0, holes.split("-")[1])[0][1::3, 1::3])
         view = scene[0]
         case = Case(name, view.rgb, depth.astype(np.float32), view.depth, view.camera, [scene.right[0]],
-                    ddp.DisparityTransform.from_depth(view.depth, margin=1.0), scene, 0, None)
+                    DisparityTransform.from_depth(view.depth, margin=1.0), scene, 0, None)
         return case, view.camera.focal * scene.meta["baseline"]
     if holes == "blobs":  # Depthcomp-like: large smooth blobs cut into the complete depth
         case = make_case(scene_name, profile, holes="random")
@@ -207,11 +210,11 @@ def run(args) -> None:
                 for seed in args.seeds:
                     if (name, recipe, variant, seed, size) in done:
                         continue
-                    config = ddp.FitConfig.for_profile(profile, variant=variant, progress=False,
+                    config = FitConfig.for_profile(profile, variant=variant, progress=False,
                                                        **{"seed": seed, **overrides})
                     neighbors = case.neighbors if variant == "rgbd+warp" else ()
                     start = time.perf_counter()
-                    result = ddp.complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant,
+                    result = complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant,
                                                 config=config)
                     record(dict(case=name, method=recipe, variant=variant, seed=seed, size=size,
                                 px=rmse_px(result.merged(case.depth), case, fb),

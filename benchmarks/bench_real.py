@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ddp_lite import baselines
+from ddp_lite.classical import baselines
 from ddp_lite.method.config import FitConfig
 from ddp_lite.studies.real_cases import _fit_reusing, _plain_fits
 from ddp_lite.studies.real_suite import SUITE_HOLES, make_suite_case, suite_case_names

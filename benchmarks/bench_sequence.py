@@ -20,11 +20,14 @@ from pathlib import Path
 
 import numpy as np
 
-from ddp_lite import FitConfig, get_profile, make_scene
-from ddp_lite.evaluation.experiments import cloud_scores, sgm_depth_at_scale
+from ddp_lite.method.config import FitConfig
+from ddp_lite.method.profiles import get_profile
+from ddp_lite.world.scenes import make_scene
+from ddp_lite.evaluation.metrics import cloud_scores
+from ddp_lite.evaluation.experiments import sgm_depth_at_scale
 from ddp_lite.data.formats import load_sequence
 from ddp_lite.evaluation.fusion import fuse_depths, points_from_depth
-from ddp_lite.method.side_by_side import torch_threads
+from ddp_lite.method.runtime.side_by_side import torch_threads
 from ddp_lite.sequences.runner import open_client
 from ddp_lite.sequences.sequence import run_sequence
 from ddp_lite.sequences.sequence_cost import estimate_sequence, format_estimate

@@ -33,7 +33,8 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 import torch  # noqa: E402
 
-from ddp_lite import FitConfig, complete_depth  # noqa: E402
+from ddp_lite.method.config import FitConfig  # noqa: E402
+from ddp_lite.method.complete import complete_depth  # noqa: E402
 from ddp_lite.evaluation.experiments import make_case  # noqa: E402
 from ddp_lite.method.coarse_to_fine import complete_depth_coarse_to_fine  # noqa: E402
 from _common import add_profile_args, profile_from_args  # noqa: E402

@@ -1,4 +1,4 @@
-"""Peak resident memory of one-iteration fits against ``fit.estimate_peak_memory_gb``.
+"""Peak resident memory of one-iteration fits against ``ddp_lite.method.runtime.memory.estimate_peak_memory_gb``.
 
     OMP_NUM_THREADS=1 python benchmarks/calibrate_memory.py
 
@@ -23,7 +23,7 @@ def one(H: int, W: int, variant: str, channels) -> dict:
     import numpy as np
 
     from ddp_lite.method.config import FitConfig
-    from ddp_lite.method.combine import complete_depth
+    from ddp_lite.method.complete import complete_depth
     depth = np.full((H, W), 2.0, np.float32)
     depth[H // 4:H // 2, W // 4:W // 2] = np.nan
     rgb = np.random.default_rng(0).random((H, W, 3)).astype(np.float32)
@@ -34,7 +34,7 @@ def one(H: int, W: int, variant: str, channels) -> dict:
 
 def main() -> None:
     from ddp_lite.method.config import FitConfig
-    from ddp_lite.method.loop import estimate_peak_memory_gb
+    from ddp_lite.method.runtime.memory import estimate_peak_memory_gb
     print(f"{'size':>9} {'variant':>7} {'net':>20} {'measured GiB':>12} {'estimate':>9}")
     for H, W, variant, channels in CASES:
         out = subprocess.run([sys.executable, __file__, json.dumps([H, W, variant, channels])], check=True,

@@ -22,7 +22,10 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 import torch  # noqa: E402
 
-import ddp_lite as ddp  # noqa: E402
+from ddp_lite.classical.holes import random_holes  # noqa: E402
+from ddp_lite.method.coarse_to_fine import complete_depth_coarse_to_fine  # noqa: E402
+from ddp_lite.method.complete import complete_depth  # noqa: E402
+from ddp_lite.world.scenes import make_scene  # noqa: E402
 from ddp_lite.method.config import FitConfig  # noqa: E402
 
 SIZE = (32, 32)
@@ -68,19 +71,19 @@ def configs():
 
 def main() -> None:
     torch.set_num_threads(1)
-    scene = ddp.make_scene("desk", size=SIZE, n_views=3, seed=0)
+    scene = make_scene("desk", size=SIZE, n_views=3, seed=0)
     ref = scene[0]
-    depth, _ = ddp.random_holes(ref.depth, seed=0)
+    depth, _ = random_holes(ref.depth, seed=0)
     neighbors = [scene[1].as_neighbor(), scene[2].as_neighbor()]
     start = time.perf_counter()
     print(f"{'config':36s} {'sha256[:16]':16s}")
     for name, variant, config, c2f in configs():
         nbrs = neighbors if variant == "rgbd+warp" else ()
         if c2f:
-            result = ddp.complete_depth_coarse_to_fine(ref.rgb, depth, ref.camera, nbrs, variant=variant,
+            result = complete_depth_coarse_to_fine(ref.rgb, depth, ref.camera, nbrs, variant=variant,
                                                        config=config, gt_depth=ref.depth, scale=2)
         else:
-            result = ddp.complete_depth(ref.rgb, depth, ref.camera, nbrs, variant=variant, config=config,
+            result = complete_depth(ref.rgb, depth, ref.camera, nbrs, variant=variant, config=config,
                                         gt_depth=ref.depth)
         print(f"{name:36s} {digest(result)}", flush=True)
     print(f"({time.perf_counter() - start:.0f} s)", file=sys.stderr)

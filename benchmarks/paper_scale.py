@@ -30,8 +30,10 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 import torch  # noqa: E402
 
-import ddp_lite as ddp  # noqa: E402
-from ddp_lite import baselines  # noqa: E402
+from ddp_lite.method.complete import complete_depth  # noqa: E402
+from ddp_lite.method.config import FitConfig  # noqa: E402
+from ddp_lite.method.kit import recipes  # noqa: E402
+from ddp_lite.classical import baselines  # noqa: E402
 from ddp_lite.studies.real_cases import REAL_HOLES, factor_for_profile  # noqa: E402
 from ddp_lite.studies.table6 import TABLE6_SCENES, table6_case  # noqa: E402
 from ddp_lite.method.runtime.device import resolve_device  # noqa: E402
@@ -84,7 +86,7 @@ def peak_memory_mb(device: torch.device) -> float:
 
 def configs(profile, recipes, variants, seed: int) -> dict:
     """{(recipe, variant): FitConfig} at the profile."""
-    return {(recipe, variant): ddp.FitConfig.for_profile(profile, variant=variant, recipe=recipe, seed=seed,
+    return {(recipe, variant): FitConfig.for_profile(profile, variant=variant, recipe=recipe, seed=seed,
                                                           progress=False)
             for recipe in recipes for variant in variants}
 
@@ -93,7 +95,7 @@ def fit(case, variant: str, config) -> tuple[object, float]:
     """``complete_depth`` of a real case → (result, wall seconds including the fit's setup)."""
     neighbors = case.neighbors if variant == "rgbd+warp" else ()
     start = time.perf_counter()
-    result = ddp.complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant, config=config)
+    result = complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant, config=config)
     return result, time.perf_counter() - start
 
 
@@ -209,7 +211,7 @@ def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     add_profile_args(parser)
     parser.set_defaults(profile="paper")
-    parser.add_argument("--recipes", nargs="+", default=list(RECIPES), choices=sorted(ddp.recipes.RECIPES))
+    parser.add_argument("--recipes", nargs="+", default=list(RECIPES), choices=sorted(recipes.RECIPES))
     parser.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=VARIANTS)
     parser.add_argument("--holes", nargs="+", default=list(REAL_HOLES), choices=REAL_HOLES, help="hole kinds")
     parser.add_argument("--seed", type=int, default=0)

@@ -31,7 +31,8 @@ def main() -> None:
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="FitConfig override")
     args = parser.parse_args()
     torch.set_num_threads(args.threads)
-    from ddp_lite import FitConfig, complete_depth
+    from ddp_lite.method.config import FitConfig
+    from ddp_lite.method.complete import complete_depth
     print(cpu_summary())
     print(f"torch {torch.__version__}, {torch.get_num_threads()} thread(s), overrides {parse_overrides(args.set)}")
     for name, ((height, width), channels) in SIZES.items():

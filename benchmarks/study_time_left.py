@@ -5,7 +5,7 @@
 
 Records the held-out error at every evaluation, the learning-rate cut and the stop of `class` fits on the
 22 rendered and 5 real cases of ``bench_quality.py`` (rgbd seed 0, rgbd+warp seed 1), then replays
-:class:`ddp_lite.method.loop.PlateauStopper` on each curve (a fit is deterministic, so the replay is the
+:class:`ddp_lite.method.stopping.PlateauStopper` on each curve (a fit is deterministic, so the replay is the
 fit's own stopper) and compares, at each progress line (every 10 % of the cap) from 20 % on, the expected
 stop with the real one: the iterations left as estimated against those actually left. "old" is the rule
 before the run after the cut was counted (after the cut: the next plateau). Prints figures; asserts nothing.
@@ -18,14 +18,16 @@ import statistics
 import time
 from pathlib import Path
 
-from ddp_lite.method.loop import EXPECTED_STOP_SHARE, PlateauStopper
+from ddp_lite.method.stopping import PlateauStopper
+from ddp_lite.method.time_left import EXPECTED_STOP_SHARE, earliest_stop, expected_stop
 
 ROWS = Path(__file__).parent / "results" / "time_left_class.jsonl"
 
 
 def record(lane: int, lanes: int, out: str) -> None:
     import torch
-    import ddp_lite as ddp
+    from ddp_lite.method.complete import complete_depth
+    from ddp_lite.method.config import FitConfig
     from bench_quality import build_case, suite  # benchmarks/ is on the path: the scripts run from there
     from ddp_lite.method.profiles import get_profile
     torch.set_num_threads(1)
@@ -37,9 +39,9 @@ def record(lane: int, lanes: int, out: str) -> None:
             case, _ = build_case(name, profile)
             if variant == "rgbd+warp" and not case.neighbors:
                 continue
-            config = ddp.FitConfig.for_profile(profile, variant=variant, progress=False, seed=seed)
+            config = FitConfig.for_profile(profile, variant=variant, progress=False, seed=seed)
             start = time.perf_counter()
-            result = ddp.complete_depth(case.rgb, case.depth, case.camera,
+            result = complete_depth(case.rgb, case.depth, case.camera,
                                         case.neighbors if variant == "rgbd+warp" else (), variant=variant, config=config)
             history = result.history
             rows.write(json.dumps(dict(case=name, variant=variant, seed=seed, cap=config.iterations,
@@ -54,8 +56,8 @@ def record(lane: int, lanes: int, out: str) -> None:
 def old_rule(stopper: PlateauStopper, done: int, cap: int) -> int:
     """The expected stop before the run after the cut was counted: after the cut, the next plateau."""
     if stopper.since_cut is not None:
-        return stopper.earliest_stop(done, cap)
-    return min(cap, max(stopper.earliest_stop(done, cap), round(EXPECTED_STOP_SHARE * cap)))
+        return earliest_stop(stopper, done, cap)
+    return min(cap, max(earliest_stop(stopper, done, cap), round(EXPECTED_STOP_SHARE * cap)))
 
 
 def replay(row: dict, rule) -> list:
@@ -83,7 +85,7 @@ def main() -> None:
     print(f"{len(rows)} fits; stopped at {statistics.median(r['ran'] for r in rows):.0f} of 600 (median), "
           f"{sum(r['ran'] == r['cap'] for r in rows)} at the cap; after the cut ({len(after)} fits) they ran "
           f"{after[0]}–{after[-1]} more (median {statistics.median(after):.0f})")
-    for name, rule in (("old", old_rule), ("now", lambda s, done, cap: s.expected_stop(done, cap))):
+    for name, rule in (("old", old_rule), ("now", lambda s, done, cap: expected_stop(s, done, cap))):
         errors = [e for row in rows for e in replay(row, rule)]
         print(f"{name}: {sum(abs(e) <= 0.3 for e in errors)}/{len(errors)} progress lines within 30 % of the iterations "
               f"left, mean error {statistics.mean(errors):+.2f}, median |error| {statistics.median(abs(e) for e in errors):.2f}")

@@ -14,7 +14,7 @@ torch.set_num_threads(1 if os.environ.get("PYTEST_XDIST_WORKER") else max(1, min
 
 
 def pytest_configure(config):
-    """One fresh fit cache (``ddp_lite.method.runtime.cache``) per test session, shared by its xdist workers (they start
+    """One fresh fit cache (``ddp_lite.method.fit_cache``) per test session, shared by its xdist workers (they start
     after this hook and inherit the environment) and the notebook kernels they start. The notebooks
     run first and fill it; the student copies and graded solutions run the same notebooks again and
     read their fits back (they test the notebooks' flow and checks, not the fits). Python tests run
@@ -109,7 +109,7 @@ def plane_with_hole(height: int = 24, width: int = 32):
 def rectified_pair(width: int, height: int, focal: float = 60.0, baseline: float = 0.1):
     """(left, right) Cameras of ``width`` × ``height`` px: the left at the origin, the right ``baseline`` m to
     its right, the same K (``focal`` px, principal point at the image centre): disparity d = f·B/Z px."""
-    from ddp_lite import Camera
+    from ddp_lite.core.camera import Camera
     K = np.array([[focal, 0.0, width / 2], [0.0, focal, height / 2], [0.0, 0.0, 1.0]])
     right = np.eye(4)
     right[0, 3] = -baseline

@@ -33,7 +33,12 @@ import torch  # noqa: E402
 
 from data_fetch import Dataset, FetchError, RemoteFile, fetch, safe_extract  # noqa: E402
 from data_fetch.__main__ import main as fetch_main  # noqa: E402
-from ddp_lite import datasets as ds  # noqa: E402
+from ddp_lite.data import datasets as ds  # noqa: E402
+from ddp_lite.data.file_writers import write_pfm  # noqa: E402
+from ddp_lite.data.fileio import read_depth_image, read_pfm  # noqa: E402
+from ddp_lite.data.middlebury import (load_middlebury, make_middlebury_fixture, parse_middlebury_calib,  # noqa: E402
+                                      read_middlebury_calib)
+from ddp_lite.data.resample import resize_scene  # noqa: E402
 from ddp_lite.classical.stereo import disparity_to_depth  # noqa: E402
 from ddp_lite.core.files import write_bytes_atomic  # noqa: E402
 from ddp_lite.core.camera import Camera, look_at  # noqa: E402
@@ -42,7 +47,7 @@ from ddp_lite.method.paper.disparity import DisparityTransform  # noqa: E402
 from ddp_lite.method.coarse_to_fine import complete_depth_coarse_to_fine  # noqa: E402
 from ddp_lite.method.config import FitConfig  # noqa: E402
 from ddp_lite.method.dip import fit_image  # noqa: E402
-from ddp_lite.method.combine import complete_depth  # noqa: E402
+from ddp_lite.method.complete import complete_depth  # noqa: E402
 from ddp_lite.method.fit import merge  # noqa: E402
 from ddp_lite.core.views import View  # noqa: E402
 
@@ -342,7 +347,7 @@ PFM_BODY = np.ones(4, "<f4").tobytes()
 def _pfm(data):
     def setup(tmp):
         (tmp / "x.pfm").write_bytes(data)
-        return lambda: ds.read_pfm(tmp / "x.pfm")
+        return lambda: read_pfm(tmp / "x.pfm")
     return setup
 
 
@@ -357,7 +362,7 @@ CALIB = {"cam0": "[30 0 15.5; 0 30 11.5; 0 0 1]", "cam1": "[30 0 15.5; 0 30 11.5
 def _calib(**changes):
     entries = {**CALIB, **changes}
     text = "\n".join(f"{k}={v}" for k, v in entries.items() if v is not None)
-    return lambda tmp: (lambda: ds.parse_middlebury_calib(text))
+    return lambda tmp: (lambda: parse_middlebury_calib(text))
 
 
 for _id, _kw, _name in (("baseline nan", dict(baseline="nan"), "baseline"), ("baseline inf", dict(baseline="inf"), "baseline"),
@@ -366,12 +371,12 @@ for _id, _kw, _name in (("baseline nan", dict(baseline="nan"), "baseline"), ("ba
                         ("ndisp missing", dict(ndisp=None), "ndisp"), ("cam0 2×2", dict(cam0="[1 0; 0 1]"), "cam0"),
                         ("height inf", dict(height="inf"), "height")):
     case(f"calib {_id}", ValueError, _name)(_calib(**_kw))
-case("calib not text", ValueError, "text")(lambda tmp: (lambda: ds.parse_middlebury_calib(b"cam0=[1]")))
+case("calib not text", ValueError, "text")(lambda tmp: (lambda: parse_middlebury_calib(b"cam0=[1]")))
 
 
 def _latin1_calib(tmp):
     (tmp / "calib.txt").write_bytes("cam0=[30 0 15.5; 0 30 11.5; 0 0 1] # f\xe9\n".encode("latin-1"))
-    return lambda: ds.read_middlebury_calib(tmp / "calib.txt")
+    return lambda: read_middlebury_calib(tmp / "calib.txt")
 
 
 case("calib.txt not UTF-8", ValueError, "calib.txt")(_latin1_calib)
@@ -402,9 +407,9 @@ case("kitti disparity 8-bit", ValueError, "path")(_kitti_disp8)
 
 
 def _mb_all_inf(tmp):
-    folder = ds.make_middlebury_fixture(tmp / "mb", size=(24, 32))
-    ds.write_pfm(folder / "disp0.pfm", np.full((24, 32), np.inf, np.float32))
-    return lambda: ds.load_middlebury(folder)
+    folder = make_middlebury_fixture(tmp / "mb", size=(24, 32))
+    write_pfm(folder / "disp0.pfm", np.full((24, 32), np.inf, np.float32))
+    return lambda: load_middlebury(folder)
 
 
 case("middlebury all-invalid disparity", ValueError, "disp0.pfm")(_mb_all_inf)
@@ -435,18 +440,18 @@ for _id, _kw, _name in (("focal 0", dict(focal=0.0, baseline=0.1), "focal"),
         lambda tmp, kw=_kw: (lambda: disparity_to_depth(np.ones((4, 4)), **kw)))
 case("disparity_to_depth 3-D", ValueError, "disparity")(
     lambda tmp: (lambda: disparity_to_depth(np.ones((4, 4, 1)), 30.0, 0.1)))
-case("read_depth_image scale 0", ValueError, "scale")(lambda tmp: (lambda: ds.read_depth_image(tmp / "x.png", 0.0)))
+case("read_depth_image scale 0", ValueError, "scale")(lambda tmp: (lambda: read_depth_image(tmp / "x.png", 0.0)))
 
 
 def _depth8(tmp):
     cv2.imwrite(str(tmp / "d8.png"), np.ones((4, 4), np.uint8))
-    return lambda: ds.read_depth_image(tmp / "d8.png")
+    return lambda: read_depth_image(tmp / "d8.png")
 
 
 case("read_depth_image 8-bit", ValueError, "path")(_depth8)
-case("resize_scene not a Scene", TypeError, "scene")(lambda tmp: (lambda: ds.resize_scene("scene", (8, 8))))
-case("write_pfm bool", ValueError, "array")(lambda tmp: (lambda: ds.write_pfm(tmp / "b.pfm", np.ones((2, 2), bool))))
-case("write_pfm 4-D", ValueError, "array")(lambda tmp: (lambda: ds.write_pfm(tmp / "b.pfm", np.ones((2, 2, 2, 2)))))
+case("resize_scene not a Scene", TypeError, "scene")(lambda tmp: (lambda: resize_scene("scene", (8, 8))))
+case("write_pfm bool", ValueError, "array")(lambda tmp: (lambda: write_pfm(tmp / "b.pfm", np.ones((2, 2), bool))))
+case("write_pfm 4-D", ValueError, "array")(lambda tmp: (lambda: write_pfm(tmp / "b.pfm", np.ones((2, 2, 2, 2)))))
 
 
 # --------------------------------------------------------------------------- files and data_fetch
@@ -553,7 +558,7 @@ case("Camera.resized(0, 0)", BAD, "width")(lambda tmp: (lambda: camera().resized
 case("DisparityTransform.from_depth margin 0", BAD, "margin")(
     lambda tmp: (lambda: DisparityTransform.from_depth(depth(), margin=0.0)))
 case("calib a key twice", ValueError, "baseline")(
-    lambda tmp: (lambda: ds.parse_middlebury_calib("\n".join(f"{k}={v}" for k, v in CALIB.items()) + "\nbaseline=5")))
+    lambda tmp: (lambda: parse_middlebury_calib("\n".join(f"{k}={v}" for k, v in CALIB.items()) + "\nbaseline=5")))
 case("fetch dest ''", ValueError, "dest")(lambda tmp: (lambda: fetch(_toy(), dest="", trust_first_download=True)))
 case("safe_extract duplicate members", FetchError, "more than once")(
     lambda tmp: ((tmp / "dup.zip").write_bytes(_zip([("a", b"1"), ("a", b"22")])),
@@ -595,14 +600,14 @@ def test_accepted_on_purpose(tmp_path):
     (tmp_path / "crlf.pfm").write_bytes(b"Pf\r\n2 2\r\n-1.0\r\n" + PFM_BODY)
     (tmp_path / "comment.pfm").write_bytes(b"Pf\n# made by hand\n2 2\n-1.0\n" + PFM_BODY)
     for name in ("crlf.pfm", "comment.pfm"):
-        np.testing.assert_array_equal(ds.read_pfm(tmp_path / name), np.ones((2, 2), np.float32))
+        np.testing.assert_array_equal(read_pfm(tmp_path / name), np.ones((2, 2), np.float32))
     # an integral float size (from arithmetic) is a size
     assert Camera(np.array([[30.0, 0, 15.5], [0, 30.0, 11.5], [0, 0, 1]]), np.eye(4), 32.0, 24.0).width == 32
     # learning-rate growth (lr_gamma > 1) is a lever, not a mistake; NumPy integers are integers
     tiny(lr_gamma=2.0, iterations=np.int64(2), lr_milestones=(np.int32(1),)).validate()
     # KITTI's testing split has no ground truth: all-NaN depth is the truth there
     # one blind neighbour among seeing ones: a warning, the fit goes on
-    from ddp_lite.method.fit_inputs import check_fit_inputs
+    from ddp_lite.method.input_checks import check_fit_inputs
     away = camera(look_at((0, 0, 0), (0, 0, -1)))
     with pytest.warns(UserWarning, match=r"neighbors\[1\]"):
         check_fit_inputs(rgb(), depth(), camera(), [(rgb(), camera(look_at((0.1, 0, 0), (0.1, 0, 1)))), (rgb(), away)],
@@ -648,7 +653,7 @@ def test_cli_writes_the_format_its_suffix_names(tmp_path):
             assert cli_main(run) == 0
     png = cv2.imread(str(tmp_path / "o.png"), cv2.IMREAD_UNCHANGED)
     assert png.dtype == np.uint16 and png.shape == (H, W) and 1000 < np.median(png) < 3000  # millimetres
-    pfm, npy = ds.read_pfm(tmp_path / "o.pfm"), np.load(tmp_path / "o.npy")
+    pfm, npy = read_pfm(tmp_path / "o.pfm"), np.load(tmp_path / "o.npy")
     np.testing.assert_allclose(pfm, npy)
     np.testing.assert_allclose(png / 1000.0, npy, atol=6e-4)
 

@@ -27,18 +27,20 @@ if __name__ != "__main__":
 import cv2  # noqa: E402
 
 from data_fetch import Dataset, FetchError, RemoteFile, fetch  # noqa: E402
-from ddp_lite import fileio  # noqa: E402
+from ddp_lite.data import fileio  # noqa: E402
 from ddp_lite.core.camera import Camera, look_at  # noqa: E402
 from ddp_lite.core.checks import check_depth  # noqa: E402
 from ddp_lite.method.paper.disparity import DisparityTransform  # noqa: E402
 from ddp_lite.method.config import FitConfig  # noqa: E402
 from ddp_lite.method.dip import fit_image  # noqa: E402
-from ddp_lite.method.combine import complete_depth  # noqa: E402
+from ddp_lite.method.complete import complete_depth  # noqa: E402
 from ddp_lite.method.fit import merge  # noqa: E402
-from ddp_lite.data.formats import read_colmap, read_scene, read_tum, write_colmap, write_tum  # noqa: E402
+from ddp_lite.data.colmap import read_colmap, write_colmap  # noqa: E402
+from ddp_lite.data.formats import read_scene  # noqa: E402
+from ddp_lite.data.tum import read_tum, write_tum  # noqa: E402
 from ddp_lite.world.scenes import make_scene  # noqa: E402
 from ddp_lite.sequences.sequence import run_sequence  # noqa: E402
-from ddp_lite import sequence_files  # noqa: E402
+from ddp_lite.sequences import sequence_files  # noqa: E402
 from ddp_lite.sequences.sequence_files import MANIFEST, read_manifest  # noqa: E402
 
 from test_bad_inputs import Case, _WATCHED, camera, depth, rgb, snapshot, tiny, verdicts, watch  # noqa: E402
@@ -401,7 +403,7 @@ def test_unpaired_tum_frames_are_reported(tmp_path):
 
 def test_neighbour_without_parallax_is_warned():
     """Depth in millimetres with poses in metres: 2000 "m" away, a 0.2 m baseline shifts < 0.5 px."""
-    from ddp_lite.method.fit_inputs import check_fit_inputs
+    from ddp_lite.method.input_checks import check_fit_inputs
     ref = camera(look_at((0, 0, 0), (0, 0, 2)))
     millimetres = depth() * 1000.0
     with pytest.warns(UserWarning, match=r"neighbors\[0\].*px of parallax.*same unit"):
@@ -456,7 +458,7 @@ if __name__ == "__main__":
 def test_masked_arrays_are_honoured_wherever_depth_is_scored_or_warped():
     """A masked array's mask means unknown everywhere, not only in the fit: every metric, the disparity
     range and the warp give exactly what they give for the same array with NaN under the mask."""
-    from ddp_lite import metrics
+    from ddp_lite.evaluation import metrics
     from ddp_lite.method.paper.warp import warp_to_reference
     raw = np.full((H, W), 2.0)
     raw[:, W // 2:] = 3.0  # a depth edge, so edge_band and texture_leakage have something to see

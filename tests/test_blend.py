@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 import torch
 
-from ddp_lite import FitConfig, complete_depth
+from ddp_lite.method.config import FitConfig
+from ddp_lite.method.complete import complete_depth
 from ddp_lite.method.kit.blend import (BLEND_WEIGHTS, FILL_SHARES, best_fill_share, best_weight, fill_holdout, ring_width,
                                   validation_ring)
 from ddp_lite.method.kit.recipes import get_recipe

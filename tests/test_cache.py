@@ -1,4 +1,4 @@
-"""The fit cache (ddp_lite.method.runtime.cache): a hit returns what is stored, and every input that decides a fit misses."""
+"""The fit cache (ddp_lite.method.fit_cache): a hit returns what is stored, and every input that decides a fit misses."""
 import errno
 import io
 import json
@@ -14,8 +14,10 @@ import pytest
 import torch
 from conftest import TINY, plane_with_hole, tilted_plane
 
-import ddp_lite as ddp
-from ddp_lite import cache
+from ddp_lite.method.complete import complete_depth
+from ddp_lite.method.config import FitConfig
+from ddp_lite.method.dip import fit_image
+from ddp_lite.method import fit_cache
 
 H, W = 24, 32
 
@@ -33,11 +35,11 @@ def _inputs():
 
 
 def _config(**changes):
-    return ddp.FitConfig(**TINY, iterations=4).replace(**changes)
+    return FitConfig(**TINY, iterations=4).replace(**changes)
 
 
 def _fit(rgb, depth, **config_changes):
-    return ddp.complete_depth(rgb, depth, variant="d", config=_config(**config_changes))
+    return complete_depth(rgb, depth, variant="d", config=_config(**config_changes))
 
 
 def _members(path) -> dict:
@@ -96,8 +98,8 @@ def test_each_input_that_decides_a_fit_gets_its_own_entry(folder, monkeypatch):
     one_pixel[0, 0] += 1e-3
     _fit(rgb, one_pixel)  # an array by value
     _fit(rgb, depth, seed=1)  # a config field
-    ddp.complete_depth(rgb, depth, None, (), "d", _config(), tilted_plane(H, W))  # gt_depth, positionally
-    monkeypatch.setattr(cache, "_library_digest", lambda: "an edited ddp_lite")
+    complete_depth(rgb, depth, None, (), "d", _config(), tilted_plane(H, W))  # gt_depth, positionally
+    monkeypatch.setattr(fit_cache, "_library_digest", lambda: "an edited ddp_lite")
     _fit(rgb, depth)  # the library's source
     assert len(list(folder.iterdir())) == 5
 
@@ -106,7 +108,7 @@ def test_the_profile_decides_a_call_without_a_config(monkeypatch):
     keys = []
     for profile in ("ci", "class", "ci"):
         monkeypatch.setenv("DDP_PROFILE", profile)
-        keys.append(cache._key(ddp.complete_depth, {"config": None}))
+        keys.append(fit_cache._key(complete_depth, {"config": None}))
     assert keys[0] == keys[2] != keys[1]
 
 
@@ -114,15 +116,15 @@ def test_what_does_not_decide_a_fit_shares_the_entry(folder):
     rgb, depth = _inputs()
     _fit(rgb, depth)
     _fit(rgb.copy(), depth.copy(), progress=True)  # equal copies; a progress bar
-    ddp.complete_depth(rgb, depth, None, (), "d", _config())  # positional, the defaults given or not
-    ddp.complete_depth(rgb=rgb, depth=depth, variant="d", config=_config(), gt_depth=None)
+    complete_depth(rgb, depth, None, (), "d", _config())  # positional, the defaults given or not
+    complete_depth(rgb=rgb, depth=depth, variant="d", config=_config(), gt_depth=None)
     assert len(list(folder.iterdir())) == 1
 
 
 def test_no_entry_without_the_variable_with_a_callback_or_for_bad_input(folder, monkeypatch):
     rgb, depth = _inputs()
     seen = []
-    ddp.complete_depth(rgb, depth, variant="d", config=_config(callback_every=2), callback=lambda i, _: seen.append(i))
+    complete_depth(rgb, depth, variant="d", config=_config(callback_every=2), callback=lambda i, _: seen.append(i))
     assert seen == [2, 4] and not folder.exists()
     with pytest.raises(ValueError, match="depth"):
         _fit(rgb, depth[:, :-1])  # the fit's own check still speaks
@@ -239,8 +241,8 @@ def test_a_cached_result_keeps_every_field(folder, monkeypatch):
 
 def test_deep_image_prior_fits_are_cached_too(folder):
     image = np.random.default_rng(1).random((H, W, 3)).astype(np.float32)
-    first = ddp.fit_image(image, config=_config())
-    second = ddp.fit_image(image, config=_config())
+    first = fit_image(image, config=_config())
+    second = fit_image(image, config=_config())
     assert len(list(folder.iterdir())) == 1
     np.testing.assert_array_equal(first.image, second.image)
 
@@ -248,9 +250,10 @@ def test_deep_image_prior_fits_are_cached_too(folder):
 def test_a_warm_start_hashes_the_same_in_another_process():
     # pickled tensors differ from process to process; the key hashes their values
     state = {"w": torch.arange(6.0).reshape(2, 3)}
-    here = cache._key(ddp.complete_depth, {"init": state})
-    code = (f"import torch, ddp_lite as ddp; from ddp_lite import cache; torch.set_num_threads({torch.get_num_threads()}); "
-            "print(cache._key(ddp.complete_depth, {'init': {'w': torch.arange(6.0).reshape(2, 3)}}))")
+    here = fit_cache._key(complete_depth, {"init": state})
+    code = ("import torch; from ddp_lite.method import fit_cache; from ddp_lite.method.complete import complete_depth; "
+            f"torch.set_num_threads({torch.get_num_threads()}); "
+            "print(fit_cache._key(complete_depth, {'init': {'w': torch.arange(6.0).reshape(2, 3)}}))")
     there = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
     assert here == there and here is not None
-    assert cache._key(ddp.complete_depth, {"init": {"w": torch.arange(6.0).reshape(3, 2)}}) != here
+    assert fit_cache._key(complete_depth, {"init": {"w": torch.arange(6.0).reshape(3, 2)}}) != here

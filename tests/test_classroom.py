@@ -16,7 +16,7 @@ from pathlib import Path
 import nbformat
 import pytest
 
-from ddp_lite import classroom, grades, grading
+from ddp_lite.interface import classroom, grades, grading
 
 NOTEBOOKS = Path(__file__).resolve().parent.parent / "notebooks"
 SOURCES = sorted(NOTEBOOKS.glob("[0-9][0-9]_*.ipynb"))
@@ -267,7 +267,7 @@ def test_hand_points_merge_into_the_scores_and_open_answers_go_to_one_file_per_s
 
 def test_exercise_11_3s_command_prints_what_its_expected_answer_says(tmp_path, capsys):
     from ddp_lite.interface.cli import main
-    from ddp_lite.data.formats import write_tum
+    from ddp_lite.data.tum import write_tum
     from ddp_lite.world.scenes import make_scene
     nb = nbformat.read(NOTEBOOKS / "11_your_own_data.ipynb", as_version=4)
     listed = next(c.source for c in nb.cells if "## Exercises" in c.source).split("3. Run `", 1)[1]

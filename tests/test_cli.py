@@ -12,7 +12,7 @@ import cv2
 import numpy as np
 import pytest
 
-from ddp_lite import cli
+from ddp_lite.interface import cli
 from ddp_lite.interface.cli import build_parser, main
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -25,7 +25,7 @@ def _subparsers():
 
 def _tum_capture(tmp_path, n_views=3):
     """A tiny TUM RGB-D folder (desk, 24×32) written by the kit, named as TUM names fr3 captures."""
-    from ddp_lite.data.formats import write_tum
+    from ddp_lite.data.tum import write_tum
     from ddp_lite.world.scenes import make_scene
     return write_tum(make_scene("desk", size=(24, 32), n_views=n_views), tmp_path / "rgbd_dataset_freiburg3_desk")
 
@@ -135,7 +135,8 @@ def test_sequence_workers_capped_at_the_cpu_count(capsys):
 
 def test_sequence_tum_reads_a_millimetre_capture_with_depth_scale(tmp_path):
     from ddp_lite.interface.cli_sequence import _sequence_options
-    from ddp_lite.data.formats import load_sequence, write_tum
+    from ddp_lite.data.formats import load_sequence
+    from ddp_lite.data.tum import write_tum
     from ddp_lite.world.scenes import make_scene
     scene = make_scene("desk", size=(24, 32), n_views=2)
     folder = write_tum(scene, tmp_path / "rgbd_dataset_freiburg3_desk")
@@ -249,8 +250,8 @@ def test_complete_refuses_a_gt_with_nothing_in_the_holes_before_the_fit(tmp_path
     depth, gt = _pair(tmp_path)
     np.save(tmp_path / "gt.npy", np.where(np.isfinite(depth), gt, np.nan))  # known only where the input is
     fits = []
-    import ddp_lite.method.combine as combine
-    monkeypatch.setattr(combine, "complete_depth", lambda *a, **k: fits.append(1))  # a fit would be the error
+    import ddp_lite.method.complete as complete
+    monkeypatch.setattr(complete, "complete_depth", lambda *a, **k: fits.append(1))  # a fit would be the error
     argv = ["complete", "--rgb", str(tmp_path / "rgb.png"), "--depth", str(tmp_path / "depth.npy"),
             "--gt", str(tmp_path / "gt.npy"), "--out", str(tmp_path / "filled.npy"), "--profile", "ci"]
     assert main(argv) == 2
@@ -260,15 +261,15 @@ def test_complete_refuses_a_gt_with_nothing_in_the_holes_before_the_fit(tmp_path
 
 
 def test_complete_raw_writes_the_nets_output_with_no_fill_mixed_in(tmp_path, monkeypatch):
-    import ddp_lite.method.combine as combine
+    import ddp_lite.method.complete as complete
     _pair(tmp_path)
-    shares, real_complete_depth = [], combine.complete_depth
+    shares, real_complete_depth = [], complete.complete_depth
 
     def recording(*args, **kwargs):  # the real fit, the fill share of the command's config noted
         shares.append(kwargs["config"].blend_fill if "config" in kwargs else args[5].blend_fill)
         return real_complete_depth(*args, **kwargs)
 
-    monkeypatch.setattr(combine, "complete_depth", recording)
+    monkeypatch.setattr(complete, "complete_depth", recording)
     argv = ["complete", "--rgb", str(tmp_path / "rgb.png"), "--depth", str(tmp_path / "depth.npy"),
             "--profile", "class", "--recipe", "kit", "--variant", "rgbd", "--iterations", "3", "--max-side", "48"]
     assert main(argv + ["--out", str(tmp_path / "kit.npy")]) == 0
@@ -320,7 +321,7 @@ class _Terminal(__import__("io").StringIO):
 
 
 def test_a_terminal_bar_shows_the_whole_commands_share_and_time_left(monkeypatch):
-    from ddp_lite import progress as progress_module
+    from ddp_lite.core import progress as progress_module
     from ddp_lite.core.progress import command_progress, progress
     clock_now = [0.0]
     monkeypatch.setattr(progress_module.time, "perf_counter", lambda: clock_now[0])
@@ -350,7 +351,7 @@ def test_time_left_skips_set_up_and_expects_an_auto_stop(monkeypatch):
     """Set-up before the first iteration is no iteration; a fit that may stop by itself expects to run
     its expected share, until its stopper says more, and the line gives the range from every fit
     stopping at its earliest to every fit running to its cap (hand-computed, one second per iteration)."""
-    from ddp_lite import progress as progress_module
+    from ddp_lite.core import progress as progress_module
     from ddp_lite.core.progress import command_progress, progress
     now = [0.0]
     monkeypatch.setattr(progress_module.time, "perf_counter", lambda: now[0])
@@ -379,7 +380,7 @@ def test_time_left_skips_set_up_and_expects_an_auto_stop(monkeypatch):
 def test_time_left_over_units_that_report_their_end_counts_the_first_from_the_start(monkeypatch):
     """A sequence's views report when they end: after the first of six (60 s) five are left, 5:00, not
     the 0:00 a rate measured from the first report would give (hand-computed)."""
-    from ddp_lite import progress as progress_module
+    from ddp_lite.core import progress as progress_module
     from ddp_lite.core.progress import CommandClock
     now = [0.0]
     monkeypatch.setattr(progress_module.time, "perf_counter", lambda: now[0])
@@ -470,7 +471,7 @@ def test_sequence_views_by_index_or_name_and_no_other(tmp_path, capsys):
     """--views takes indices 0..N-1 or names; a negative index (-1 is no view: "all" is --views left out),
     one past the end, or a view listed twice is refused before anything is estimated or fitted."""
     from ddp_lite.interface.cli_sequence import _view_indices
-    from ddp_lite.data.formats import write_tum
+    from ddp_lite.data.tum import write_tum
     from ddp_lite.world.scenes import make_scene
     scene = make_scene("desk", size=(24, 32), n_views=3)
     assert _view_indices(scene, ["2", "0"]) == [2, 0] and _view_indices(scene, [scene[1].name]) == [1]
@@ -503,7 +504,8 @@ def test_complete_preview_titles_overlap_nothing(shape, with_gt, monkeypatch):
 
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
-    from ddp_lite import cli_complete, viz
+    from ddp_lite.interface import cli_complete
+    from ddp_lite.evaluation import viz
     figures = []
     monkeypatch.setattr(viz, "save_figure", lambda fig, path: figures.append(fig))
     H, W = shape

@@ -5,7 +5,10 @@ import torch
 from skimage import data
 from skimage.metrics import structural_similarity
 
-from ddp_lite import Camera, DisparityTransform, look_at, relative_pose, ssim, warp_to_reference
+from ddp_lite.core.camera import Camera, look_at, relative_pose
+from ddp_lite.method.paper.disparity import DisparityTransform
+from ddp_lite.method.paper.losses import ssim
+from ddp_lite.method.paper.warp import warp_to_reference
 from ddp_lite.core.camera import backproject, project
 
 

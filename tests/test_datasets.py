@@ -5,9 +5,12 @@ import cv2
 import numpy as np
 import pytest
 
-from ddp_lite.data.datasets import (NYU_K, load_kitti, load_middlebury, load_nyu, load_tnt,
-                               make_middlebury_fixture, parse_middlebury_calib, read_depth_image, resize_scene,
-                               read_kitti_calib, read_kitti_disparity, read_mvsnet_cam, read_pfm, write_pfm)
+from ddp_lite.data.datasets import (NYU_K, load_kitti, load_nyu, load_tnt, read_kitti_calib, read_kitti_disparity,
+                                    read_mvsnet_cam)
+from ddp_lite.data.middlebury import load_middlebury, make_middlebury_fixture, parse_middlebury_calib
+from ddp_lite.data.fileio import read_depth_image, read_pfm
+from ddp_lite.data.resample import resize_scene
+from ddp_lite.data.file_writers import write_pfm
 from ddp_lite.core.camera import Camera
 from ddp_lite.world.scenes import make_scene
 from ddp_lite.classical.stereo import disparity_to_depth

@@ -8,7 +8,9 @@ import pytest
 from scipy import ndimage
 from skimage.metrics import structural_similarity
 
-from ddp_lite import exercises, ssim, warp_to_reference
+from ddp_lite.interface import exercises
+from ddp_lite.method.paper.losses import ssim
+from ddp_lite.method.paper.warp import warp_to_reference
 
 
 def _d1(compare=np.greater, of_truth=True):

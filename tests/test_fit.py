@@ -4,9 +4,15 @@ import pytest
 import torch
 from scipy.interpolate import griddata
 
-from ddp_lite import (Camera, FitConfig, SkipNet, UNet, complete_depth, disparity_loss, fit_image, look_at, merge,
-                      warp_loss, warp_to_reference)
-from ddp_lite.method.loop import PlateauStopper
+from ddp_lite.core.camera import Camera, look_at
+from ddp_lite.method.config import FitConfig
+from ddp_lite.method.paper.nets import SkipNet, UNet
+from ddp_lite.method.complete import complete_depth
+from ddp_lite.method.paper.losses import disparity_loss, warp_loss
+from ddp_lite.method.dip import fit_image
+from ddp_lite.method.fit import merge
+from ddp_lite.method.paper.warp import warp_to_reference
+from ddp_lite.method.stopping import PlateauStopper
 from conftest import TINY, tilted_plane
 
 
@@ -128,27 +134,27 @@ def test_plateau_stopper_events_by_hand(decays, expected):
 
 
 def test_the_stoppers_earliest_and_expected_stop_count_the_plateaus_still_to_come():
-    from ddp_lite.method.loop import EXPECTED_STOP_SHARE, RUN_AFTER_CUT_SHARE
+    from ddp_lite.method.time_left import EXPECTED_STOP_SHARE, RUN_AFTER_CUT_SHARE, earliest_stop, expected_stop
     assert (EXPECTED_STOP_SHARE, RUN_AFTER_CUT_SHARE) == (0.8, 0.4)  # the figures below are worked out with these
     stopper = PlateauStopper(patience=50, eval_every=10, decays=1)
     stopper.update(1.0)  # a new best at iteration 10: a plateau needs 50 more, then the cut, then 50 more
-    assert stopper.earliest_stop(10, 600) == 110
-    assert stopper.expected_stop(10, 600) == 480  # before the cut: the usual share, 0.8 × 600
+    assert earliest_stop(stopper, 10, 600) == 110
+    assert expected_stop(stopper, 10, 600) == 480  # before the cut: the usual share, 0.8 × 600
     for error in (2.0, 2.0, 2.0, 2.0):  # 40 without a best: 10 to the plateau, then 50 after the cut
         stopper.update(error)
-    assert stopper.earliest_stop(50, 600) == 110
+    assert earliest_stop(stopper, 50, 600) == 110
     assert stopper.update(2.0) == "decay"  # iteration 60: the cut
-    assert stopper.earliest_stop(60, 600) == 110  # the next plateau could stop it at 110 ...
-    assert stopper.expected_stop(60, 600) == 300  # ... fits usually run 0.4 × 600 = 240 past the cut
+    assert earliest_stop(stopper, 60, 600) == 110  # the next plateau could stop it at 110 ...
+    assert expected_stop(stopper, 60, 600) == 300  # ... fits usually run 0.4 × 600 = 240 past the cut
     assert [stopper.update(0.9 - 0.01 * k) for k in range(30)] == ["improved"] * 30  # a new best up to iteration 360
-    assert stopper.expected_stop(360, 600) == 410  # past the cut + 240: the next plateau, 50 on
-    assert stopper.earliest_stop(60, 100) == stopper.expected_stop(60, 100) == 100  # never past the cap
+    assert expected_stop(stopper, 360, 600) == 410  # past the cut + 240: the next plateau, 50 on
+    assert earliest_stop(stopper, 60, 100) == expected_stop(stopper, 60, 100) == 100  # never past the cap
     late = PlateauStopper(patience=50, eval_every=10, decays=1)
     late.update(1.0)  # a best at 400 with no cut yet: the cut at 450 at the earliest, then 240 on: the cap
-    assert late.expected_stop(400, 600) == 600
+    assert expected_stop(late, 400, 600) == 600
     plain = PlateauStopper(patience=50, eval_every=10, decays=0)
     plain.update(1.0)  # no cut to come: the next plateau is the stop, at 450 at the earliest; the usual share, 480
-    assert plain.expected_stop(400, 600) == 480 and plain.expected_stop(500, 600) == 550
+    assert expected_stop(plain, 400, 600) == 480 and expected_stop(plain, 500, 600) == 550
 
 
 def test_plateau_decay_continues_the_same_run_and_cuts_the_rate():
@@ -270,10 +276,15 @@ def test_for_profile_copies_every_shared_field_and_derives_the_rest():
     assert FitConfig.for_profile("ci", lr=0.5).lr == 0.5  # overrides win
 
 
-def test_public_face_lists_what_users_call_and_keeps_the_building_blocks():
+def test_the_front_door_lists_what_users_call_and_hands_on_nothing_else():
+    import importlib
+
     import ddp_lite
-    assert all(hasattr(ddp_lite, name) for name in ddp_lite.__all__)
-    assert {"complete_depth", "FitConfig", "get_profile", "make_scene", "Camera"} <= set(ddp_lite.__all__)
-    assert not {"pixel_grid", "make_noise", "masked_l1", "build_net"} & set(ddp_lite.__all__)  # building blocks
-    for name in ("pixel_grid", "make_noise", "masked_l1", "build_net", "ssim", "complete_depth_coarse_to_fine"):
-        assert hasattr(ddp_lite, name)  # still importable from the package, as before
+    assert {"complete_depth", "FitConfig", "get_profile", "get_recipe", "make_scene", "Camera"} <= set(ddp_lite.__all__)
+    for name in ddp_lite.__all__:  # each is its own module's object, importable from there
+        module = importlib.import_module(f"ddp_lite.{ddp_lite._FRONT_DOOR[name]}")
+        assert getattr(ddp_lite, name) is getattr(module, name) and name in module.__all__
+    # building blocks and modules by their own names no longer pass through the package
+    for name in ("pixel_grid", "make_noise", "masked_l1", "build_net", "ssim", "complete_depth_coarse_to_fine",
+                 "metrics", "baselines", "recipes", "loop"):
+        assert not hasattr(ddp_lite, name), name

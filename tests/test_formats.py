@@ -6,9 +6,11 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from ddp_lite.core.camera import Camera
-from ddp_lite.data.formats import (associate, load_sequence, read_colmap, read_colmap_cameras, read_colmap_depth,
-                              read_colmap_images, read_scene, read_tum, read_tum_list, read_tum_trajectory,
-                              write_colmap, write_colmap_depth, write_tum)
+from ddp_lite.data.tum import associate, read_tum, read_tum_list, read_tum_trajectory, write_tum
+from ddp_lite.data.formats import load_sequence, read_scene
+from ddp_lite.data.colmap import read_colmap, read_colmap_cameras, read_colmap_images, write_colmap
+from ddp_lite.data.fileio import read_colmap_depth
+from ddp_lite.data.file_writers import write_colmap_depth
 from ddp_lite.classical.holes import random_holes
 from ddp_lite.world.scenes import make_scene
 

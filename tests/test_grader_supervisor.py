@@ -9,7 +9,7 @@ import time
 
 import nbformat
 
-from ddp_lite import classroom, grading
+from ddp_lite.interface import classroom, grading
 from ddp_lite.interface import grades
 from test_grader_trust import RIGHT, _hand_in, _source
 

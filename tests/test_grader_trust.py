@@ -6,7 +6,7 @@ from pathlib import Path
 
 import nbformat
 
-from ddp_lite import classroom, grading
+from ddp_lite.interface import classroom, grading
 
 RIGHT = "def fscore(precision, recall):\n    ### BEGIN SOLUTION\n    return 0.0 if precision + recall == 0 else " \
         "2 * precision * recall / (precision + recall)\n    ### END SOLUTION"

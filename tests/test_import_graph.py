@@ -202,6 +202,20 @@ def test_each_part_of_the_method_imports_only_what_its_docstring_allows():
     assert breaches == []
 
 
+def test_the_methods_rooms_import_only_downward():
+    """paper below runtime below kit below the fit's own files: the paper imports none of the rest, the
+    runtime only the paper, the kit of ``method/`` itself only the held-out pixels (``stopping``), which
+    import nothing of the kit and nothing of the fit above them."""
+    edges = graph()
+    up = {"paper": {"runtime", "kit", "method"}, "runtime": {"kit", "method"}, "kit": {"method"}}
+    breaches = [f"{importer} imports {target}" for importer, out in edges.items() for target in out
+                if part_of_method(importer) in up and part_of_method(target) in up[part_of_method(importer)]
+                and target != "ddp_lite.method.stopping"]
+    assert breaches == []
+    below_kit = {"ddp_lite.method.stopping"} | set(edges["ddp_lite.method.stopping"])
+    assert all(part_of_method(module) in ("paper", "runtime", None) for module in below_kit - {"ddp_lite.method.stopping"})
+
+
 def _ddp_lite_imports(source: str, importer: str | None = None, is_package: bool = False):
     """(line, absolute module name) of every import of ``ddp_lite`` or one of its modules in ``source``."""
     for node in ast.walk(ast.parse(source)):
@@ -217,10 +231,43 @@ def _ddp_lite_imports(source: str, importer: str | None = None, is_package: bool
                 yield node.lineno, target
 
 
+def _outside_sources():
+    """(where, source) of every file outside the package that imports it: tests, benchmarks, the downloader,
+    and each notebook's code cells (magics left out)."""
+    import json
+    root = PACKAGE.parent
+    for folder in ("tests", "benchmarks", "data_fetch"):
+        for path in sorted((root / folder).glob("*.py")):
+            yield str(path.relative_to(root)), path.read_text(encoding="utf-8")
+    for path in sorted((root / "notebooks").glob("*.ipynb")):
+        for i, cell in enumerate(json.loads(path.read_text(encoding="utf-8"))["cells"]):
+            if cell["cell_type"] == "code":
+                source = "".join(cell["source"])
+                source = "\n".join(l for l in source.splitlines() if not l.lstrip().startswith(("%", "!")))
+                yield f"{path.relative_to(root)} cell {i}", source
+
+
+def _names_taken(source: str):
+    """(line, module, name) of every ``from ddp_lite... import name`` in ``source`` (a module taken as a
+    name is left out), and (line, "ddp_lite", name) of every ``ddp.name`` after ``import ddp_lite as ddp``."""
+    known = modules()
+    tree = ast.parse(source)
+    aliases = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and not node.level and (node.module or "").split(".")[0] == "ddp_lite":
+            for alias in node.names:
+                if f"{node.module}.{alias.name}" not in known:
+                    yield node.lineno, node.module, alias.name
+        elif isinstance(node, ast.Import):
+            aliases |= {alias.asname or alias.name for alias in node.names if alias.name == "ddp_lite"}
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) and node.value.id in aliases:
+            yield node.lineno, "ddp_lite", node.attr
+
+
 def test_every_import_of_the_package_names_a_module_that_exists():
     """Also the late imports inside functions, and those of tests, benchmarks and notebooks, which no other
     test may reach (a module moved into a sub-package leaves them pointing at nothing)."""
-    import json
     known = set(modules())
     root = PACKAGE.parent
     missing = []
@@ -228,38 +275,62 @@ def test_every_import_of_the_package_names_a_module_that_exists():
         for line, target in _ddp_lite_imports(path.read_text(encoding="utf-8"), name, path.name == "__init__.py"):
             if target not in known:
                 missing.append(f"{path.relative_to(root)}:{line}: {target}")
-    for path in sorted((root / "tests").glob("*.py")) + sorted((root / "benchmarks").glob("*.py")):
-        for line, target in _ddp_lite_imports(path.read_text(encoding="utf-8")):
+    for where, source in _outside_sources():
+        for line, target in _ddp_lite_imports(source):
             if target not in known:
-                missing.append(f"{path.relative_to(root)}:{line}: {target}")
-    for path in sorted((root / "notebooks").glob("*.ipynb")):
-        for i, cell in enumerate(json.loads(path.read_text(encoding="utf-8"))["cells"]):
-            if cell["cell_type"] == "code":
-                source = "".join(cell["source"])
-                source = "\n".join(l for l in source.splitlines() if not l.lstrip().startswith(("%", "!")))
-                for line, target in _ddp_lite_imports(source):
-                    if target not in known:
-                        missing.append(f"{path.relative_to(root)} cell {i}:{line}: {target}")
+                missing.append(f"{where}:{line}: {target}")
     assert not missing, "imports of modules that do not exist:\n" + "\n".join(missing)
 
 
-def test_the_packages_module_list_names_every_module():
+def test_tests_benchmarks_and_notebooks_take_each_name_from_the_module_that_defines_it():
+    """The rules outside the package: every name comes from its own module, never through the package's
+    front door or another module; a notebook, which students read as the way to use the kit, takes no
+    private name."""
+    defined = {name: defined_names(path) for name, path in modules().items()}
+    second_hand, private = [], []
+    for where, source in _outside_sources():
+        for line, module, name in _names_taken(source):
+            if name not in defined[module]:  # the front door's own names (__all__) aside, none through it
+                second_hand.append(f"{where}:{line}: {name} from {module}")
+            if name.startswith("_") and where.startswith("notebooks"):
+                private.append(f"{where}:{line}: {name} from {module}")
+    assert second_hand == [] and private == []
+
+
+def test_no_module_hands_on_a_name_it_does_not_define():
+    """A module's ``__all__`` names what it defines: no name lives on at an old address. The package's
+    front door names each name's own module, and that module defines it."""
     import ddp_lite
-    on_disk = {name.split(".", 1)[1] for name, path in modules().items()  # "method.fit", "method.paper.losses"
-               if name.count(".") >= 2 and path.name != "__init__.py"}
-    listed = {f"{package}.{module}" for package, names in ddp_lite._PACKAGES.items() for module in names}
-    assert listed == on_disk
-    packages = {name.split(".", 1)[1] for name, path in modules().items() if path.name == "__init__.py" and "." in name}
-    assert packages == set(ddp_lite._PACKAGES)  # every sub-package listed, and only they
-    flat = [module for names in ddp_lite._PACKAGES.values() for module in names]
-    assert len(flat) == len(set(flat)), "a module's own name must say where it lives (ddp.metrics)"
+    handed_on = []
+    for name, path in modules().items():
+        if name == "ddp_lite":
+            continue
+        for node in ast.parse(path.read_text(encoding="utf-8")).body:
+            if isinstance(node, ast.Assign) and any(isinstance(t, ast.Name) and t.id == "__all__" for t in node.targets):
+                handed_on += [f"{name}: {n}" for n in ast.literal_eval(node.value) if n not in defined_names(path)]
+    assert handed_on == []
+    assert ddp_lite.__all__ == list(ddp_lite._FRONT_DOOR)
+    assert all(name in defined_names(modules()[f"ddp_lite.{module}"]) for name, module in ddp_lite._FRONT_DOOR.items())
+
+
+def test_each_sub_package_names_its_modules_in_its_docstring():
+    """The one list of the package's modules: each sub-package's docstring names each of its modules
+    (``name``) and sub-packages, and the package's docstring each sub-package."""
+    unnamed = []
+    for init in sorted(PACKAGE.rglob("__init__.py")):
+        doc = ast.get_docstring(ast.parse(init.read_text(encoding="utf-8"))) or ""
+        parts = [p.stem for p in init.parent.glob("*.py") if p.name != "__init__.py"]
+        parts += [p.parent.name for p in init.parent.glob("*/__init__.py")]
+        unnamed += [f"{init.parent.relative_to(PACKAGE.parent)}: {part}" for part in sorted(parts)
+                    if not re.search(rf"``{part}(\.py|/)?``", doc)]
+    assert unnamed == []
 
 
 def test_the_fit_does_not_import_its_combiner():
     # one fit is a straight path: the combiner (blend, fill, ensemble) calls it, never the reverse
     edges = graph()
-    assert "ddp_lite.method.fit" in edges["ddp_lite.method.combine"]
-    assert "ddp_lite.method.combine" not in edges["ddp_lite.method.fit"]
+    assert "ddp_lite.method.fit" in edges["ddp_lite.method.complete"]
+    assert "ddp_lite.method.complete" not in edges["ddp_lite.method.fit"]
     assert not {"ddp_lite.method.kit.blend", "ddp_lite.method.kit.ensemble"} & set(edges["ddp_lite.method.fit"])
 
 

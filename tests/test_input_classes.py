@@ -25,7 +25,8 @@ from ddp_lite.core.camera import Camera, check_intrinsics
 from ddp_lite.core.checks import SkippedWarning
 from ddp_lite.core.views import View
 from ddp_lite.data import file_writers, fileio
-from ddp_lite.data.formats import read_colmap, read_colmap_cameras, read_tum, write_colmap, write_tum
+from ddp_lite.data.colmap import read_colmap, read_colmap_cameras, write_colmap
+from ddp_lite.data.tum import read_tum, write_tum
 from ddp_lite.evaluation import metrics
 from ddp_lite.interface.cli import main
 from ddp_lite.method.paper.disparity import DisparityTransform

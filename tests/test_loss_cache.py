@@ -5,7 +5,7 @@ import torch
 import torch.nn.functional as F
 from skimage.metrics import structural_similarity
 
-from ddp_lite import disparity_loss, rgb_loss, ssim, warp_loss
+from ddp_lite.method.paper.losses import disparity_loss, rgb_loss, ssim, warp_loss
 from ddp_lite.method.paper.losses import ConstantTarget
 
 

@@ -4,7 +4,9 @@ import numpy as np
 import pytest
 
 from ddp_lite.core.camera import Camera, look_at
-from ddp_lite.world.organic import Capsule, Cone, Ellipsoid, HeightField, PhotoTexture
+from ddp_lite.world.solids import Capsule, Cone, Ellipsoid
+from ddp_lite.world.terrain import HeightField
+from ddp_lite.world.photo_texture import PhotoTexture
 from ddp_lite.world.render import Cylinder, Plane, Sphere, render
 from ddp_lite.world.scenes import SCENES, list_scenes, make_scene, register_scene
 from ddp_lite.world.textures import Texture

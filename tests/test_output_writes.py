@@ -143,7 +143,7 @@ def test_grade_is_refused_while_another_grading_writes_the_same_csv(tmp_path, ca
 
 
 def test_sequence_is_refused_while_another_run_writes_the_same_folder(tmp_path, capsys):
-    from ddp_lite.data.formats import write_tum
+    from ddp_lite.data.tum import write_tum
     from ddp_lite.world.scenes import make_scene
     folder = write_tum(make_scene("desk", size=(16, 16), n_views=2), tmp_path / "capture")
     out = tmp_path / "o"

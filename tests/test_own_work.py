@@ -10,8 +10,7 @@ import pytest
 import torch
 from skimage.metrics import mean_squared_error, peak_signal_noise_ratio, structural_similarity
 
-import ddp_lite
-from ddp_lite import exercises
+from ddp_lite.interface import exercises
 from ddp_lite.classical import baselines, stereo
 from ddp_lite.classical.kinect import quantise_depth
 from ddp_lite.core import camera
@@ -20,6 +19,7 @@ from ddp_lite.evaluation import metrics
 from ddp_lite.interface.classroom import nbgrader_meta
 from ddp_lite.interface.own_work import call_watched
 from ddp_lite.method.paper.disparity import DisparityTransform
+from ddp_lite.method.paper.losses import ssim
 from ddp_lite.method.paper.warp import warp_to_reference
 from ddp_lite.studies.additions import paired_change
 
@@ -83,7 +83,7 @@ def test_the_kit_function_through_a_partial_or_a_torch_call_fails(capsys):
     import functools
     fill = functools.partial(baselines.BASELINES["nearest"], rgb=None)
     assert exercises.check_nearest_fill(lambda d: fill(d)) is False
-    assert exercises.check_ssim(lambda x, y: float(ddp_lite.ssim(torch.as_tensor(x)[None, None],
+    assert exercises.check_ssim(lambda x, y: float(ssim(torch.as_tensor(x)[None, None],
                                                                   torch.as_tensor(y)[None, None]))) is False
     assert "ddp_lite.method.paper.losses.ssim" in capsys.readouterr().out
 
@@ -93,6 +93,20 @@ def test_a_function_that_switches_off_the_watch_is_caught():
     seen = set()
     call_watched(lambda: sys.setprofile(None), (), {}, ("ddp_lite.evaluation.metrics.psnr",), seen)
     assert any("setprofile" in s for s in seen) and sys.getprofile() is None
+
+
+def _notebook_imports(path) -> str:
+    """The notebook's own import statements, from every code cell that is no solution: the names its
+    solutions may use as the notebook gives them."""
+    import ast
+    nb = nbformat.read(path, as_version=4)
+    found = []
+    for cell in nb.cells:
+        if cell.cell_type == "code" and not nbgrader_meta(cell).get("solution"):
+            source = "\n".join(l for l in cell.source.splitlines() if not l.lstrip().startswith(("%", "!")))
+            found += [ast.get_source_segment(source, node) for node in ast.parse(source).body
+                      if isinstance(node, (ast.Import, ast.ImportFrom))]
+    return "\n".join(found)
 
 
 def _solutions_and_checks(path):
@@ -116,7 +130,8 @@ NOTEBOOKS_WITH_CHECKS = [p for p in sorted(NOTEBOOKS.glob("[0-9][0-9]_*.ipynb"))
 @pytest.mark.parametrize("path", NOTEBOOKS_WITH_CHECKS, ids=lambda p: p.stem[:2])
 def test_the_notebooks_solutions_pass(path, capsys):
     solutions, checks = _solutions_and_checks(path)
-    namespace = {"__name__": "__main__", "np": np, "ddp": ddp_lite}
+    namespace = {"__name__": "__main__"}
+    exec(compile(_notebook_imports(path), f"<{path.stem} imports>", "exec"), namespace)
     for source in solutions:  # defined as a notebook cell defines them
         exec(compile(source, f"<{path.stem} solution>", "exec"), namespace)
     for source in checks:

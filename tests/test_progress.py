@@ -60,3 +60,52 @@ def test_small_totals_and_unknown_lengths():
 def test_every_must_be_a_percentage(every):
     with pytest.raises(ValueError, match="every"):
         progress(range(3), stream=io.StringIO(), every=every)
+
+
+def test_the_loop_reports_through_the_hook_its_caller_passes():
+    """The fit's loop iterates over its caller's hook and tells it each held-out error and where its
+    stopper expects the fit to stop; the kit's own hook hands those expectations to a command's clock."""
+    import numpy as np
+    import torch
+
+    from ddp_lite.core.progress import FitBar, command_progress
+    from ddp_lite.method import loop
+    from ddp_lite.method.config import FitConfig
+
+    class Recorder:
+        def __init__(self, iterations):
+            self.iterations, self.calls = iterations, []
+
+        def __iter__(self):
+            return iter(range(self.iterations))
+
+        def heldout(self, error):
+            self.calls.append(("heldout", error))
+
+        def expect(self, expected_total, earliest_total):
+            self.calls.append(("expect", expected_total, earliest_total))
+
+        def close(self):
+            self.calls.append(("close",))
+
+    config = FitConfig(channels=(4, 8), iterations=20, eval_every=5, patience=100, auto_stop=True, progress=False)
+    net, noise = loop.build(config, 1, 8, 8, torch.device("cpu"))
+    target = torch.zeros(1, 1, 8, 8)
+
+    def loss_fn(output):
+        loss = (output - target).abs().mean()
+        return loss, {"l1": loss}
+
+    recorder = Recorder(20)
+    _, history, ran, _ = loop.run(net, noise, loss_fn, config, 20, lambda out: float(out.abs().mean()),
+                                  progress=recorder)
+    kinds = [call[0] for call in recorder.calls]
+    assert ran == 20 and kinds == ["heldout", "expect"] * 4 + ["close"]
+    assert np.allclose([c[1] for c in recorder.calls if c[0] == "heldout"], history["heldout"])
+    assert all(0 < c[2] <= c[1] <= 20 for c in recorder.calls if c[0] == "expect")
+    with command_progress(20, expected_share=0.5) as clock:
+        bar = FitBar(20, "fit", enabled=False)
+        bar.expect(15, 10)  # 15 expected in all, 10 at least: what the clock now counts on
+        assert clock.bar_left == (20, 15, 10)
+        bar.close()
+    FitBar(20, enabled=False).expect(15, 10)  # with no command open, nobody to tell: no error

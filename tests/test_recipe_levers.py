@@ -10,7 +10,10 @@ import pytest
 import torch
 import torch.nn.functional as F
 
-from ddp_lite import DisparityTransform, FitConfig, UNet, complete_depth
+from ddp_lite.method.paper.disparity import DisparityTransform
+from ddp_lite.method.config import FitConfig
+from ddp_lite.method.paper.nets import UNet
+from ddp_lite.method.complete import complete_depth
 from ddp_lite.method.paper.nets import _conv
 from conftest import TINY, plane_with_hole, tilted_plane
 
@@ -318,7 +321,7 @@ def test_bf16_none_follows_the_cpu_flags():
 
 @pytest.mark.parametrize("shape", ["pixels", "blobs"])
 def test_holdout_takes_its_share_of_valid_pixels_only(shape):
-    from ddp_lite.method.loop import holdout_mask
+    from ddp_lite.method.stopping import holdout_mask
     valid = np.ones((48, 64), bool)
     valid[:, :20] = False  # a hole: never held out
     held = holdout_mask(valid, 0.05, seed=3, shape=shape)
@@ -329,7 +332,7 @@ def test_holdout_takes_its_share_of_valid_pixels_only(shape):
 
 def test_holdout_blobs_are_patches_not_scattered_pixels():
     from scipy import ndimage
-    from ddp_lite.method.loop import holdout_mask
+    from ddp_lite.method.stopping import holdout_mask
     valid = np.ones((96, 128), bool)
     pixels, blobs = (holdout_mask(valid, 0.05, seed=0, shape=s) for s in ("pixels", "blobs"))
     # 4-connected components: ~600 scattered pixels are mostly alone; blobs are a handful of patches
@@ -384,7 +387,7 @@ def test_image_channels_are_the_image_blurred_like_scipys_gaussian_filter_then_s
 
 
 def test_image_input_feeds_the_colour_image_to_variants_that_see_it_and_not_to_depth_only():
-    from ddp_lite import loop
+    from ddp_lite.method import loop
     from ddp_lite.method.kit.net_inputs import image_channels
     depth = tilted_plane(12, 16)
     depth[4:8, 5:11] = np.nan

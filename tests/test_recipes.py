@@ -2,7 +2,9 @@
 import numpy as np
 import pytest
 
-import ddp_lite as ddp
+from ddp_lite.classical.holes import random_holes
+from ddp_lite.method.complete import complete_depth
+from ddp_lite.world.scenes import make_scene
 from ddp_lite.method.config import FitConfig
 from ddp_lite.method.profiles import PROFILES
 from ddp_lite.method.kit.recipes import RECIPES, get_recipe
@@ -19,14 +21,14 @@ def test_the_paper_recipe_adds_nothing_at_any_size(profile):
 
 
 def test_the_paper_recipe_optimises_only_the_papers_three_terms():
-    scene = ddp.make_scene("desk", size=(24, 32), n_views=2, seed=0)
-    depth, _ = ddp.random_holes(scene[0].depth, seed=0)
+    scene = make_scene("desk", size=(24, 32), n_views=2, seed=0)
+    depth, _ = random_holes(scene[0].depth, seed=0)
     nbrs = [scene[1].as_neighbor()]
     terms = {}
     for recipe in ("paper", "kit"):
         config = FitConfig.for_profile("ci", variant="rgbd+warp", recipe=recipe, iterations=3, progress=False,
                                        channels=(8, 16))
-        result = ddp.complete_depth(scene[0].rgb, depth, scene[0].camera, nbrs, variant="rgbd+warp", config=config)
+        result = complete_depth(scene[0].rgb, depth, scene[0].camera, nbrs, variant="rgbd+warp", config=config)
         terms[recipe] = {k for k in result.history if k in ("disp", "rgb", "warp", "smooth", "flat")}
     assert terms["paper"] == {"disp", "rgb", "warp"}
     assert {"smooth", "flat"} <= terms["kit"]

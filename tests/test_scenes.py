@@ -5,7 +5,6 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from ddp_lite import neighbors, render as render_module, scenes, textures, views
 from ddp_lite.core.camera import Camera, look_at
 from ddp_lite.world.neighbors import select_neighbors
 from ddp_lite.world.render import Box, Plane, Sphere, render
@@ -228,14 +227,6 @@ def test_select_neighbors_rejects_bad_input(desk):
         select_neighbors(desk, 7)
     with pytest.raises(ValueError, match="n"):
         select_neighbors(desk, 0, n=3)
-
-
-def test_old_import_paths_keep_working():  # notebooks and user code written before the split
-    for name in ("View", "Scene", "LABELS", "LABEL_SKY", "LABEL_TEXTURELESS", "LABEL_PLANKS", "LABEL_TEXTURED"):
-        assert getattr(scenes, name) is getattr(views, name)
-    for name in ("Plane", "Box", "Sphere", "Cylinder", "render"):
-        assert getattr(scenes, name) is getattr(render_module, name)
-    assert scenes.Texture is textures.Texture and scenes.select_neighbors is neighbors.select_neighbors
 
 
 def test_a_view_as_a_warp_neighbour():

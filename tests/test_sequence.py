@@ -17,11 +17,13 @@ import torch
 
 from ddp_lite.interface.cli import main
 from ddp_lite.method.config import FitConfig
-from ddp_lite.data.formats import read_tum, write_tum
+from ddp_lite.data.tum import read_tum, write_tum
 from ddp_lite.classical.holes import random_holes
 from ddp_lite.sequences.runner import open_client, run_jobs
 from ddp_lite.world.scenes import make_scene
-from ddp_lite.sequences.sequence import VARIANT, plan_jobs, read_manifest, run_sequence
+from ddp_lite.sequences.sequence_jobs import VARIANT, plan_jobs
+from ddp_lite.sequences.sequence_files import read_manifest
+from ddp_lite.sequences.sequence import run_sequence
 
 N_VIEWS, ITERATIONS = 6, 15
 

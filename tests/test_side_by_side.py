@@ -1,4 +1,4 @@
-"""Independent fits side by side (``ddp_lite.method.side_by_side``): each gives the numbers of a fit
+"""Independent fits side by side (``ddp_lite.method.runtime.side_by_side``): each gives the numbers of a fit
 run alone on one thread, the last round's too (so the numbers do not depend on the machine's core
 count), and results come back in the jobs' order."""
 import threading
@@ -7,7 +7,7 @@ import numpy as np
 import torch
 
 from ddp_lite.evaluation.experiments import make_case, run_cases, run_jobs
-from ddp_lite.method.side_by_side import run_side_by_side
+from ddp_lite.method.runtime.side_by_side import run_side_by_side
 
 TINY_FIT = dict(channels=(8, 16, 32), iterations=8, auto_stop=False, lr_milestones=(), progress=False)
 

@@ -2,7 +2,8 @@
 import numpy as np
 import pytest
 
-from ddp_lite import Camera, FitConfig, look_at
+from ddp_lite.core.camera import Camera, look_at
+from ddp_lite.method.config import FitConfig
 from ddp_lite.method.coarse_to_fine import (_downsample_camera, _downsample_depth, _downsample_image,
                                      complete_depth_coarse_to_fine)
 from conftest import TINY, tilted_plane

@@ -14,7 +14,7 @@ import nbformat
 import pytest
 from test_classroom import README, SOURCES, _checks, _meta  # tests/ is on sys.path (see conftest.py)
 
-from ddp_lite import classroom, grading
+from ddp_lite.interface import classroom, grading
 
 # What a course must give nbgrader's autograder per cell (README, "For instructors"); the student
 # copies below run with exactly this limit.

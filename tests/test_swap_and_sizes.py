@@ -23,7 +23,7 @@ def _files(tmp_path):
 
 
 def _complete(tmp_path, monkeypatch, capsys, rgb, depth):
-    import ddp_lite.method.combine as combine
+    import ddp_lite.method.complete as combine
 
     def no_fit(*args, **kwargs):
         raise AssertionError("the fit started: the refusal must come first")

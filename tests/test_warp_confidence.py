@@ -6,7 +6,7 @@ import pytest
 import torch
 from scipy import ndimage
 
-from ddp_lite import FitConfig
+from ddp_lite.method.config import FitConfig
 from ddp_lite.method.paper.losses import ssim, warp_loss
 from ddp_lite.method.kit.warp_confidence import cost_volume, photometric_cost, sweep_planes, warp_confidence
 from conftest import rectified_pair

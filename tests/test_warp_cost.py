@@ -8,7 +8,7 @@ import pytest
 import torch
 from scipy import ndimage
 
-from ddp_lite import FitConfig
+from ddp_lite.method.config import FitConfig
 from ddp_lite.method.paper.disparity import DisparityTransform
 from ddp_lite.method.paper.losses import ConstantTarget, warp_loss
 from ddp_lite.method.kit.warp_terms import kit_warp_arguments, kit_warp_term

@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 import torch
 
-from ddp_lite import Camera, FitConfig, look_at
+from ddp_lite.core.camera import Camera, look_at
+from ddp_lite.method.config import FitConfig
 from ddp_lite.method.kit.visibility import Visibility
 from ddp_lite.method.paper.warp import Warper
 

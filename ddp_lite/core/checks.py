@@ -1,4 +1,5 @@
-"""Argument checks shared by the API, the loaders and the CLI: one message style, one place.
+"""Argument checks shared by the API, the loaders and the CLI: one message style, one place; and the
+one check on what a fit returns (:func:`check_finite_output`).
 
 Each check returns the value in its plain Python type or raises ``TypeError`` (wrong kind of
 value) or ``ValueError`` (right kind, out of range), with a message that names the argument
@@ -23,7 +24,7 @@ import numpy as np
 import torch
 
 __all__ = ["SkippedWarning", "report_skipped", "env_choice", "named_choice", "check_callback", "check_int", "check_real", "check_bool", "check_choice", "check_int_tuple", "check_image", "check_depth",
-           "check_size", "unmask", "MIN_VALID_PIXELS"]
+           "check_size", "unmask", "MIN_VALID_PIXELS", "check_finite_output"]
 
 MIN_VALID_PIXELS = 16  # a fit, or a mask, with fewer known pixels is refused
 MAX_DEPTH_RATIO = 1e6  # farthest / nearest valid depth: beyond it float32 disparity cannot resolve the far part
@@ -233,3 +234,11 @@ def report_skipped(where, names, what: str, reason: str, strict: bool = False, t
         raise ValueError(message + " (strict: nothing may be left out; fix the input, or run without strict "
                                    "(CLI: without --strict) to go on without them)")
     warnings.warn(message + " (strict=True, CLI --strict, makes this an error)", SkippedWarning, stacklevel=3)
+
+
+def check_finite_output(name: str, array) -> None:
+    """A fit must never return NaN or inf: raise instead (the optimisation diverged)."""
+    if array is not None and not np.all(np.isfinite(array)):
+        bad = int(np.size(array) - np.isfinite(array).sum())
+        raise FloatingPointError(f"the fit's {name} has {bad} non-finite value(s) of {np.size(array)}: the "
+                                 f"optimisation diverged. Lower config.lr, or check the inputs and init.")

@@ -18,14 +18,20 @@ early hands its unrun iterations back, so the share jumps ahead and the time lef
 fits may stop by themselves, no single time is honest (one stops at half its cap, the next runs
 to it), so the line gives the range too: every fit stopping at its earliest, every fit running to
 its cap (``all 40%, 1:12 left (0:50–1:40)``).
+
+A fit's loop reports through a hook its caller hands it, :class:`FitProgress`: the loop iterates over
+it, and tells it each held-out error and where its stopper now expects the fit to stop. The kit's own
+hook, :class:`FitBar`, is a bar over the iterations that passes those expectations on to the open
+command's clock.
 """
 from __future__ import annotations
 
 import contextlib
 import sys
 import time
+from typing import Iterator, Protocol
 
-__all__ = ["progress", "LineProgress", "command_progress", "CommandClock"]
+__all__ = ["progress", "LineProgress", "command_progress", "CommandClock", "FitProgress", "FitBar"]
 
 
 class CommandClock:
@@ -280,3 +286,45 @@ def progress(iterable, desc: str = "", disable: bool = False, leave: bool = True
         return bar
     total = total if total is not None else (len(iterable) if hasattr(iterable, "__len__") else None)
     return _Counted(bar, _COMMAND[-1], desc, total)
+
+
+class FitProgress(Protocol):
+    """What a fit's loop reports while it runs: the hook :func:`ddp_lite.method.loop.run` takes from its
+    caller. The loop iterates over it for its iterations, may stop early, and closes it."""
+
+    def __iter__(self) -> Iterator[int]:
+        """The iteration numbers 0, 1, ..., ``iterations - 1``, each handed out as the loop takes it."""
+
+    def heldout(self, error: float) -> None:
+        """The latest held-out error (mean |Z_out − Z_in| over the held-out pixels, normalised disparity)."""
+
+    def expect(self, expected_total: int, earliest_total: int) -> None:
+        """The fit now expects to run ``expected_total`` iterations in all, and at least ``earliest_total``
+        (its stopper's state, :mod:`ddp_lite.method.time_left`)."""
+
+    def close(self) -> None:
+        """The loop is done: after its last iteration, or an early stop."""
+
+
+class FitBar:
+    """The kit's :class:`FitProgress`: a bar over a fit's ``iterations`` (:func:`progress`, labelled
+    ``description``, silent unless ``enabled``) showing the held-out error; inside a
+    :func:`command_progress` block its expectations reach the command's clock (:meth:`CommandClock.expect`)."""
+
+    def __init__(self, iterations: int, description: str = "fit", enabled: bool = True):
+        self.bar = progress(range(iterations), desc=description, disable=not enabled, leave=False)
+        # only a bar counted toward a command has a clock to tell; a plain bar shows the error alone
+        self._clock_bar = self.bar if isinstance(self.bar, _Counted) else None
+
+    def __iter__(self) -> Iterator[int]:
+        return iter(self.bar)
+
+    def heldout(self, error: float) -> None:
+        self.bar.set_postfix(heldout=f"{error:.4f}", refresh=False)
+
+    def expect(self, expected_total: int, earliest_total: int) -> None:
+        if self._clock_bar is not None:
+            self._clock_bar.expect(expected_total, earliest_total)
+
+    def close(self) -> None:
+        self.bar.close()

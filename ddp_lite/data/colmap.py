@@ -23,13 +23,12 @@ from ..core.files import regular_file, write_bytes_atomic
 from ..core.camera import Camera, check_intrinsics
 from ..core.checks import check_bool, report_skipped
 from .file_writers import checked_depth_png_bytes, float_depth, npy_bytes, pfm_bytes, rgb_png_bytes, write_colmap_depth
-from .fileio import check_same_size, read_colmap_depth, read_depth, read_rgb
+from .fileio import check_same_size, read_depth, read_rgb
 from .resample import finish_scene, undistort_rgbd
 from .textparse import parse_error, parse_floats, quaternion_rotation, text_lines
 from ..core.views import Scene, View
 
-__all__ = ["COLMAP_MODELS", "ColmapCamera", "read_colmap_cameras", "read_colmap_images", "read_colmap_depth",
-           "write_colmap_depth", "read_colmap", "write_colmap"]
+__all__ = ["COLMAP_MODELS", "ColmapCamera", "read_colmap_cameras", "read_colmap_images", "read_colmap", "write_colmap"]
 
 
 IMAGE_SUFFIXES = (".jpg", ".jpeg", ".png", ".tif", ".tiff", ".bmp", ".webp")  # what a folder of photos holds

@@ -7,7 +7,7 @@ the OpenCV convention with the (left / first) camera at the world origin.
 
 Here: KITTI, Tanks and Temples, NYU. Middlebury lives in ``ddp_lite.data.middlebury``, the file formats
 (PFM, depth PNG, ``.npy``) in ``ddp_lite.data.fileio`` (readers) and ``ddp_lite.data.file_writers``,
-resampling in ``ddp_lite.data.resample``; their names stay importable from here, as before.
+resampling in ``ddp_lite.data.resample``.
 
 * **KITTI 2015**: disparity PNG uint16, d = value / 256, 0 = no ground truth; calibration
   ``P_rect_02``/``P_rect_03`` (3×4), baseline = (P2[0,3] − P3[0,3]) / f.
@@ -25,20 +25,14 @@ import numpy as np
 from ..core.files import regular_file
 from ..core.camera import Camera, check_intrinsics
 from ..core.checks import check_bool, report_skipped
-# Middlebury, the file formats and resize_scene lived here; their names stay importable from here.
-from .file_writers import depth_png_bytes, npy_bytes, pfm_bytes, write_pfm
-from .fileio import (check_same_size, existing_path, read_depth, read_depth_image, read_image_file, read_pfm, read_rgb,
+from .file_writers import depth_png_bytes, npy_bytes, pfm_bytes
+from .fileio import (check_same_size, existing_path, read_depth, read_depth_image, read_image_file, read_rgb,
                      read_text_file)
-from .middlebury_rail import load_middlebury2006
-from .middlebury import (MiddleburyCalib, require_valid_depth, stereo_scene, load_middlebury,
-                         make_middlebury_fixture, parse_middlebury_calib, read_middlebury_calib)
-from .resample import check_optional_size, scene_depth_range, resize_view, resize_scene
+from .middlebury import MiddleburyCalib, require_valid_depth, stereo_scene
+from .resample import check_optional_size, scene_depth_range, resize_view
 from ..core.views import Scene, View
 
-__all__ = ["read_pfm", "write_pfm", "MiddleburyCalib", "parse_middlebury_calib", "read_middlebury_calib",
-           "load_middlebury", "load_middlebury2006", "make_middlebury_fixture", "resize_scene",
-           "read_kitti_disparity", "read_kitti_calib", "load_kitti", "read_mvsnet_cam", "load_tnt",
-           "read_depth_image", "load_nyu", "NYU_K"]
+__all__ = ["read_kitti_disparity", "read_kitti_calib", "load_kitti", "read_mvsnet_cam", "load_tnt", "load_nyu", "NYU_K"]
 
 # NYU Depth v2 RGB intrinsics at 480×640 (H×W) (fx_rgb, fy_rgb, cx_rgb, cy_rgb of the toolbox's camera_params.m).
 NYU_K = np.array([[5.1885790117450188e+02, 0.0, 3.2558244941119034e+02],

@@ -11,8 +11,7 @@ number before anything runs.
 * **COLMAP** text models with per-image depth: ``ddp_lite.data.colmap`` (``read_colmap``, ``write_colmap``).
 * **The kit's own** ``Scene.save`` files (``.npz``), or a folder holding exactly one: ``read_scene`` here.
 
-``load_sequence(path, format)`` picks the reader by name. The TUM and COLMAP names stay
-importable from here, as before.
+``load_sequence(path, format)`` picks the reader by name.
 """
 from __future__ import annotations
 
@@ -21,19 +20,12 @@ import zlib
 from pathlib import Path
 
 from ..core.files import regular_file
-from .colmap import (COLMAP_MODELS, ColmapCamera, read_colmap, read_colmap_cameras, read_colmap_images,
-                     write_colmap)
-from .file_writers import write_colmap_depth
-from .fileio import read_colmap_depth
+from .colmap import read_colmap
 from .resample import resize_scene
-from .tum import (TUM_DEPTH_FACTOR, TUM_INTRINSICS, associate, read_tum, read_tum_list, read_tum_trajectory,
-                  write_tum)
+from .tum import read_tum
 from ..core.views import Scene
 
-__all__ = ["TUM_INTRINSICS", "TUM_DEPTH_FACTOR", "read_tum", "write_tum", "associate", "read_tum_list",
-           "read_tum_trajectory", "COLMAP_MODELS", "ColmapCamera", "read_colmap_cameras", "read_colmap_images",
-           "read_colmap_depth", "write_colmap_depth", "read_colmap", "write_colmap", "read_scene", "load_sequence",
-           "FORMATS"]
+__all__ = ["read_scene", "load_sequence", "FORMATS"]
 
 
 def read_scene(path, size=None) -> Scene:

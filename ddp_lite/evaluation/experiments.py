@@ -15,12 +15,12 @@ import numpy as np
 from ..core.camera import Camera
 from ..method.paper.disparity import DisparityTransform
 from ..method.config import FitConfig
-from ..method.combine import complete_depth
+from ..method.complete import complete_depth
 from ..method.fit import DepthResult
-from ..method.side_by_side import run_fits
+from ..method.runtime.side_by_side import run_fits
 from .fusion import points_from_depth
 from ..classical.holes import edge_band_holes, random_holes
-from .metrics import cloud_scores, disparity_rmse, edge_band, texture_leakage  # re-exported: notebooks import them here
+from .metrics import cloud_scores, disparity_rmse, edge_band
 from ..method.profiles import Profile, get_profile
 from ..world.neighbors import select_neighbors
 from ..world.scenes import make_scene
@@ -28,8 +28,8 @@ from ..classical.stereo import sgm_depth_subsampled
 from ..method.paper.variants import get_variant
 from ..core.views import LABEL_SKY
 
-__all__ = ["Case", "make_case", "sgm_depth_at_scale", "edge_band", "disparity_rmse", "run_variants", "run_cases", "run_jobs", "error_table", "format_table",
-           "format_ranking", "texture_leakage", "format_mean_spread", "cloud_scores", "ablation", "TABLE2_CONFIGS"]
+__all__ = ["Case", "make_case", "sgm_depth_at_scale", "run_variants", "run_cases", "run_jobs", "error_table",
+           "format_table", "format_ranking", "format_mean_spread", "ablation", "TABLE2_CONFIGS"]
 
 
 @dataclass
@@ -122,7 +122,7 @@ def make_case(scene_name: str = "house", profile: Profile | str | None = None, r
 def run_variants(case: Case, variants=("d", "rgbd", "rgbd+warp"), profile=None, net: str = "unet",
                  **config_overrides) -> dict[str, DepthResult]:
     """Fit each DDP variant on ``case`` with the profile's config; {variant: DepthResult}. The fits are
-    independent and run side by side (:mod:`ddp_lite.method.side_by_side`)."""
+    independent and run side by side (:mod:`ddp_lite.method.runtime.side_by_side`)."""
     results = run_jobs([(case, variant, net, config_overrides) for variant in variants], profile)
     return dict(zip(variants, results))
 
@@ -136,7 +136,7 @@ def run_jobs(jobs, profile=None) -> list[DepthResult]:
     """Each ``(case, variant, net, {FitConfig field: value})`` of ``jobs`` fitted with the profile's config
     (the case's ground truth for the fit's history) → DepthResults in the same order. The fits are
     independent: on a CPU they run side by side, one torch thread each, as many at once as torch has
-    threads (:mod:`ddp_lite.method.side_by_side`); a fit gives the numbers of one thread."""
+    threads (:mod:`ddp_lite.method.runtime.side_by_side`); a fit gives the numbers of one thread."""
     configs = [FitConfig.for_profile(profile, variant=variant, net=net, **options) for _, variant, net, options in jobs]
     partners = [case.neighbors if get_variant(variant).needs_neighbors else () for case, variant, *_ in jobs]
 

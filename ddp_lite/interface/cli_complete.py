@@ -234,10 +234,10 @@ def complete_command(args) -> int:
 
 def _complete(args, writers, staged, start) -> int:
     from ..method.config import FitConfig
-    from ..method.combine import complete_depth
+    from ..method.complete import complete_depth
     from ..method.profiles import get_profile
     from ..core.progress import command_progress
-    from ..method.loop import earliest_share, expected_share
+    from ..method.time_left import earliest_share, expected_share
     from ..core.checks import check_depth
     from ..method.paper.nets import check_input_size
     from ..method.full_resolution import refine_full_resolution

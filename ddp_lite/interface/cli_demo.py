@@ -21,8 +21,9 @@ from ..classical.guided_fills import fill_colorization
 from ..method.runtime.device import resolve_device
 from ..evaluation.experiments import error_table, format_table, make_case
 from ..method.config import FitConfig
-from ..method.combine import complete_depth
-from ..method.loop import check_memory, earliest_share, expected_share
+from ..method.complete import complete_depth
+from ..method.runtime.memory import check_memory
+from ..method.time_left import earliest_share, expected_share
 from ..method.paper.nets import check_input_size
 from ..evaluation.metrics import hole_rmse
 from ..core.outpaths import check_output_file

@@ -8,7 +8,7 @@ implementation of that very exercise (each check names those it forbids, in its 
 line; the rule is :mod:`ddp_lite.interface.own_work`): a one-line answer that calls
 ``skimage.metrics.peak_signal_noise_ratio`` is not the student's PSNR. In the notebooks each check
 sits in a read-only nbgrader test cell as ``assert check_x(student_function)``: a FAIL prints what is wrong and the assert marks the cell
-failed, which is what nbgrader and ``ddp-lite grade`` (``ddp_lite.grading``) score.
+failed, which is what nbgrader and ``ddp-lite grade`` (``ddp_lite.interface.grading``) score.
 
     >>> from ddp_lite.interface.exercises import check_psnr
     >>> check_psnr(lambda a, b: 10 * np.log10(1 / np.mean((a - b) ** 2)))

@@ -16,8 +16,9 @@ rule as before.
 """
 from __future__ import annotations
 
-# The kernel imports this module for every call (answer_call): numpy and the standard library only at
-# the top; nbformat and nbclient, which the grader's side needs, take a second to import.
+# The kernel imports this module for every call (answer_call): at the top only numpy, the standard library
+# and two files of core that use nothing more (array_archive, files); nbformat and nbclient, which the
+# grader's side needs, take a second to import.
 import ast
 import builtins
 import contextlib
@@ -29,9 +30,10 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["encode", "decode", "answer_call", "RemoteFunction", "StudentError", "run_graded", "check_imports"]
+from ..core.array_archive import archive_bytes, array_node
+from ..core.files import write_bytes_atomic
 
-_ARRAY_KINDS = "biufc"
+__all__ = ["encode", "decode", "answer_call", "RemoteFunction", "StudentError", "run_graded", "check_imports"]
 
 
 class StudentError(Exception):
@@ -49,11 +51,7 @@ def _pack(value, arrays: list):
     if type(value).__module__ == "torch" and hasattr(value, "detach"):  # a tensor: its values
         value = value.detach().cpu().numpy()
     if isinstance(value, (np.ndarray, np.generic)):
-        array = np.asarray(value)
-        if array.dtype.kind not in _ARRAY_KINDS:
-            raise TypeError(f"an array of dtype {array.dtype} is not an answer the grader can read")
-        arrays.append(array)
-        return {"array" if isinstance(value, np.ndarray) else "scalar": len(arrays) - 1}
+        return array_node(value, arrays, lambda what: TypeError(f"{what} is not an answer the grader can read"))
     if type(value).__name__ == "Camera" and type(value).__module__ == "ddp_lite.core.camera":
         return {"camera": [_pack(np.asarray(value.K), arrays), _pack(np.asarray(value.cam_from_world), arrays),
                            int(value.width), int(value.height)]}
@@ -71,10 +69,7 @@ def encode(value) -> bytes:
     """``value`` (numbers, strings, None, arrays, tensors, lists, tuples, str-keyed dicts, cameras) as
     ``.npz`` bytes; TypeError for anything else."""
     arrays: list = []
-    structure = json.dumps(_pack(value, arrays)).encode()
-    buffer = io.BytesIO()
-    np.savez(buffer, structure=np.frombuffer(structure, np.uint8), **{f"a{i}": a for i, a in enumerate(arrays)})
-    return buffer.getvalue()
+    return archive_bytes("structure", _pack(value, arrays), arrays)
 
 
 def _unpack(node, archive):
@@ -124,7 +119,7 @@ def answer_call(namespace: dict, name: str, folder) -> None:
         data = encode({"value": [value], "args": list(args), "seen": sorted(seen)})
     except BaseException as error:  # the student's error is the answer: the grader reports it
         data = encode({"error": [type(error).__name__, str(error)], "seen": sorted(seen)})
-    (folder / "answer.npz").write_bytes(data)
+    write_bytes_atomic(folder / "answer.npz", data)
 
 
 class RemoteFunction:
@@ -141,7 +136,7 @@ class RemoteFunction:
         """The call, with the forbidden callables (dotted names) it made in the kernel added to ``seen``."""
         args_file, answer_file = self._folder / "args.npz", self._folder / "answer.npz"
         answer_file.unlink(missing_ok=True)
-        args_file.write_bytes(encode([list(args), kwargs] + ([list(forbidden)] if forbidden else [])))
+        write_bytes_atomic(args_file, encode([list(args), kwargs] + ([list(forbidden)] if forbidden else [])))
         failure = self._run("from ddp_lite.interface.grading_kernel import answer_call as __ddp_answer\n"
                             f"__ddp_answer(globals(), {self.name!r}, {str(self._folder)!r})\ndel __ddp_answer")
         try:

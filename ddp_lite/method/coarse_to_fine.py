@@ -13,9 +13,9 @@ import torch
 from ..core.camera import Camera
 from .config import FitConfig
 from .paper.disparity import DisparityTransform
-from .combine import with_fill
+from .complete import with_fill
 from .fit import DepthResult, fit_once
-from .fit_inputs import check_fit_inputs
+from .input_checks import check_fit_inputs
 from .paper.nets import make_input
 
 __all__ = ["complete_depth_coarse_to_fine"]
@@ -60,7 +60,7 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
                                   config: FitConfig | None = None, gt_depth=None,
                                   transform: DisparityTransform | None = None, coarse_fraction: float = 0.5,
                                   scale: int = 2) -> DepthResult:
-    """:func:`~ddp_lite.method.combine.complete_depth` in two stages: first at 1/``scale`` size, then at full
+    """:func:`~ddp_lite.method.complete.complete_depth` in two stages: first at 1/``scale`` size, then at full
     size from the coarse weights.
 
     The coarse stage runs ``round(coarse_fraction · iterations)`` iterations (no auto-stop) on the
@@ -72,7 +72,7 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
     given (auto-stop included); the learning-rate schedule continues across the two stages.
     It is one fit: ``config.ensemble`` and ``config.blend_paper`` do not apply; ``config.blend_fill`` does,
     to the full-size result (None: both stages fit without the held-out blobs that choose the share,
-    as :func:`~ddp_lite.method.combine.with_fill` does for :func:`complete_depth`).
+    as :func:`~ddp_lite.method.complete.with_fill` does for :func:`complete_depth`).
 
     Args:
         rgb: (H, W, 3) float in [0, 1] (may be None for ``variant="d"``).

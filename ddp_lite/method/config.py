@@ -5,7 +5,7 @@
     loss          the paper's loss: L1/SSIM shares, γ1, γ2, the warp term, the disparity range
     holes         the kit's hole terms and their edge weights (hole_losses.py, hole_terms.py)
     combination   what is averaged or blended into the answer: an ensemble, the paper's fit, a classical fill
-    stopping      auto-stop on held-out pixels (loop.PlateauStopper)
+    stopping      auto-stop on held-out pixels (stopping.PlateauStopper)
     runtime       seed, device, precision, memory, progress: where and how it runs, not what it computes
 
 Each section is a frozen dataclass; ``config.holes.smoothness`` names a field by its section. Every field
@@ -122,7 +122,7 @@ class HolesConfig(_Section):
 
 @dataclass(frozen=True)
 class CombinationConfig(_Section):
-    """What goes into the answer besides one fit (:mod:`ddp_lite.method.combine`): more seeds, the
+    """What goes into the answer besides one fit (:mod:`ddp_lite.method.complete`): more seeds, the
     paper's fit, a classical fill."""
 
     ensemble: int = 1  # fits with seeds seed, seed+1, ...; their disparities are averaged

@@ -10,13 +10,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import loop
-from .runtime.cache import cached
-from ..core.checks import MIN_VALID_PIXELS, check_callback, check_image
+from ..core.checks import MIN_VALID_PIXELS, check_callback, check_finite_output, check_image
+from ..core.progress import FitBar
 from .config import FitConfig
-from .runtime.device import resolve_device
-from .loop import check_finite_output, check_memory, holdout_mask
-from .runtime.tensors import to_tensor
 from .paper.nets import check_input_size
+from .fit_cache import cached
+from .runtime.device import resolve_device
+from .runtime.memory import check_memory
+from .runtime.tensors import to_tensor
+from .stopping import holdout_mask
 
 __all__ = ["ImageResult", "fit_image", "describe_image_fit"]
 
@@ -97,8 +99,9 @@ def fit_image(image, mask=None, config: FitConfig | None = None, clean=None, cal
     check_memory(config, 3, H, W, 0, device)
     net, noise = loop.build(config, 3, H, W, device)
     start = time.perf_counter()
-    output, history, ran, best = loop.run(net, noise, loss_fn, config, config.resolved_iterations("rgbd"),
-                                          heldout_error, evaluate, user_callback, description="DIP")
+    iterations = config.resolved_iterations("rgbd")
+    output, history, ran, best = loop.run(net, noise, loss_fn, config, iterations, heldout_error, evaluate,
+                                          user_callback, progress=FitBar(iterations, "DIP", config.progress))
     restored = output[0].permute(1, 2, 0).cpu().numpy().astype(np.float32)
     check_finite_output("image", restored)
     return ImageResult(image=restored, history=history,

@@ -6,7 +6,7 @@ One fit, on inputs checked once (:func:`check_inputs`): :func:`run_fit` builds t
 arguments, joins the kit's net inputs (:mod:`ddp_lite.method.kit.net_inputs`), and hands it to the
 loop (:func:`ddp_lite.method.loop.run`). :func:`fit_once` is the two steps in one call. The kit's
 combinations of fits (an ensemble, the blend with the paper recipe's fit, a share of a classical fill)
-and :func:`~ddp_lite.method.combine.complete_depth`, the entry point, live in :mod:`ddp_lite.method.combine`,
+and :func:`~ddp_lite.method.complete.complete_depth`, the entry point, live in :mod:`ddp_lite.method.complete`,
 which calls this module, never the reverse.
 """
 from __future__ import annotations
@@ -19,25 +19,27 @@ import torch
 
 from . import loop
 from ..core.camera import Camera
-from ..core.checks import MIN_VALID_PIXELS, check_depth, unmask
+from ..core.checks import MIN_VALID_PIXELS, check_depth, check_finite_output, unmask
+from ..core.progress import FitBar
 from .config import FitConfig
-from .runtime.device import resolve_device
-from .paper.disparity import DisparityTransform
-from .fit_inputs import check_fit_inputs
+from .input_checks import check_fit_inputs
 from .kit.hole_terms import HoleTerms
 from .kit.net_inputs import fill_channel, image_channels
 from .kit.warp_terms import kit_warp_arguments
-from .loop import check_finite_output, check_memory, holdout_mask
-from .runtime.tensors import to_tensor
+from .paper.disparity import DisparityTransform
 from .paper.total_loss import PaperLoss
 from .paper.variants import Variant, get_variant
+from .runtime.device import resolve_device
+from .runtime.memory import check_memory
+from .runtime.tensors import to_tensor
+from .stopping import heldout_error_fn, holdout_mask
 
-__all__ = ["DepthResult", "FitInputs", "merge", "check_inputs", "run_fit", "fit_once"]
+__all__ = ["DepthResult", "FitInputs", "merge", "check_inputs", "run_fit", "fit_once", "hole_errors_fn"]
 
 
 @dataclass
 class DepthResult:
-    """What :func:`~ddp_lite.method.combine.complete_depth` returns. Arrays are NumPy, (H, W) or (H, W, 3).
+    """What :func:`~ddp_lite.method.complete.complete_depth` returns. Arrays are NumPy, (H, W) or (H, W, 3).
 
     For the mean of several fits (``config.ensemble > 1``, ``fits`` of them) ``iterations`` and
     ``seconds`` are totals over the fits; ``history``, ``best_iteration`` and ``state`` are the
@@ -89,7 +91,7 @@ class FitInputs:
 
 def check_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth=None, transform=None, init=None
                  ) -> tuple[FitInputs, FitConfig]:
-    """Check a fit's inputs once, before any work (:func:`~ddp_lite.method.fit_inputs.check_fit_inputs`):
+    """Check a fit's inputs once, before any work (:func:`~ddp_lite.method.input_checks.check_fit_inputs`):
     (:class:`FitInputs`, the config). ``init`` must be None or a :class:`DepthResult`."""
     spec = get_variant(variant)
     config, depth, rgb, neighbors, gt_depth, transform = check_fit_inputs(rgb, depth, camera, neighbors, spec,
@@ -139,8 +141,8 @@ def run_fit(inputs: FitInputs, config: FitConfig, *, callback=None, init: DepthR
         disparity = output[:, :1]  # one view for every term: the gradients add up in the same order
         return paper_loss(disparity, output[:, 1:4] if spec.uses_rgb else None)
 
-    heldout_error = loop.heldout_error_fn(target, heldout, device) if heldout.any() else None
-    evaluate = loop.hole_errors_fn(gt_depth, valid, transform, device) if gt_depth is not None else None
+    heldout_error = heldout_error_fn(target, heldout, device) if heldout.any() else None
+    evaluate = hole_errors_fn(gt_depth, valid, transform, device) if gt_depth is not None else None
 
     user_callback = None
     if callback is not None:
@@ -162,7 +164,7 @@ def run_fit(inputs: FitInputs, config: FitConfig, *, callback=None, init: DepthR
                             noise, image)
     start = time.perf_counter()
     output, history, ran, best = loop.run(net, noise, loss_fn, config, iterations, heldout_error, evaluate,
-                                          user_callback, description=f"DDP {variant}")
+                                          user_callback, progress=FitBar(iterations, f"DDP {variant}", config.progress))
     state = {name: value.detach().cpu().clone() for name, value in net.state_dict().items()}
     seconds = time.perf_counter() - start
     disparity = output[0, 0].cpu().numpy().astype(np.float32)
@@ -172,3 +174,20 @@ def run_fit(inputs: FitInputs, config: FitConfig, *, callback=None, init: DepthR
     return DepthResult(depth=transform.to_depth(disparity).astype(np.float32), disparity=disparity, rgb=out_rgb,
                        history=history, transform=transform, iterations=ran, best_iteration=best, seconds=seconds,
                        state=state)
+
+
+def hole_errors_fn(gt_depth: np.ndarray, valid: np.ndarray, transform, device):
+    """``errors(output)`` → {"hole_rmse": disparity RMSE, "hole_rmse_m": depth RMSE in metres} over the
+    holes (``valid`` False) where ``gt_depth`` (H, W) metres is known: tracked, never optimised."""
+    holes = ~valid & np.isfinite(gt_depth)
+    holes_t = to_tensor(holes, device).bool()
+    gt_disp_t = to_tensor(np.nan_to_num(transform.to_disparity(gt_depth), nan=0.0), device)
+    gt_m_t = to_tensor(np.nan_to_num(np.clip(gt_depth, transform.d_min, transform.d_max), nan=0.0), device)
+    n_holes = max(float(holes.sum()), 1.0)
+
+    def evaluate(output):
+        disparity = output[:, :1]
+        err_disp = ((disparity - gt_disp_t) ** 2 * holes_t).sum() / n_holes
+        err_m = ((transform.to_depth(disparity) - gt_m_t) ** 2 * holes_t).sum() / n_holes
+        return {"hole_rmse": float(err_disp.sqrt()), "hole_rmse_m": float(err_m.sqrt())}
+    return evaluate

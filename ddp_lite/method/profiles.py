@@ -9,7 +9,7 @@ A profile sets size and budget only: image size, net widths, iterations, learnin
 auto-stop, views per scene, seeds. What a fit optimises is the recipe (:mod:`ddp_lite.method.kit.recipes`).
 The paper's rate fills nothing in 1000 iterations at our small sizes, so ``ci`` and ``class`` use
 1e-2: ``ci`` cuts it ×0.3 at iterations 90 and 128 of a fixed 150; ``class`` cuts it at the first
-plateau of a held-out error and stops at the second (:class:`~ddp_lite.method.loop.PlateauStopper`).
+plateau of a held-out error and stops at the second (:class:`~ddp_lite.method.stopping.PlateauStopper`).
 How these settings were chosen: ``docs/tuning_history.md``.
 """
 from __future__ import annotations

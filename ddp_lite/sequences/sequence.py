@@ -24,7 +24,7 @@ and the views are fused into one point cloud (Fusibile; here ``fusion.fuse_depth
 
 Only this process writes files: a worker returns arrays, so a remote cluster needs no shared disk.
 
-The steps live in their own modules, and their names stay importable from here: planning and the
+The steps live in their own modules: planning and the
 per-view fit in ``sequence_jobs``, the output folder (manifest, files, fusion) in
 ``sequence_files``, the dry run's cost estimate in ``sequence_cost``.
 """
@@ -37,17 +37,15 @@ import time
 import numpy as np
 
 from ..method.config import FitConfig
-from ..method.side_by_side import side_by_side_workers, torch_threads
+from ..method.runtime.side_by_side import side_by_side_workers, torch_threads
 from ..core.progress import CommandClock
 from .runner import run_jobs
-from .sequence_cost import estimate_sequence, format_estimate, measure_fit_cost
 from .sequence_files import (MANIFEST, view_files, view_finished, fuse_views, write_manifest, write_view, check_out_folder,
                              read_manifest)
-from .sequence_jobs import VARIANT, ViewJob, fit_view, plan_jobs
+from .sequence_jobs import VARIANT, fit_view, plan_jobs
 from ..core.views import Scene
 
-__all__ = ["ViewJob", "plan_jobs", "fit_view", "run_sequence", "read_manifest", "measure_fit_cost",
-           "estimate_sequence", "format_estimate", "MANIFEST", "VARIANT"]
+__all__ = ["run_sequence"]
 
 
 def run_sequence(scene: Scene, out, config: FitConfig | None = None, views=None, client=None, threads: int = 1,

@@ -3,7 +3,7 @@
 ``measure_fit_cost`` times one rgbd+warp iteration of a profile's net on this machine and counts
 its convolution FLOPs (``torch.utils.flop_counter``), both per pixel; ``estimate_sequence`` scales
 them to n views of (H, W): GPU-hours at an *assumed* sustained TFLOP/s, one-thread CPU-hours, and
-peak memory per job (``fit.estimate_peak_memory_gb``); ``format_estimate`` prints that.
+peak memory per job (``ddp_lite.method.runtime.memory.estimate_peak_memory_gb``); ``format_estimate`` prints that.
 """
 from __future__ import annotations
 
@@ -13,8 +13,8 @@ import torch
 from torch.utils.flop_counter import FlopCounterMode
 
 from ..method.config import FitConfig
-from ..method.combine import complete_depth
-from ..method.loop import estimate_peak_memory_gb
+from ..method.complete import complete_depth
+from ..method.runtime.memory import estimate_peak_memory_gb
 from ..world.scenes import make_scene
 from .sequence_jobs import N_NEIGHBORS, VARIANT
 
@@ -63,7 +63,7 @@ def estimate_sequence(n_views: int, size, profile="paper", cost: dict | None = N
     ``cost``: :func:`measure_fit_cost`'s result (measured now if None). GPU-hours = total convolution
     FLOPs / ``gpu_tflops`` (an *assumed* sustained rate, not a measurement: ~5 TFLOP/s is a third of
     a V100's fp32 peak; replace it with your GPU's by timing one view). CPU-hours use the measured
-    single-thread CPU cost. Memory per job: ``fit.estimate_peak_memory_gb`` (CPU-calibrated)."""
+    single-thread CPU cost. Memory per job: ``ddp_lite.method.runtime.memory.estimate_peak_memory_gb`` (CPU-calibrated)."""
     config = FitConfig.for_profile(profile, variant=VARIANT)
     cost = measure_fit_cost(profile) if cost is None else cost
     H, W = size
@@ -93,7 +93,7 @@ def format_estimate(estimate: dict, command: str | None = None) -> str:
         f"(≈ {60 * e['gpu_hours'] / max(e['jobs'], 1):.1f} min per view)",
         f"  CPU:     ≈ {_round(e['cpu_hours_one_thread'])} CPU-hours on this machine, one thread per fit "
         f"({c['cpu_seconds_per_pixel_iteration'] * 1e6:.2f} µs per pixel-iteration, measured now)",
-        f"  memory:  ≈ {e['memory_gb_per_job']:.1f} GB peak per job (fit.estimate_peak_memory_gb, CPU-calibrated)",
+        f"  memory:  ≈ {e['memory_gb_per_job']:.1f} GB peak per job (runtime.memory.estimate_peak_memory_gb, CPU-calibrated)",
     ]
     if command:
         lines += ["run it on a Dask cluster (one GPU per worker; README 'Your own data' shows dask-jobqueue on Slurm):",

@@ -20,9 +20,9 @@ import numpy as np
 from ..core.camera import Camera
 from ..method.paper.disparity import DisparityTransform
 from ..method.config import FitConfig
-from ..method.combine import complete_depth
-from ..method.side_by_side import torch_threads
-from ..method.fit_inputs import check_fit_inputs
+from ..method.complete import complete_depth
+from ..method.runtime.side_by_side import torch_threads
+from ..method.input_checks import check_fit_inputs
 from ..world.neighbors import select_neighbors
 from ..core.views import Scene
 

@@ -14,8 +14,8 @@ import torch
 from ..classical.baselines import BASELINES
 from ..classical.stereo import pixel_disparity
 from ..method.config import FitConfig
-from ..method.combine import complete_depth, mixed_with_fill
-from ..method.side_by_side import run_side_by_side
+from ..method.complete import complete_depth, mixed_with_fill
+from ..method.runtime.side_by_side import run_side_by_side
 from ..method.profiles import get_profile
 from ..method.kit.recipes import get_recipe
 from ..evaluation.experiments import Case, make_case

@@ -18,8 +18,8 @@ import numpy as np
 
 from ..classical.baselines import fill
 from ..method.config import FitConfig
-from ..method.combine import complete_depth
-from ..method.side_by_side import run_fits
+from ..method.complete import complete_depth
+from ..method.runtime.side_by_side import run_fits
 from ..evaluation.fusion import fuse_depths, points_from_depth
 from ..evaluation.metrics import cloud_scores, psnr
 from ..world.neighbors import select_neighbors
@@ -44,7 +44,7 @@ def scene_neighbors(scene: Scene, n: int):
 def complete_views(views, depths, neighbors_of, profile=None, variant: str = "rgbd+warp", log=print) -> list:
     """DDP (``FitConfig.for_profile``) on each of ``depths`` (H, W metres, NaN holes) of ``views``, with
     ``neighbors_of(i)`` as warp partners → list of (H, W) depths, the input kept where it was valid.
-    The views' fits are independent: they run side by side (:mod:`ddp_lite.method.side_by_side`)."""
+    The views' fits are independent: they run side by side (:mod:`ddp_lite.method.runtime.side_by_side`)."""
     config = FitConfig.for_profile(profile, variant=variant, progress=False)
 
     def fit(i: int):

@@ -31,11 +31,11 @@ from scipy import ndimage
 from ..classical.baselines import BASELINES
 from ..evaluation.experiments import Case
 from ..method.config import FitConfig
-from ..method.combine import blend_members, blended_result, complete_depth, mixed_with_fill
+from ..method.complete import blend_members, blended_result, complete_depth, mixed_with_fill
 from ..classical.holes import random_holes
 from ..data.middlebury import load_middlebury, load_motorcycle
 from ..method.profiles import get_profile
-from ..method.side_by_side import run_fits
+from ..method.runtime.side_by_side import run_fits
 from ..classical.stereo import sgm_disparity, sgm_left_right_failures
 from ..core.views import Scene, View
 
@@ -205,7 +205,7 @@ def compare_fills(case: RealCase, profile=None, recipes=("paper", "kit"), varian
     from the input depth's range, with the profile's size and budget (``rgbd+warp`` warps the right
     view). Names: the fills' keys, then ``"DDP <recipe>"``. A blend of two recipes listed before it
     (``photo`` after ``paper`` and ``kit``) is built from their fits: two fits fewer, the same method.
-    The fits run side by side (:mod:`ddp_lite.method.side_by_side`).
+    The fits run side by side (:mod:`ddp_lite.method.runtime.side_by_side`).
     """
     disparity_in = case.fb / case.depth  # (H, W) px (plus doffs: a constant, it cancels in every error)
     out = {name: fill(disparity_in, case.rgb) for name, fill in BASELINES.items()}

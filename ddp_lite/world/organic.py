@@ -9,7 +9,7 @@ scenes here are mostly curved: a height-field terrain, ellipsoids (boulders, org
 dome seen from inside), cylinders and cones on tilted axes and thin rods, textured with photos
 bundled with scikit-image.
 
-Their pieces live in their own modules (and stay importable from here): ``solids``
+Their pieces live in their own modules: ``solids``
 (``Ellipsoid``, ``Cone``, ``Capsule``), ``terrain`` (``HeightField``), ``photo_texture``
 (``PhotoTexture``, ``PHOTOS``). World frame as in ``render``: x right, y down, z forward, metres.
 
@@ -21,13 +21,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from .photo_texture import PHOTOS, PhotoTexture
+from .photo_texture import PhotoTexture
 from .render import sky_plane
 from .solids import Capsule, Cone, Ellipsoid
 from .terrain import HeightField
 from .textures import jitter_colour, seeded_texture
 
-__all__ = ["ORGANIC_SCENES", "PHOTOS", "PhotoTexture", "Ellipsoid", "Cone", "Capsule", "HeightField"]
+__all__ = ["ORGANIC_SCENES"]
 
 
 def _photo_tex(rng, image, scale, tint=(1.0, 1.0, 1.0), crop=(0.0, 1.0, 0.0, 1.0), variation=0.25):

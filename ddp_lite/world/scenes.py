@@ -6,8 +6,7 @@ holes any way we like (or let a real stereo matcher cut them, see ``stereo.py``)
 measure the error where it matters. The pieces live in their own modules: the data model
 (``views``: ``View``, ``Scene``, ``LABEL_*``), surface textures (``textures``), primitives and
 the ray-caster (``render``), view selection (``neighbors``); this module names scenes and
-renders them. The old import paths (``ddp_lite.world.scenes.View``, ``.render``, ``.select_neighbors``,
-...) still work.
+renders them.
 
 Sky: a textureless, unshaded colour gradient on a *far plane* (``Scene.meta["sky_depth"]``
 metres ahead), so the ground truth is finite everywhere and hole errors can be measured there
@@ -29,15 +28,12 @@ import numpy as np
 
 from ..core.camera import Camera, look_at
 from ..core.checks import check_size
-from .neighbors import select_neighbors
 from .organic import ORGANIC_SCENES
 from .render import Box, Cylinder, Plane, Sphere, render, sky_plane
-from .textures import Texture, seeded_texture
-from ..core.views import LABEL_PLANKS, LABEL_SKY, LABEL_TEXTURED, LABEL_TEXTURELESS, LABELS, Scene, View
+from .textures import seeded_texture
+from ..core.views import Scene, View
 
-__all__ = ["View", "Scene", "Texture", "Plane", "Box", "Sphere", "Cylinder", "render", "make_scene",
-           "list_scenes", "register_scene", "select_neighbors", "check_size", "LABELS", "LABEL_SKY",
-           "LABEL_TEXTURELESS", "LABEL_PLANKS", "LABEL_TEXTURED", "SCENES"]
+__all__ = ["make_scene", "list_scenes", "register_scene", "SCENES"]
 
 
 def _house(rng):

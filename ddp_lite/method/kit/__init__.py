@@ -5,8 +5,9 @@ into one warp term the paper's loss takes as an argument (``warp_terms``), extra
 colour image, a classical fill: ``net_inputs``), blends with a fill or the paper recipe's fit
 (``blend``), ensembles (``ensemble``) and the method switch (``recipes``).
 
-Blends and ensembles combine whole fits, so they use two of the fit's own files in ``method/``: its
-held-out pixels (``loop.holdout_mask``) and its side-by-side runs (``side_by_side``).
+Blends and ensembles combine whole fits: a blend holds out valid pixels as the fit's auto-stop does
+(``method/stopping.holdout_mask``, the one file of ``method/`` itself the kit uses), an ensemble runs
+its members side by side (``runtime/side_by_side``).
 
 May import: core, classical, paper, runtime, method.
 """

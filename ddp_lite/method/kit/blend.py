@@ -16,7 +16,7 @@ valid input around the holes is held out of both fits, and the weight that best 
 Measured on the real pair, the ring costs more than it tells: both fits lose the valid pixels that
 matter most (beside an occlusion, the far surface), and its choice is no better than the fixed mean.
 It stays a study lever. The two fits run side by side on a CPU with two threads
-(:func:`ddp_lite.method.side_by_side.run_side_by_side`).
+(:func:`ddp_lite.method.runtime.side_by_side.run_side_by_side`).
 
 ``blend_fill`` f mixes in a third estimate that errs in yet other places: a colour-guided fill of the
 input (:func:`fill_disparity`), the mean of Levin et al.'s colorization fill and Barron & Poole's fast
@@ -132,7 +132,7 @@ def fill_disparity(depth: np.ndarray, rgb: np.ndarray, transform) -> np.ndarray:
 
 def fill_holdout(valid: np.ndarray, seed: int = 0) -> np.ndarray:
     """(H, W) bool: the valid pixels held out to choose the fill's share, ``FILL_HOLDOUT`` of them in
-    smooth random blobs (seeded; :func:`ddp_lite.method.loop.holdout_mask` with ``shape="blobs"``).
+    smooth random blobs (seeded; :func:`ddp_lite.method.stopping.holdout_mask` with ``shape="blobs"``).
     Blobs, not scattered pixels: a scattered pixel is predicted from its neighbours by any smooth fit.
 
     Example:
@@ -141,7 +141,7 @@ def fill_holdout(valid: np.ndarray, seed: int = 0) -> np.ndarray:
         >>> bool((held & ~valid).any()), round(float(held.sum() / valid.sum()), 2)
         (False, 0.05)
     """
-    from ..loop import holdout_mask
+    from ..stopping import holdout_mask
 
     return holdout_mask(np.asarray(valid, bool), FILL_HOLDOUT, seed + 777, "blobs")
 

@@ -4,13 +4,13 @@
 
 Not in the paper. One fit's hole error moves ±10 % and more with the seed (other weights, noise
 and held-out pixels); the mean keeps what the fits agree on. Members run side by side in threads
-where cores and memory allow (:func:`parallel_members`, :mod:`ddp_lite.method.side_by_side`).
+where cores and memory allow (:func:`parallel_members`, :mod:`ddp_lite.method.runtime.side_by_side`).
 """
 from __future__ import annotations
 
 import numpy as np
 
-from ..side_by_side import side_by_side_workers
+from ..runtime.side_by_side import side_by_side_workers
 
 __all__ = ["parallel_members", "mean_outputs"]
 

@@ -19,7 +19,7 @@ recipe): ``extra_terms`` added to L_total (the kit's hole terms, :class:`~ddp_li
 a ``warp_term`` in place of Eq. 5's cost (its confidence mask, restriction to the holes, census or
 gradient cost and texture weights: :func:`~ddp_lite.method.kit.warp_terms.kit_warp_term`) and an occlusion
 test per neighbour (``visibility``: :func:`~ddp_lite.method.kit.warp_terms.occlusion_tests`). Other net inputs
-are the fit's (:mod:`ddp_lite.method.kit.net_inputs`); auto-stop (:mod:`ddp_lite.method.loop`), ensembles
+are the fit's (:mod:`ddp_lite.method.kit.net_inputs`); auto-stop (:mod:`ddp_lite.method.stopping`), ensembles
 (:mod:`ddp_lite.method.kit.ensemble`) and bfloat16 (:func:`ddp_lite.method.runtime.device.use_bf16`) are around it.
 """
 from __future__ import annotations

@@ -1,6 +1,7 @@
-"""Where and how a fit runs, not what it computes: the device and bfloat16 (``device``), the fit
-cache (``cache``: its key names the profile, the recipe and the config, from ``method/``) and one cache
-entry's file format (``cache_entry``), NumPy arrays into torch's layout (``tensors``).
+"""Where and how a fit runs, not what it computes: the device and bfloat16 (``device``), NumPy arrays
+into torch's layout (``tensors``), the memory guard (``memory``), independent fits side by side in
+threads (``side_by_side``), and the file format of one entry of the fit cache (``cache_entry``; the
+cache itself, whose key names the profile, the recipe and the config, is ``method/fit_cache``).
 
-May import: core, kit, method.
+May import: core, paper.
 """

@@ -12,17 +12,17 @@ height and width or hold non-finite values: :class:`BadEntry` says which.
 from __future__ import annotations
 
 import dataclasses
-import io
 import json
 import zipfile
 
 import numpy as np
 import torch
 
-__all__ = ["BadEntry", "Unstorable", "entry_bytes", "read_entry"]
+from ...core.array_archive import array_node, write_archive
+
+__all__ = ["BadEntry", "Unstorable", "write_entry", "read_entry"]
 
 FORMAT = 1
-_ARRAY_KINDS = "biufc"  # bool, integers, floats, complex: what NumPy stores without pickling
 
 
 class BadEntry(ValueError):
@@ -50,11 +50,7 @@ def _encode(value, arrays: list, types: dict):
         arrays.append(array.numpy())
         return {"tensor": len(arrays) - 1}
     if isinstance(value, (np.ndarray, np.generic)):
-        array = np.asarray(value)
-        if array.dtype.kind not in _ARRAY_KINDS:
-            raise Unstorable(f"an array of dtype {array.dtype}")
-        arrays.append(array)
-        return {"array" if isinstance(value, np.ndarray) else "scalar": len(arrays) - 1}
+        return array_node(value, arrays, Unstorable)
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
         if types.get(_type_name(type(value))) is not type(value):
             raise Unstorable(f"a {_type_name(type(value))}")
@@ -69,18 +65,15 @@ def _encode(value, arrays: list, types: dict):
     raise Unstorable(f"a {type(value).__qualname__}")
 
 
-def entry_bytes(result, key: str, function: str, types=()) -> bytes:
-    """The ``.npz`` bytes of ``result`` made by ``function`` (its qualified name) for ``key``; ``types``:
-    the dataclasses it may hold.
+def write_entry(path, result, key: str, function: str, types=()) -> None:
+    """Store ``result`` made by ``function`` (its qualified name) for ``key`` at ``path``, atomically, as an
+    ``.npz`` (:func:`ddp_lite.core.array_archive.write_archive`); ``types``: the dataclasses it may hold.
 
-    Raises :class:`Unstorable` for a value that only a pickle could hold."""
+    Raises :class:`Unstorable` for a value that only a pickle could hold, before anything is written."""
     arrays: list = []
     types = {_type_name(cls): cls for cls in types}
     meta = {"format": FORMAT, "key": key, "function": function, "result": _encode(result, arrays, types)}
-    buffer = io.BytesIO()
-    np.savez(buffer, meta=np.frombuffer(json.dumps(meta).encode(), np.uint8),
-             **{f"a{i}": array for i, array in enumerate(arrays)})
-    return buffer.getvalue()
+    write_archive(path, "meta", meta, arrays)
 
 
 def _decode(node, arrays, types: dict):

@@ -17,9 +17,9 @@ from concurrent.futures import ThreadPoolExecutor
 
 import torch
 
-from .runtime.device import resolve_device
-from .loop import estimate_peak_memory_gb, memory_limit_gb
-from .paper.variants import get_variant
+from .device import resolve_device
+from .memory import estimate_peak_memory_gb, memory_limit_gb
+from ..paper.variants import get_variant
 
 __all__ = ["side_by_side_workers", "run_side_by_side", "run_fits", "torch_threads"]
 

@@ -1,4 +1,4 @@
-"""The kit's combinations of DDP fits, and :func:`complete_depth`, the entry point that applies them.
+""":func:`complete_depth`, the entry point: one DDP fit, or the kit's combinations of fits a config asks for.
 
 A config asks for at most three, applied from the outside in: a share of the input's colour-guided
 fill mixed into the result (``blend_fill``, :func:`with_fill`); the blend of this config's fit with
@@ -14,13 +14,13 @@ from dataclasses import replace
 import numpy as np
 
 from .kit.blend import best_fill_share, best_weight, fill_disparity, fill_holdout, validation_ring
-from .runtime.cache import cached
+from .fit_cache import cached
 from ..core.camera import Camera
 from ..core.checks import MIN_VALID_PIXELS, check_callback
 from .config import FitConfig
 from .paper.disparity import DisparityTransform
 from .kit.ensemble import mean_outputs, parallel_members
-from .side_by_side import run_side_by_side
+from .runtime.side_by_side import run_side_by_side
 from .fit import DepthResult, FitInputs, check_inputs, run_fit
 from .kit.recipes import get_recipe
 from .paper.variants import get_variant

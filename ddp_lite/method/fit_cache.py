@@ -43,11 +43,11 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from ...core.files import describe_kind, regular_file, write_bytes_atomic
-from .cache_entry import BadEntry, Unstorable, entry_bytes, read_entry
-from ..config import FitConfig
-from ..profiles import current_profile_name
-from ..kit.recipes import current_recipe_name
+from ..core.files import describe_kind, regular_file
+from .runtime.cache_entry import BadEntry, Unstorable, read_entry, write_entry
+from .config import FitConfig
+from .profiles import current_profile_name
+from .kit.recipes import current_recipe_name
 
 __all__ = ["ENV_VAR", "cache_folder", "cached"]
 
@@ -73,7 +73,7 @@ def cache_folder() -> Path | None:
 def _library_digest() -> str:
     """SHA-256 over the package's own source files (every sub-package), in path order."""
     digest = hashlib.sha256()
-    root = Path(__file__).resolve().parents[1]  # ddp_lite/
+    root = Path(__file__).resolve().parents[__name__.count(".") - 1]  # ddp_lite/, wherever this file sits in it
     for path in sorted(root.rglob("*.py")):
         digest.update(path.relative_to(root).as_posix().encode() + b"\0" + path.read_bytes())
     return digest.hexdigest()
@@ -144,7 +144,7 @@ def cached(function=None, *, like: str | None = None, types=()):
                               RuntimeWarning, stacklevel=2)
         result = function(*args, **kwargs)
         try:
-            write_bytes_atomic(path, entry_bytes(result, key, name, types))
+            write_entry(path, result, key, name, types)
         except (Unstorable, OSError) as error:  # the fit is done: hand it back, say why it is not kept
             warnings.warn(f"{ENV_VAR}: could not store the result in {path} ({error}); it is returned "
                           f"but not cached", RuntimeWarning, stacklevel=2)
