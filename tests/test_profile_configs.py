@@ -9,7 +9,7 @@ from ddp_lite.method.profiles import PROFILES
 DEFAULTS = dict(net='unet', channels=None, down='stride', up='bilinear', pad='reflect', noise_channels=16, net_input='noise',
                 image_input=0.0, image_blur=1.0, fill_input=0.0, lr=5e-05, schedule='step', iterations=None,
                 lr_milestones=(12000, 15000), lr_gamma=0.01, lambda_z=0.8, lambda_i=0.5, lambda_w=0.5,
-                gammas=None, warp_occlusion=False, warp_confidence=False, warp_reach=None, warp_cost='intensity', warp_texture=False,
+                gammas=None, warp_occlusion=False, warp_confidence=False, warp_reach=None, warp_cost='intensity', warp_texture=False, warp_combine='mean',
                 reg_noise_std=0.0, average_outputs=0.0, ensemble=1, blend_paper=False, blend_weight=0.5, blend_fill=0.0, smoothness=0.0,
                 smoothness_edge=10.0, edge_guide='grey', flatness=0.0, affinity=0.0, flatness_reach=None, step_reach=None,
                 disparity_margin=1.25, auto_stop=False, holdout_fraction=0.05, holdout='pixels', patience=200,
