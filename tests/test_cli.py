@@ -499,7 +499,8 @@ def test_demo_and_sequence_name_size_when_the_net_cannot_take_it(tmp_path, capsy
 @pytest.mark.parametrize("shape", [(60, 90), (480, 640), (300, 1200), (600, 300), (12, 200)])
 def test_complete_preview_titles_overlap_nothing(shape, with_gt, monkeypatch):
     """No panel title, colour bar (with its labels), the hole panel's legend or the summary line overlaps
-    another, at any aspect; the hole panel has a two-entry legend and no colour bar."""
+    another, at any aspect; the hole panel has a two-entry legend and no colour bar; the input and the fill,
+    on one scale, share one bar and keep equal widths."""
     import itertools
 
     from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -528,7 +529,8 @@ def test_complete_preview_titles_overlap_nothing(shape, with_gt, monkeypatch):
     every = list(fig.axes) + [child for ax in fig.axes for child in ax.child_axes]  # a shared bar is a panel's inset
     boxes += [("colour bar", ax.get_tightbbox(renderer)) for ax in every if ax.get_label() == "<colorbar>"]
     boxes += [("legend", legend.get_window_extent(renderer)), ("summary", fig._suptitle.get_window_extent(renderer))]
-    assert len(boxes) == (4 + 3 + 2 if with_gt else 3 + 2 + 2)
+    assert len(boxes) == (4 + 2 + 2 if with_gt else 3 + 1 + 2)  # input and fill share one bar; the error map has its own
+    assert panels[0].get_position().width == pytest.approx(panels[1].get_position().width)  # no bar takes a panel's width
     assert [(a, b) for (a, box_a), (b, box_b) in itertools.combinations(boxes, 2) if box_a.overlaps(box_b)] == []
     assert len(panels[1].collections) >= 1  # the holes' outline on the filled panel
     if with_gt:

@@ -152,20 +152,21 @@ def _read_rgb(path: str) -> np.ndarray:
 def _write_preview(path: str, depth: np.ndarray, filled: np.ndarray, summary: str, scores=None) -> None:
     """Input (holes coloured), filled depth (the holes outlined), the hole mask (two colours), and with
     ``scores`` = (gt (H, W) metres, {method: hole RMSE m}) the fill's error in the holes with every
-    method's RMSE: one figure, same depth colour scale, written atomically."""
+    method's RMSE: one figure, input and fill on one depth colour scale with one bar, written atomically."""
     from matplotlib.colors import ListedColormap
     from matplotlib.figure import Figure
     from matplotlib.patches import Patch
 
-    from ..evaluation.viz import HOLE_COLOUR, outline, save_figure, show_depth, show_errors
+    from ..evaluation.viz import HOLE_COLOUR, outline, save_figure, shared_colorbar, show_depth, show_errors
     holes = ~np.isfinite(depth)
     vmin, vmax = float(np.nanpercentile(filled, 1)), float(np.nanpercentile(filled, 99))
     H, W = depth.shape
     panels = 3 if scores is None else 4
     fig = Figure(figsize=(5 * panels, 15 * H / W / 3 + 1.6))
     axes = fig.subplots(1, panels)
-    show_depth(axes[0], depth, f"input ({holes.mean():.1%} holes)", vmin, vmax)
-    show_depth(axes[1], filled, "filled (holes outlined)", vmin, vmax)
+    show_depth(axes[0], depth, f"input ({holes.mean():.1%} holes)", vmin, vmax, colorbar=False)
+    image = show_depth(axes[1], filled, "filled (holes outlined)", vmin, vmax, colorbar=False)
+    shared_colorbar(image, axes[1], label="depth (m)")  # one scale for the input and the fill, one bar
     outline(axes[1], holes, colour="white")
     axes[2].imshow(holes, cmap=ListedColormap(["lightgrey", HOLE_COLOUR]), vmin=0, vmax=1, interpolation="nearest")
     axes[2].legend(handles=[Patch(color="lightgrey", label="valid"), Patch(color=HOLE_COLOUR, label="hole")],
