@@ -29,9 +29,13 @@ def test_a_hand_in_cannot_stop_hang_outlive_or_rewrite_the_grader(tmp_path, monk
     _hand_in(tmp_path, "b_hangs_in_a_cell", student, RIGHT + "\nimport time\nwhile True:\n    try:\n"
              "        time.sleep(100)\n    except KeyboardInterrupt:\n        pass")
     _hand_in(tmp_path, "c_deletes", student, RIGHT + f"\nimport os\nos.remove({str(precious)!r})")
+    detached_pid = tmp_path / "detached.pid"
+    # the detached process says who it is at once, then waits far longer than a hand-in's grading takes (a
+    # machine under load included) before it would write: the grader must have killed it by then
     _hand_in(tmp_path, "d_detaches", student, RIGHT + (
         "\nimport subprocess, sys\nsubprocess.Popen([sys.executable, '-c', "
-        f"\"import time; time.sleep(4); open({str(late)!r}, 'w').write('=rewritten')\"], start_new_session=True)"))
+        f"\"import os, time; open({str(detached_pid)!r}, 'w').write(str(os.getpid())); time.sleep(60); "
+        f"open({str(late)!r}, 'w').write('=rewritten')\"], start_new_session=True)"))
     _hand_in(tmp_path, "e_kills_its_parent", student, RIGHT + "\nimport os, signal\nos.kill(os.getppid(), signal.SIGTERM)")
     _hand_in(tmp_path, "f_kills_its_group", student,
              RIGHT + "\nimport os, signal\nos.killpg(os.getpgid(os.getppid()), signal.SIGTERM)")
@@ -49,7 +53,14 @@ def test_a_hand_in_cannot_stop_hang_outlive_or_rewrite_the_grader(tmp_path, monk
     assert any(line.startswith("e_kills_its_parent/") and "SIGTERM" in line for line in log), log
     assert table["g_honest"] == (2, "pass"), (table, log)  # graded after all of them
     assert took < 120, took
-    time.sleep(5)  # the detached process would have written by now
+    time.sleep(1)
+    if detached_pid.exists() and detached_pid.read_text():  # absent: killed before it could even say its pid
+        pid = int(detached_pid.read_text())
+        try:
+            alive = open(f"/proc/{pid}/stat").read().rsplit(")", 1)[1].split()[0] != "Z"
+        except FileNotFoundError:
+            alive = False
+        assert not alive, f"the process the hand-in detached ({pid}) outlived its grading"
     assert not late.exists()
 
 
