@@ -53,17 +53,11 @@ def _done(path: Path) -> tuple[list[dict], set]:
 def recipe_config(profile: str, variant: str, recipe: str, seed: int) -> FitConfig:
     """The config of one fit: ``recipe`` a kit recipe's name (kit, paper, photo) or that name with
     ``FitConfig`` overrides, ``kit:warp_combine=min,gammas=(0.96,0.02)`` (bare words are read as strings)."""
+    from bench_quality import _split_top  # the recipe syntax bench_quality's own --recipes reads
+
     name, _, body = recipe.partition(":")
     overrides = {}
-    items, depth, current = [], 0, ""
-    for char in body:  # commas inside brackets belong to the value: gammas=(0.96,0.02)
-        depth += (char in "([") - (char in ")]")
-        if char == "," and depth == 0:
-            items.append(current)
-            current = ""
-        else:
-            current += char
-    for item in filter(None, items + [current]):
+    for item in filter(None, _split_top(body)):  # commas inside brackets belong to the value
         key, _, value = item.partition("=")
         try:
             overrides[key.strip()] = ast.literal_eval(value.strip())
