@@ -166,7 +166,7 @@ def main() -> None:
         fills = {name: cached_fill(name, case, args.fill_limit, args.cache) for name in FILL_NAMES}
         for seed in args.seeds:
             small, seconds, shape = fit_small(case, profile, seed, args.cache, args.isa)
-            row = evaluate(case, small, sweep)
+            row = evaluate(case, small, sweep, fills)
             row.update(case=case.name, seed=seed, profile=profile.name, isa=args.isa, threads=args.threads,
                        shape=list(case.depth.shape), working=list(shape), fit_seconds=seconds,
                        holes=float((~np.isfinite(case.depth)).mean()), scored=int(case.scored.sum()))
@@ -187,6 +187,12 @@ def main() -> None:
         print(f"{r['case']:<18}{r['seed']:>5}{r['refined']['default']:>10.3f}{r['DDP-upsampled']:>11.3f}  "
               f"{best + ' ' + format(r['fills'][best], '.3f'):<26}{r['refined']['default'] / r['fills'][best]:>7.3f}"
               f"{r['refine_seconds']['default']:>10.2f}{r['fit_seconds']:>8.1f}")
+    if rows and rows[0]["mixed"]:
+        print("\nthe refined fit mixed with a share of a full-size fill: hole RMSE (px) per case, mean ratio to the best fill")
+        for key in rows[0]["mixed"]:
+            ratios = [r["mixed"][key] / r["fills"][r["best_fill"]] for r in rows]
+            print(f"{key:<28}" + "".join(f"{r['mixed'][key]:>8.3f}" for r in rows) + f"   ratio {np.mean(ratios):.3f} "
+                  f"(below 1 on {sum(x < 1 for x in ratios)} of {len(ratios)})")
     if args.sweep:
         print("\nsweep: hole RMSE (px) per case, and the mean of each setting's ratio to the best fill")
         for key in SWEEP:
@@ -194,6 +200,7 @@ def main() -> None:
             print(f"{key:<48}" + "".join(f"{r['refined'][key]:>8.3f}" for r in rows) + f"   ratio {np.mean(ratios):.3f}")
 
 
+MIX_SHARES = (0.25, 0.5, 0.6, 0.7, 0.8)  # shares of a full-size fill mixed into the refined fit
 FILL_NAMES = ("nearest", "linear", "cubic", "telea", "navier-stokes", "biharmonic", "colorization", "guided-filter",
               "bilateral-solver", "cross-bilateral")
 
@@ -224,8 +231,11 @@ def cached_fill(name: str, case: Case, limit: float, cache: str | None):
     return out, seconds
 
 
-def evaluate(case: Case, small, sweep: dict) -> dict:
-    """DDP up-sampled into the holes, and refined at full size by each setting of ``sweep`` → RMSEs, seconds."""
+def evaluate(case: Case, small, sweep: dict, fills: dict | None = None) -> dict:
+    """DDP up-sampled into the holes, and refined at full size by each setting of ``sweep`` → RMSEs, seconds;
+    and the default refinement mixed, in disparity, with a share of a full-size fill of ``fills`` ({name:
+    (depth or None, seconds)}): the bilateral solver alone, and its mean with colorization (the fill the
+    ``kit`` recipe mixes in at the working size) → ``row["mixed"]["<fill> <share>"]``."""
     from ddp_lite.method.full_resolution import refine_full_resolution
     from ddp_lite.sequences.working_size import fill_holes_at_full_size
     upsampled = fill_holes_at_full_size(case.depth, small)
@@ -238,6 +248,18 @@ def evaluate(case: Case, small, sweep: dict) -> dict:
         assert np.array_equal(refined[~case.scored & np.isfinite(case.depth)],
                               case.depth[~case.scored & np.isfinite(case.depth)])
         row["refined"][key] = case.rmse_px(refined)
+        if key == "default":
+            default = refined
+    row["mixed"] = {}
+    partners = {}  # name → (H, W) disparity px
+    if fills and fills.get("bilateral-solver", (None,))[0] is not None:
+        partners["bilateral-solver"] = case.fb / fills["bilateral-solver"][0]
+        if fills.get("colorization", (None,))[0] is not None:
+            partners["mean"] = (partners["bilateral-solver"] + case.fb / fills["colorization"][0]) / 2
+    for name, fill in partners.items():
+        for share in MIX_SHARES:
+            mixed = (1 - share) * case.fb / default + share * fill
+            row["mixed"][f"{name} {share}"] = case.rmse_px(case.fb / mixed)
     return row
 
 

@@ -1,0 +1,198 @@
+"""How much of a classical fill should DDP mix in, and which fill? Rules judged on the real suite, chosen on one
+half of the scenes and confirmed on the other.
+
+    python benchmarks/study_fill_blends.py --data DIR fit [--seeds 0 1] [--cases Art/sgbm ...]   # the fits (slow)
+    python benchmarks/study_fill_blends.py --data DIR report [--seeds 0 1]                        # the rules (seconds)
+
+The best classical fill differs from case to case (the bilateral solver on most, colorization on
+occlusions, the guided filter on Plastic's strokes), so "DDP over the best fill" compares DDP with an
+oracle. A method may only choose from what the input shows. Here every choice is made on **held-out
+valid depth**: 5 % of the valid pixels in hole-like blobs (``kit.blend.fill_holdout``) are taken out of
+the input before DDP fits and before every fill runs, and the rule picks what predicts them best.
+
+``fit``: one ``kit`` DDP fit per case and seed on the held-out input, without the fill's share
+(``blend_fill=0``), ``class`` at the suite's size; its depth and the held-out mask are saved to
+``--fits`` (one ``.npz`` per case and seed; a saved one is skipped, so a stopped run resumes).
+
+``report``: per case, every fill of the held-out input (scored on the held-out blobs) and of the whole
+input (scored in the holes), and these rules for the answer in the holes (disparity, ``(1 − f)·DDP +
+f·fill``):
+
+- ``fit``: DDP alone (f = 0); ``kit``: f = ¼ of the mean of colorization and the bilateral solver (the
+  ``kit`` recipe today);
+- ``fixed f``: f of that mean, f = 0.1 … 1 (1: the mean fill alone);
+- ``chosen share``: f ∈ {0, 0.1, …, 1} that best predicts the held-out blobs, of that mean;
+- ``chosen fill``: the fill that best predicts the held-out blobs, alone (no DDP);
+- ``chosen fill + share``: that fill, and the share of it that best predicts the blobs.
+
+Each rule's hole RMSE over the best fill of the case (the suite's yardstick), means per hole kind, per
+half (A: Art, Dolls, Moebius, Baby1, Baby3, Bowling2, Adirondack, Jadeplant, Pipes, Playtable;
+B: Books, Laundry, Reindeer, Baby2, Bowling1, Plastic, ArtL, Piano, Playroom, Motorcycle) and over seeds.
+Rows (one per case, seed and rule) to ``--out``. Asserts nothing.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import time
+from collections import defaultdict
+from pathlib import Path
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402
+
+from ddp_lite.classical.baselines import BASELINES  # noqa: E402
+from ddp_lite.core.files import atomic_path, write_bytes_atomic  # noqa: E402
+from ddp_lite.method.complete import complete_depth  # noqa: E402
+from ddp_lite.method.config import FitConfig  # noqa: E402
+from ddp_lite.method.kit.blend import FILL_MEMBERS, fill_holdout  # noqa: E402
+from ddp_lite.studies.real_suite import SUITE_HOLES, make_suite_case, suite_case_names  # noqa: E402
+
+RESULTS = Path(__file__).resolve().parent / "results"
+HALF_A = ("Art", "Dolls", "Moebius", "Baby1", "Baby3", "Bowling2", "Adirondack", "Jadeplant", "Pipes", "Playtable")
+SHARES = tuple(round(0.1 * k, 1) for k in range(11))
+KIT_SHARE = 0.25
+
+
+def half(case: str) -> str:
+    """"A" or "B": the half of the suite the case's scene is in."""
+    return "A" if case.split("/")[0] in HALF_A else "B"
+
+
+def held_out_input(case, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """The case's input with ``fill_holdout``'s blobs of valid depth taken out, and those blobs (H, W) bool."""
+    heldout = fill_holdout(np.isfinite(case.depth), seed)
+    return np.where(heldout, np.nan, case.depth).astype(np.float32), heldout
+
+
+def fit(data, names, seeds, fits: Path, variant: str, size: str) -> None:
+    """One kit fit per case and seed on the held-out input, saved to ``fits``."""
+    fits.mkdir(parents=True, exist_ok=True)
+    start = time.perf_counter()
+    for seed in seeds:
+        for name in names:
+            path = fits / f"{name.replace('/', '__')}__{variant}__{seed}.npz"
+            if path.exists():
+                continue
+            case = make_suite_case(data, name, size)
+            depth, heldout = held_out_input(case, seed)
+            config = FitConfig.for_profile("class", variant=variant, recipe="kit", seed=seed, progress=False,
+                                           blend_fill=0.0)
+            began = time.perf_counter()
+            neighbors = case.neighbors if variant == "rgbd+warp" else ()
+            result = complete_depth(case.rgb, depth, case.camera, neighbors, variant=variant, config=config)
+            seconds = time.perf_counter() - began
+            with atomic_path(path) as temporary:
+                np.savez_compressed(temporary, depth=result.depth, heldout=heldout, seconds=seconds)
+            print(f"{name:<24} seed {seed}: {seconds:.0f} s ({(time.perf_counter() - start) / 60:.1f} min in all)",
+                  flush=True)
+
+
+def _rmse(estimate: np.ndarray, truth: np.ndarray, mask: np.ndarray) -> float:
+    return float(np.sqrt(np.mean((estimate[mask] - truth[mask]) ** 2)))
+
+
+def rules(case, fit_depth: np.ndarray, heldout: np.ndarray, seed: int) -> dict[str, float]:
+    """{rule: hole RMSE in disparity px} for one case and its saved fit (module docstring)."""
+    held_depth = np.where(heldout, np.nan, case.depth)
+    truth_in = case.fb / case.depth  # (H, W) px disparity of the input, NaN in its holes
+    fit_px = case.fb / fit_depth
+    fills_held = {n: f(case.fb / held_depth, case.rgb) for n, f in BASELINES.items()}  # (H, W) px each
+    fills_all = {n: f(truth_in, case.rgb) for n, f in BASELINES.items()}
+    mean_held = np.mean([fills_held[n] for n in FILL_MEMBERS], axis=0)
+    mean_all = np.mean([fills_all[n] for n in FILL_MEMBERS], axis=0)
+    holes = case.scored_holes
+
+    def score(px):  # the input where it is valid, px in its holes
+        return case.rmse_px(case.fb / np.where(np.isfinite(case.depth), truth_in, px), holes)
+
+    def chosen_share(fill_held):
+        errors = [_rmse((1 - f) * fit_px + f * fill_held, truth_in, heldout) for f in SHARES]
+        return SHARES[int(np.argmin(errors))]
+
+    out = {f"fill {n}": score(px) for n, px in fills_all.items()}
+    out["fit"] = score(fit_px)
+    out["kit"] = score((1 - KIT_SHARE) * fit_px + KIT_SHARE * mean_all)
+    for f in SHARES[1:]:
+        out[f"fixed {f:.1f}"] = score((1 - f) * fit_px + f * mean_all)
+    f = chosen_share(mean_held)
+    out["chosen share"], out["chosen share: f"] = score((1 - f) * fit_px + f * mean_all), f
+    best = min(fills_held, key=lambda n: _rmse(fills_held[n], truth_in, heldout))
+    out["chosen fill"] = score(fills_all[best])
+    f = chosen_share(fills_held[best])
+    out["chosen fill + share"], out["chosen fill + share: f"] = score((1 - f) * fit_px + f * fills_all[best]), f
+    out["chosen fill: name"] = best
+    return out
+
+
+def report(data, names, seeds, fits: Path, variant: str, size: str, out: Path) -> None:
+    rows = []
+    for seed in seeds:
+        for name in names:
+            path = fits / f"{name.replace('/', '__')}__{variant}__{seed}.npz"
+            if not path.exists():
+                continue
+            case = make_suite_case(data, name, size)
+            with np.load(path) as saved:
+                scores = rules(case, saved["depth"], saved["heldout"], seed)
+            rows.append(dict(case=name, seed=seed, variant=variant, size=size, half=half(name), **scores))
+    if not rows:
+        print(f"no fits in {fits}")
+        return
+    write_bytes_atomic(out, "".join(json.dumps(r) + "\n" for r in rows).encode())
+    fills = [k for k in rows[0] if k.startswith("fill ")]
+    ratio_keys = ["fit", "kit"] + [f"fixed {f:.1f}" for f in SHARES[1:]] + [
+        "chosen share", "chosen fill", "chosen fill + share"]
+    for r in rows:
+        r["best"] = min(r[k] for k in fills)
+    print(f"{len(rows)} case-seeds ({variant}, {size}, seeds {sorted({r['seed'] for r in rows})}); "
+          f"rule's hole RMSE / best fill's, mean over cases (how many below 1.0)")
+    groups = [("A", lambda r: r["half"] == "A"), ("B", lambda r: r["half"] == "B")] + [
+        (kind, lambda r, k=kind: r["case"].endswith("/" + k)) for kind in SUITE_HOLES] + [("all", lambda r: True)]
+    print(f"{'rule':<22}" + "".join(f"{g:>16}" for g, _ in groups))
+    for key in ratio_keys:
+        cells = []
+        for _, keep in groups:
+            chosen = [r[key] / r["best"] for r in rows if keep(r)]
+            cells.append(f"{np.mean(chosen):.3f} ({sum(x < 1 for x in chosen)}/{len(chosen)})" if chosen else "-")
+        print(f"{key:<22}" + "".join(f"{c:>16}" for c in cells))
+    shares = defaultdict(list)
+    for r in rows:
+        shares[r["case"].split("/")[1]].append(r["chosen share: f"])
+    print("chosen share of the mean fill, per hole kind: " + ", ".join(
+        f"{k} {np.mean(v):.2f}" for k, v in shares.items()))
+    names_chosen = defaultdict(int)
+    for r in rows:
+        names_chosen[r["chosen fill: name"]] += 1
+    print("fill chosen on the held-out blobs: " + ", ".join(f"{k} {v}" for k, v in sorted(
+        names_chosen.items(), key=lambda kv: -kv[1])))
+    print(f"rows to {out}")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("what", choices=("fit", "report"))
+    parser.add_argument("--data", required=True, help="a folder of Middlebury scenes with ground truth")
+    parser.add_argument("--seeds", type=int, nargs="+", default=[0])
+    parser.add_argument("--cases", nargs="+", help="scene/holes names; default: the whole suite")
+    parser.add_argument("--variant", default="rgbd+warp", choices=("rgbd", "rgbd+warp"))
+    parser.add_argument("--size", default="eighth", choices=("eighth", "quarter"))
+    parser.add_argument("--fits", type=Path, default=RESULTS / "fill_blend_fits")
+    parser.add_argument("--out", type=Path, default=RESULTS / "fill_blends_eighth.jsonl")
+    args = parser.parse_args()
+    names = suite_case_names(args.data)
+    if args.cases:
+        unknown = sorted(set(args.cases) - set(names))
+        if unknown:
+            raise SystemExit(f"--cases: not in the suite under {args.data}: {unknown}")
+        names = [n for n in names if n in set(args.cases)]
+    if args.what == "fit":
+        fit(args.data, names, args.seeds, args.fits, args.variant, args.size)
+    else:
+        report(args.data, names, args.seeds, args.fits, args.variant, args.size, args.out)
+
+
+if __name__ == "__main__":
+    main()
