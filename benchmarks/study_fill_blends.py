@@ -23,7 +23,12 @@ f·fill``):
 - ``fixed f``: f of that mean, f = 0.1 … 1 (1: the mean fill alone);
 - ``chosen share``: f ∈ {0, 0.1, …, 1} that best predicts the held-out blobs, of that mean;
 - ``chosen fill``: the fill that best predicts the held-out blobs, alone (no DDP);
-- ``chosen fill + share``: that fill, and the share of it that best predicts the blobs.
+- ``chosen fill + share``: that fill, and the share of it that best predicts the blobs;
+- ``refined c=…``: DDP's fit as the target of the edge-aware solve ``complete`` runs at a photo's full size
+  (``method.full_resolution``: the bilateral solver guided by the image, confidence 1 on the valid input
+  and c on the fit in the holes, after the fit's own error on the valid pixels is carried into them);
+  ``refined + f``: that (c = 0.01) with f of the mean fill mixed in after; ``f, refined``: f of the mean fill
+  mixed into the fit first, then refined.
 
 Each rule's hole RMSE over the best fill of the case (the suite's yardstick), means per hole kind, per
 half (A: Art, Dolls, Moebius, Baby1, Baby3, Bowling2, Adirondack, Jadeplant, Pipes, Playtable;
@@ -47,6 +52,7 @@ from ddp_lite.classical.baselines import BASELINES  # noqa: E402
 from ddp_lite.core.files import atomic_path, write_bytes_atomic  # noqa: E402
 from ddp_lite.method.complete import complete_depth  # noqa: E402
 from ddp_lite.method.config import FitConfig  # noqa: E402
+from ddp_lite.method.full_resolution import refine_full_resolution  # noqa: E402
 from ddp_lite.method.kit.blend import FILL_MEMBERS, fill_holdout  # noqa: E402
 from bench_real import table6_fills  # noqa: E402
 from ddp_lite.studies.real_suite import SUITE_HOLES, make_suite_case, suite_case_names  # noqa: E402
@@ -55,6 +61,8 @@ RESULTS = Path(__file__).resolve().parent / "results"
 HALF_A = ("Art", "Dolls", "Moebius", "Baby1", "Baby3", "Bowling2", "Adirondack", "Jadeplant", "Pipes", "Playtable")
 SHARES = tuple(round(0.1 * k, 1) for k in range(11))
 KIT_SHARE = 0.25
+REFINE_CONFIDENCES = (0.01, 0.1)
+REFINED_SHARES = (0.25, 0.5, 0.7)
 
 
 def half(case: str) -> str:
@@ -125,6 +133,14 @@ def rules(case, fit_depth: np.ndarray, heldout: np.ndarray, seed: int) -> dict[s
     f = chosen_share(fills_held[best])
     out["chosen fill + share"], out["chosen fill + share: f"] = score((1 - f) * fit_px + f * fills_all[best]), f
     out["chosen fill: name"] = best
+    for confidence in REFINE_CONFIDENCES:  # the fit as the target of the edge-aware solve complete runs at full size
+        refined = refine_full_resolution(case.depth, case.rgb, fit_depth, hole_confidence=confidence)
+        out[f"refined c={confidence:g}"] = score(case.fb / refined)
+    refined_px = case.fb / refine_full_resolution(case.depth, case.rgb, fit_depth)
+    for f in REFINED_SHARES:
+        out[f"refined + {f:g}"] = score((1 - f) * refined_px + f * mean_all)
+        mixed = case.fb / ((1 - f) * fit_px + f * mean_all)  # (H, W) metres
+        out[f"{f:g}, refined"] = score(case.fb / refine_full_resolution(case.depth, case.rgb, mixed))
     return out
 
 
@@ -145,7 +161,8 @@ def report(data, names, seeds, fits: Path, variant: str, size: str, out: Path) -
     write_bytes_atomic(out, "".join(json.dumps(r) + "\n" for r in rows).encode())
     fills = [k for k in rows[0] if k.startswith("fill ")]
     ratio_keys = ["fit", "kit"] + [f"fixed {f:.1f}" for f in SHARES[1:]] + [
-        "chosen share", "chosen fill", "chosen fill + share"]
+        "chosen share", "chosen fill", "chosen fill + share"] + [f"refined c={c:g}" for c in REFINE_CONFIDENCES] + [
+        f"refined + {f:g}" for f in REFINED_SHARES] + [f"{f:g}, refined" for f in REFINED_SHARES]
     table6 = [f"fill {n}" for n in table6_fills()]
     for r in rows:
         r["best"] = min(r[k] for k in fills)
