@@ -1,7 +1,7 @@
 """The kit's warp term of one fit, handed to the paper's loss as its ``warp_term`` (and its occlusion
-tests as its ``visibility``): the masks and costs are built here once per fit, from the config and the
-images, and applied each iteration. Each is off unless the config asks for it; with all off
-:func:`kit_warp_term` is None and the paper's Eq. 5 runs unchanged.
+tests as its ``visibility``): the masks and costs are built here once per fit, from the settings
+(:class:`WarpConfig`) and the images, and applied each iteration. Each is off unless the config asks for
+it; with all off :func:`kit_warp_term` is None and the paper's Eq. 5 runs unchanged.
 
 - ``warp_confidence``: per neighbour, the pixels whose photometric match singles out one depth
   (:mod:`ddp_lite.method.kit.warp_confidence`), from the images alone;
@@ -21,19 +21,51 @@ reprojection (Godard et al., ICCV 2019) does the same for self-supervised depth.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import torch
 from scipy import ndimage
 
+from ...core.checks import check_bool, check_choice, check_real
+from ...core.settings import Settings
 from ..paper.disparity import DisparityTransform
 from ..paper.losses import warp_loss
 from .visibility import Visibility
 from .warp_confidence import warp_confidence
-from .warp_cost import WarpCost, epipolar_directions, texture_weights
+from .warp_cost import WARP_COSTS, WarpCost, epipolar_directions, texture_weights
 
 WARP_COMBINATIONS = ("mean", "min")  # over the N neighbours: "mean" the paper's (Eq. 5), "min" per pixel
 
-__all__ = ["WARP_COMBINATIONS", "WarpTerm", "minimum_over_neighbours", "kit_warp_term", "occlusion_tests", "kit_warp_arguments", "warp_region"]
+__all__ = ["WARP_COMBINATIONS", "WarpConfig", "WarpTerm", "minimum_over_neighbours", "kit_warp_term", "occlusion_tests", "kit_warp_arguments", "warp_region"]
+
+
+@dataclass(frozen=True)
+class WarpConfig(Settings):
+    """The kit's changes to the warp term L_warp (6 fields; the defaults are the paper's Eq. 5)."""
+
+    warp_occlusion: bool = False  # skip pixels a nearer point hides from the neighbour (visibility.Visibility)
+    warp_confidence: bool = False  # only where the images single out one depth (warp_confidence)
+    warp_reach: float | None = None  # only on the unfitted pixels (holes, held-out) and within this many px of
+    # them, off the valid input L_disp pins (warp_region; None: every pixel, the paper)
+    warp_cost: str = "intensity"  # what L_warp compares: "intensity" (L1 + SSIM on colour, the paper), "census" (a
+    # soft census, no L1/SSIM), "gradient" (L1 on the images' differences + SSIM) or "census+intensity" (half each,
+    # the census at L1 + SSIM's size) (warp_cost)
+    warp_texture: bool = False  # weighted per pixel by the reference's change along the epipolar line
+    # (warp_cost.texture_weights: flat colour little)
+    warp_combine: str = "mean"  # over the N neighbours: "mean" (the paper's Eq. 5) or "min": per pixel the neighbour
+    # that agrees best (minimum_over_neighbours)
+
+    def validate(self) -> None:
+        check_choice(self.warp_cost, "config.warp_cost", WARP_COSTS)
+        check_choice(self.warp_combine, "config.warp_combine", WARP_COMBINATIONS)
+        for name in ("warp_occlusion", "warp_confidence", "warp_texture"):
+            check_bool(getattr(self, name), f"config.{name}")
+        if self.warp_combine == "min" and self.warp_texture:
+            raise ValueError("config.warp_texture weights each neighbour's cost over the image; with "
+                             "config.warp_combine='min' use one or the other")
+        if self.warp_reach is not None:
+            check_real(self.warp_reach, "config.warp_reach", 0.0)
 
 
 def warp_region(fit_mask: torch.Tensor, reach: float) -> torch.Tensor:
