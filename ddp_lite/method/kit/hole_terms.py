@@ -43,14 +43,14 @@ class HoleConfig(Settings):
 class HoleTerms:
     """The kit's hole terms of one fit: ``add(disparity, total, terms)`` adds each that is on.
 
-    ``config``: a :class:`~ddp_lite.method.config.FitConfig` (its hole-term fields);
+    ``config``: the terms' :class:`HoleConfig`;
     ``free`` (H, W) bool: the pixels no data term constrains (holes and held-out pixels);
     ``disparity`` (H, W) the input disparity, read outside ``free`` (only for ``step_reach``);
     ``rgb_t`` (1, 3, H, W) the colour the edges are measured on (None: no edges); ``rgb``
     (H, W, 3) NumPy, for the colorization affinities (None: no affinity term).
     """
 
-    def __init__(self, config, free: np.ndarray, rgb_t: torch.Tensor | None, rgb: np.ndarray | None,
+    def __init__(self, config: HoleConfig, free: np.ndarray, rgb_t: torch.Tensor | None, rgb: np.ndarray | None,
                  device, disparity: np.ndarray | None = None):
         self.config = config
         H, W = free.shape

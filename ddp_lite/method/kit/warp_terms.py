@@ -137,16 +137,16 @@ class WarpTerm:
         return torch.stack([self.cost(w, v, t) for w, v, t in zip(warped, valid, weights)]).mean()
 
 
-def kit_warp_term(config, transform: DisparityTransform, fit_mask: torch.Tensor, rgb: torch.Tensor | None,
-                  camera, neighbors, device) -> WarpTerm | None:
-    """The warp term ``config`` (a :class:`~ddp_lite.method.config.FitConfig`) asks for, for the paper's
-    loss (same arguments as :class:`~ddp_lite.method.paper.total_loss.PaperLoss`; no ``neighbors``: no
+def kit_warp_term(config: WarpConfig, lambda_w: float, transform: DisparityTransform, fit_mask: torch.Tensor,
+                  rgb: torch.Tensor | None, camera, neighbors, device) -> WarpTerm | None:
+    """The warp term ``config`` asks for, with the paper's SSIM share ``lambda_w``, for the paper's loss
+    (the other arguments as :class:`~ddp_lite.method.paper.total_loss.PaperLoss`'s; no ``neighbors``: no
     warp term); None where it asks for none of the kit's (the paper's Eq. 5)."""
     if not neighbors:
         return None
     # per neighbour, the pixels whose photometric match singles out one depth (1, 1, H, W) bool,
     # from the images alone, once per fit (it does not depend on the fit's depth)
-    keep = ([warp_confidence(rgb, image, camera, cam, transform.d_min, transform.d_max, config.lambda_w)
+    keep = ([warp_confidence(rgb, image, camera, cam, transform.d_min, transform.d_max, lambda_w)
              for image, cam in neighbors] if config.warp_confidence else None)
     if config.warp_reach is not None:  # the warp term only in the holes and a ring around them
         region = warp_region(fit_mask, config.warp_reach)
@@ -154,23 +154,23 @@ def kit_warp_term(config, transform: DisparityTransform, fit_mask: torch.Tensor,
     kind = config.warp_cost if config.warp_cost != "intensity" or config.warp_texture else None
     weights = ([texture_weights(rgb, epipolar_directions(camera, cam).to(device)) for _, cam in neighbors]
                if config.warp_texture else None)
-    combine = getattr(config, "warp_combine", "mean")
+    combine = config.warp_combine
     if keep is None and kind is None and combine == "mean":
         return None
-    return WarpTerm(config.lambda_w, keep, kind, weights, combine)
+    return WarpTerm(lambda_w, keep, kind, weights, combine)
 
 
-def occlusion_tests(config, camera, neighbors, device) -> list | None:
-    """One occlusion test per neighbour for the paper's warpers (``FitConfig.warp_occlusion``); None: none."""
+def occlusion_tests(config: WarpConfig, camera, neighbors, device) -> list | None:
+    """One occlusion test per neighbour for the paper's warpers (``config.warp_occlusion``); None: none."""
     if not config.warp_occlusion or not neighbors:
         return None
     return [Visibility(camera, cam, torch.float32, device) for _, cam in neighbors]
 
 
-def kit_warp_arguments(config, transform: DisparityTransform, fit_mask: torch.Tensor, rgb: torch.Tensor | None,
-                       camera, neighbors, device) -> dict:
+def kit_warp_arguments(config: WarpConfig, lambda_w: float, transform: DisparityTransform, fit_mask: torch.Tensor,
+                       rgb: torch.Tensor | None, camera, neighbors, device) -> dict:
     """The kit's share of the paper's warp term as :class:`~ddp_lite.method.paper.total_loss.PaperLoss`'s
     keyword arguments: ``warp_term`` (:func:`kit_warp_term`) and ``visibility`` (:func:`occlusion_tests`),
     each None where ``config`` asks for none (the paper's)."""
-    return {"warp_term": kit_warp_term(config, transform, fit_mask, rgb, camera, neighbors, device),
+    return {"warp_term": kit_warp_term(config, lambda_w, transform, fit_mask, rgb, camera, neighbors, device),
             "visibility": occlusion_tests(config, camera, neighbors, device)}
