@@ -105,7 +105,7 @@ def fit_blended(inputs: FitInputs, config: FitConfig, callback, init) -> DepthRe
     depth, transform = inputs.depth, inputs.transform
     weight, members = config.combination.blend_weight, blend_members(config)
     valid = np.isfinite(depth)
-    ring = validation_ring(valid, members[0].seed) if weight is None else np.zeros_like(valid)
+    ring = validation_ring(valid, members[0].paper.seed) if weight is None else np.zeros_like(valid)
     if weight is None and ((valid & ~ring).sum() < MIN_VALID_PIXELS or ring.sum() < MIN_VALID_PIXELS):
         return run_fit(inputs, members[0], callback=callback, init=init)  # too little to judge by (or fit without)
     held_out = replace(inputs, depth=np.where(ring, np.nan, depth).astype(np.float32)) if ring.any() else inputs

@@ -10,10 +10,9 @@ that reads it and validated there.
     tricks        Deep Image Prior's per-iteration tricks                                     (dip_tricks.py)
     run           how it runs, not what it computes: device, precision, memory, progress     (runtime/options.py)
 
-Each section is a frozen dataclass; ``config.holes.smoothness`` names a field by its section. Users and
-recipes pass fields by their own names, one name each: ``FitConfig(lr=1e-2, smoothness=1.0)``,
-``config.replace(lr=1e-2)``, ``FitConfig.for_profile("ci", iterations=50)``; :meth:`FitConfig.flat` gives
-them back by those names. Defaults are the paper's (supplement). A profile's sizes and schedules come from
+Each section is a frozen dataclass; ``config.holes.smoothness`` reads a field by its section. Users and
+recipes pass fields by their own names: ``FitConfig(lr=1e-2, smoothness=1.0)``, ``config.replace(lr=1e-2)``,
+``FitConfig.for_profile("ci", iterations=50)``; :meth:`FitConfig.flat` gives them back by those names. Defaults are the paper's (supplement). A profile's sizes and schedules come from
 :meth:`FitConfig.for_profile`, the one place a :class:`~ddp_lite.method.profiles.Profile` becomes a config;
 what differs between the DDP variants comes from :mod:`ddp_lite.method.paper.variants`. Rules that tie
 two sections together are :meth:`FitConfig.validate`'s.
@@ -52,9 +51,8 @@ class FitConfig:
 
     Use :meth:`for_profile` for the sizes and schedules of ``DDP_PROFILE``. Fields are given by their own
     names (``FitConfig(lr=1e-2)``, ``config.replace(lr=1e-2)``) and read by their sections
-    (``config.paper.lr``); a misspelt name raises instead of being ignored. NumPy integers given for
-    integer fields become Python ints. A field by its own name also reads and changes through
-    ``__getattr__``/``__setattr__`` (``config.lr``, ``config.lr = 1e-2``: a new section with it changed).
+    (``config.paper.lr``); ``config.lr``, ``config.lr = 1e-2`` and a misspelt name raise ``AttributeError``
+    saying what to write instead. NumPy integers given for integer fields become Python ints.
 
     Example:
         >>> config = FitConfig(lr=1e-2, smoothness=1.0)
@@ -84,18 +82,15 @@ class FitConfig:
             given = settings.get(section) or cls()
             object.__setattr__(self, section, dataclasses.replace(given, **changes[section]))
 
-    def __getattr__(self, name):
-        """A field by its own name (``config.lr``): only names that are no attribute come here."""
-        section = SECTION_OF.get(name)
-        if section is None:
-            raise AttributeError(f"FitConfig has no field {name!r}" + _did_you_mean(name))
-        return getattr(object.__getattribute__(self, section), name)
+    def __getattr__(self, name):  # only names that are no attribute come here: say where the field is
+        if name in SECTION_OF:
+            raise AttributeError(f"FitConfig reads {name!r} by its section: config.{SECTION_OF[name]}.{name}")
+        raise AttributeError(f"FitConfig has no field {name!r}" + _did_you_mean(name))
 
-    def __setattr__(self, name, value):
-        section = SECTION_OF.get(name)
-        if section is not None:  # config.lr = 1e-2: the section is frozen, so a new one with that field changed
-            name, value = section, dataclasses.replace(getattr(self, section), **{name: value})
-        elif name not in SECTIONS:  # a typo must not pass in silence
+    def __setattr__(self, name, value):  # a whole section may be set; a field, or a typo, must not pass in silence
+        if name in SECTION_OF:
+            raise AttributeError(f"FitConfig changes {name!r} by a copy: config = config.replace({name}=...)")
+        if name not in SECTIONS:
             raise AttributeError(f"FitConfig has no field {name!r}" + _did_you_mean(name))
         object.__setattr__(self, name, value)
 

@@ -1,4 +1,4 @@
-"""Blends of the kit's fit, the paper's and a classical fill (``FitConfig.blend_paper``, ``blend_fill``;
+"""Blends of the kit's fit, the paper's and a classical fill (``CombinationConfig.blend_paper``, ``blend_fill``;
 the ``photo`` recipe). Not in the paper.
 
 The two recipes err in different places. On rendered scenes the kit's hole terms and inputs fill
@@ -53,8 +53,8 @@ from scipy import ndimage
 from ...core.checks import check_bool, check_int, check_real
 from ...core.settings import Settings
 
-__all__ = ["CombinationConfig", "BLEND_WEIGHTS", "FILL_SHARES", "validation_ring", "best_weight", "ring_width", "fill_disparity",
-           "FILL_MEMBERS", "fill_holdout", "best_fill_share"]
+__all__ = ["CombinationConfig", "BLEND_WEIGHTS", "FILL_SHARES", "validation_ring", "best_weight", "ring_width",
+           "fill_disparity", "FILL_MEMBERS", "fill_holdout", "best_fill_share"]
 
 BLEND_WEIGHTS = (0.0, 0.25, 0.5, 0.75, 1.0)  # the kit fit's weight; 0 is the paper's fit alone
 RING_SHARE = 0.5  # the share of the ring held out: the rest keeps the holes' edges where they are

@@ -1,4 +1,4 @@
-"""Ensembles: the mean disparity of K fits from seeds seed, seed+1, ... (``FitConfig.ensemble = K``).
+"""Ensembles: the mean disparity of K fits from seeds seed, seed+1, ... (``CombinationConfig.ensemble = K``).
 
     Z = 1/K Σ_k Z_k,   I = 1/K Σ_k I_k,   D = depth of Z
 

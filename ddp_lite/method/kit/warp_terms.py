@@ -69,7 +69,7 @@ class WarpConfig(Settings):
 
 
 def warp_region(fit_mask: torch.Tensor, reach: float) -> torch.Tensor:
-    """(1, 1, H, W) bool: the pixels the warp term keeps with ``FitConfig.warp_reach`` (the kit's, not the
+    """(1, 1, H, W) bool: the pixels the warp term keeps with ``WarpConfig.warp_reach`` (the kit's, not the
     paper's): those ``fit_mask`` (1, 1, H, W) bool leaves unfitted (holes, held-out pixels) and every pixel
     within ``reach`` px of one (Euclidean distance between pixel centres, so ``reach`` 0 is the holes alone,
     1 adds their 4-neighbours).
