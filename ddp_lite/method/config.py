@@ -1,21 +1,23 @@
 """FitConfig: everything a fit needs besides the data, in eight sections, each defined beside the code
 that reads it and validated there.
 
-    paper         the paper's settings: net, schedule, loss shares, γ, disparity range, seed   (paper/config.py)
-    net_inputs    the kit's net inputs: coordinates, the colour image, a classical fill        (kit/net_inputs.py)
-    holes         the kit's hole terms and their edge weights                                 (kit/hole_terms.py)
-    warp          the kit's changes to the warp term                                          (kit/warp_terms.py)
-    combination   what is averaged or blended into the answer: an ensemble, the paper's fit, a fill (kit/blend.py)
-    stopping      auto-stop on held-out pixels                                                (stopping.py)
-    tricks        Deep Image Prior's per-iteration tricks                                     (dip_tricks.py)
-    run           how it runs, not what it computes: device, precision, memory, progress     (runtime/options.py)
+    paper         the paper's settings: net, schedule, loss shares, γ, disparity range, seed  (paper/config.py)
+    net_inputs    the kit's net inputs: the coordinates, the colour image, a classical fill   (kit/net_inputs.py)
+    holes         the kit's hole terms and their edge weights                                (kit/hole_terms.py)
+    warp          the kit's changes to the warp term                                         (kit/warp_terms.py)
+    combination   what is averaged or blended into the answer: an ensemble, the paper's fit,
+                  a classical fill                                                           (kit/blend.py)
+    stopping      auto-stop on held-out pixels                                               (stopping.py)
+    tricks        Deep Image Prior's per-iteration tricks                                    (dip_tricks.py)
+    run           how it runs, not what it computes: device, precision, memory, progress    (runtime/options.py)
 
 Each section is a frozen dataclass; ``config.holes.smoothness`` reads a field by its section. Users and
 recipes pass fields by their own names: ``FitConfig(lr=1e-2, smoothness=1.0)``, ``config.replace(lr=1e-2)``,
-``FitConfig.for_profile("ci", iterations=50)``; :meth:`FitConfig.flat` gives them back by those names. Defaults are the paper's (supplement). A profile's sizes and schedules come from
+``FitConfig.for_profile("ci", iterations=50)``; :meth:`FitConfig.flat` gives them back by those names.
+Defaults are the paper's (supplement). A profile's sizes and schedules come from
 :meth:`FitConfig.for_profile`, the one place a :class:`~ddp_lite.method.profiles.Profile` becomes a config;
-what differs between the DDP variants comes from :mod:`ddp_lite.method.paper.variants`. Rules that tie
-two sections together are :meth:`FitConfig.validate`'s.
+what differs between the DDP variants comes from :mod:`ddp_lite.method.paper.variants`. The rules that
+tie two sections together are :meth:`FitConfig.validate`'s.
 """
 from __future__ import annotations
 
