@@ -75,8 +75,9 @@ def main() -> None:
                                         config=long_config, gt_depth=case.scored_gt, transform=case.transform)
                 h = result.history
                 its, heldout, hole = h["eval_iteration"], h["heldout"], 100 * h["hole_rmse"]
-                kept, stopped = replay(heldout, config.patience, config.eval_every, config.plateau_decays)
-                plain, _ = replay(heldout, config.patience, config.eval_every, 0)
+                stopping = config.stopping
+                kept, stopped = replay(heldout, stopping.patience, stopping.eval_every, stopping.plateau_decays)
+                plain, _ = replay(heldout, stopping.patience, stopping.eval_every, 0)
                 oracle = int(np.argmin(hole))
                 near = 100 * np.mean(hole[its >= 100] <= 1.05 * hole[oracle])
                 rows.append(dict(scene=scene, variant=variant, seed=seed, oracle=hole[oracle], oracle_it=its[oracle],
@@ -85,10 +86,10 @@ def main() -> None:
                 print(f"  ran {scene}/{variant} seed {seed}: {result.iterations} it in {result.seconds:.0f} s "
                       f"({rows[-1]['s_per_it']:.3f} s/it)", flush=True)
     print(f"\nhole RMSE ×100 (normalised disparity), {profile.size[0]}×{profile.size[1]}, lr {profile.lr:g}, "
-          f"patience {config.patience}, "
+          f"patience {config.stopping.patience}, "
           + ("constant lr, stop at the first plateau, " if args.constant_lr else
-             f"{config.plateau_decays} lr cut(s) ×{config.lr_gamma:g} then stop, ") +
-          f"held-out {config.holdout_fraction:.0%} of the valid pixels")
+             f"{config.stopping.plateau_decays} lr cut(s) ×{config.paper.lr_gamma:g} then stop, ") +
+          f"held-out {config.stopping.holdout_fraction:.0%} of the valid pixels")
     head = (f"{'scene':<7} {'variant':<10} {'seed':>4} {'oracle':>7} {'@it':>5} {'kept':>7} {'@it':>5} {'gap %':>6} "
             f"{'stop it':>7} {'plain gap %':>11} {'final gap %':>11} {'near %':>6}")
     print(head)

@@ -55,7 +55,7 @@ def main() -> None:
     config = FitConfig.for_profile(profile, variant="rgbd+warp", progress=False)
     quiet = lambda *_: None  # noqa: E731
     print(f"{platform.processor() or platform.machine()}; {sequence}; profile '{profile.name}', "
-          f"{config.iterations} iterations per view, one thread per fit")
+          f"{config.paper.iterations} iterations per view, one thread per fit")
 
     with torch_threads(1):  # one view at a time
         start = time.perf_counter()

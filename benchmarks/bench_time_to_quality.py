@@ -162,7 +162,7 @@ def main() -> None:
         for k in (1, 2):
             scratch = fit(views[k], config)
             warm = fit(views[k], config, init=previous)
-            gentle = fit(views[k], config.replace(lr=config.lr / 10, lr_milestones=()), init=previous)
+            gentle = fit(views[k], config.replace(lr=config.paper.lr / 10, lr_milestones=()), init=previous)
             target = tol * min(best(scratch), best(warm), best(gentle))
             print(f"\nview {k}: best {target / tol:.2f}, target {target:.2f}\n{HEAD}")
             print(row("scratch", scratch, target))

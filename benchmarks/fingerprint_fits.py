@@ -53,11 +53,10 @@ def configs():
         for recipe in ("kit", "paper"):
             for variant in ("d", "rgbd", "rgbd+warp"):
                 config = FitConfig.for_profile(profile, variant=variant, recipe=recipe, **small)
-                config.channels = config.channels[:3]  # 32×32 takes at most 3 levels here
-                config.lr_milestones = (12, 16)
+                # 32×32 takes at most 3 levels here
+                config = config.replace(channels=config.paper.channels[:3], lr_milestones=(12, 16))
                 yield f"{profile}/{recipe}/{variant}", variant, config, False
-    base = FitConfig.for_profile("class", variant="rgbd+warp", recipe="kit", **small)
-    base.channels = (8, 16, 32)
+    base = FitConfig.for_profile("class", variant="rgbd+warp", recipe="kit", **small).replace(channels=(8, 16, 32))
     yield "levers: reach+rgb edges+bf16", "rgbd+warp", base.replace(flatness_reach=4.0, edge_guide="rgb", bf16=True), False
     yield "levers: fill+affinity", "rgbd", base.replace(fill_input=1.0, affinity=0.5, bf16=False), False
     yield "levers: jitter+averaging+cosine", "rgbd+warp", base.replace(reg_noise_std=0.03, average_outputs=0.9,

@@ -119,9 +119,9 @@ def run(args) -> None:
     profile = profile_from_args(args)
     factor = factor_for_profile(profile)
     planned = configs(profile, args.recipes, args.variants, args.seed)
-    full = next(iter(planned.values())).iterations
-    milestones = next(iter(planned.values())).lr_milestones
-    device = resolve_device(next(iter(planned.values())))
+    full = next(iter(planned.values())).paper.iterations
+    milestones = next(iter(planned.values())).paper.lr_milestones
+    device = resolve_device(next(iter(planned.values())).run)
     if args.table6:  # the paper's own Table 6 scenes, pooled to the profile's size
         names = [f"table6/{scene}" for scene in TABLE6_SCENES]
         cases = [(case, case.fb) for case in (table6_case(s, profile, args.seed, args.data) for s in TABLE6_SCENES)]

@@ -44,11 +44,12 @@ def record(lane: int, lanes: int, out: str) -> None:
             result = complete_depth(case.rgb, case.depth, case.camera,
                                         case.neighbors if variant == "rgbd+warp" else (), variant=variant, config=config)
             history = result.history
-            rows.write(json.dumps(dict(case=name, variant=variant, seed=seed, cap=config.iterations,
+            rows.write(json.dumps(dict(case=name, variant=variant, seed=seed, cap=config.paper.iterations,
                                        ran=int(result.iterations), cuts=[int(i) for i in history["lr_decay_iteration"]],
                                        eval_iteration=[int(i) for i in history["eval_iteration"]],
-                                       heldout=[float(e) for e in history["heldout"]], patience=config.patience,
-                                       eval_every=config.eval_every, decays=config.plateau_decays,
+                                       heldout=[float(e) for e in history["heldout"]],
+                                       patience=config.stopping.patience, eval_every=config.stopping.eval_every,
+                                       decays=config.stopping.plateau_decays,
                                        seconds=time.perf_counter() - start)) + "\n")
             rows.flush()
 

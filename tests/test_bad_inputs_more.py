@@ -414,14 +414,17 @@ def test_neighbour_without_parallax_is_warned():
 
 
 def test_conventions_that_are_accepted():
-    """NumPy integer seeds are seeds; neighbors=None means none; a slotted config's fields still change."""
+    """NumPy integer seeds are seeds; neighbors=None means none; a field changes by a copy, read by its section."""
     config = tiny(seed=np.int64(3))
-    assert type(config.seed) is int
+    assert type(config.paper.seed) is int
     a = complete_depth(rgb(), depth(), variant="d", config=config, neighbors=None)
     b = complete_depth(rgb(), depth(), variant="d", config=tiny(seed=3))
     np.testing.assert_array_equal(a.depth, b.depth)
-    config.lr = 1e-2  # a field: allowed (notebooks do this)
-    assert config.lr == 1e-2
+    assert config.replace(lr=1e-2).paper.lr == 1e-2
+    with pytest.raises(AttributeError, match=r"config\.replace\(lr="):
+        config.lr = 1e-2
+    with pytest.raises(AttributeError, match=r"config\.paper\.lr"):
+        config.lr
     # the smallest size the ci net takes runs: the SSIM window (11) beats its down-sampling factor + 1 (9)
     ci = FitConfig.for_profile("ci", variant="d", progress=False, iterations=1)
     complete_depth(rgb(11, 11), np.full((11, 11), 2.0, np.float32), variant="d", config=ci)

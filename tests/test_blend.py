@@ -119,7 +119,8 @@ def test_the_photo_recipe_is_the_mean_of_the_kit_fit_the_paper_fit_and_the_two_f
     finally:
         torch.set_num_threads(threads)
     fill = two_fills_disparity(depth, rgb, blended.transform)
-    assert photo.blend_paper and photo.blend_weight == 0.5 and photo.blend_fill == pytest.approx(1 / 3)
+    blend = photo.combination
+    assert blend.blend_paper and blend.blend_weight == 0.5 and blend.blend_fill == pytest.approx(1 / 3)
     assert blended.history["blend_weight"] == 0.5 and blended.history["blend_fill"] == pytest.approx(1 / 3)
     assert not np.array_equal(kit.disparity, paper.disparity)
     assert np.allclose(blended.disparity, (kit.disparity + paper.disparity + fill) / 3, atol=1e-6)
@@ -203,7 +204,7 @@ def test_blend_fill_none_chooses_the_share_on_depth_held_out_of_the_fit():
     chosen = complete_depth(rgb, depth, variant="rgbd", config=base.replace(blend_fill=None))
     assert np.array_equal(depth, given, equal_nan=True)  # the caller's array is untouched
     # by hand: the blobs held out of the fit, the fill of what is left, the share from the blobs
-    held = fill_holdout(np.isfinite(depth), seed=base.seed)
+    held = fill_holdout(np.isfinite(depth), seed=base.paper.seed)
     held_out = np.where(held, np.nan, depth)
     alone = complete_depth(rgb, held_out, variant="rgbd", config=base, transform=chosen.transform)
     target = chosen.transform.to_disparity(depth)

@@ -266,7 +266,7 @@ def test_complete_raw_writes_the_nets_output_with_no_fill_mixed_in(tmp_path, mon
     shares, real_complete_depth = [], complete.complete_depth
 
     def recording(*args, **kwargs):  # the real fit, the fill share of the command's config noted
-        shares.append(kwargs["config"].blend_fill if "config" in kwargs else args[5].blend_fill)
+        shares.append((kwargs["config"] if "config" in kwargs else args[5]).combination.blend_fill)
         return real_complete_depth(*args, **kwargs)
 
     monkeypatch.setattr(complete, "complete_depth", recording)

@@ -9,8 +9,8 @@ import torch
 from ddp_lite.interface.cli import build_parser
 from ddp_lite.method import profiles
 from ddp_lite.method.kit import recipes
-from ddp_lite.method.config import FitConfig
 from ddp_lite.method.runtime.device import resolve_device
+from ddp_lite.method.runtime.options import RunOptions
 
 
 def _options(flag):
@@ -54,4 +54,4 @@ def test_the_stated_device_default_is_what_a_fit_picks(monkeypatch, cuda, mps):
         order = re.findall(r"\b(cuda|mps|cpu)\b", stated)
         assert order[-1] == "cpu", command
         expected = next(device for device in order if present[device])
-        assert resolve_device(FitConfig(device=None)).type == expected, (command, stated)
+        assert resolve_device(RunOptions(device=None)).type == expected, (command, stated)

@@ -267,13 +267,14 @@ def test_for_profile_copies_every_shared_field_and_derives_the_rest():
         for variant in ("d", "rgbd+warp"):
             config = FitConfig.for_profile(profile, variant=variant)
             iterations = profile.iterations_depth_only if variant == "d" else profile.iterations
-            assert config.iterations == iterations and config.channels == profile.channels
-            assert config.lr_milestones == profile.milestones(iterations)
+            assert config.paper.iterations == iterations and config.paper.channels == profile.channels
+            assert config.paper.lr_milestones == profile.milestones(iterations)
+            flat = config.flat()
             for field in dataclasses.fields(profile):
-                if hasattr(config, field.name) and field.name not in ("channels", "iterations", "lr_milestones"):
-                    assert getattr(config, field.name) == getattr(profile, field.name), field.name
-    assert FitConfig.for_profile("ci", net="skip").channels == PROFILES["ci"].skip_channels
-    assert FitConfig.for_profile("ci", lr=0.5).lr == 0.5  # overrides win
+                if field.name in flat and field.name not in ("channels", "iterations", "lr_milestones"):
+                    assert flat[field.name] == getattr(profile, field.name), field.name
+    assert FitConfig.for_profile("ci", net="skip").paper.channels == PROFILES["ci"].skip_channels
+    assert FitConfig.for_profile("ci", lr=0.5).paper.lr == 0.5  # overrides win
 
 
 def test_the_front_door_lists_what_users_call_and_hands_on_nothing_else():

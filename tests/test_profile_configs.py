@@ -6,15 +6,27 @@ import pytest
 from ddp_lite.method.config import FitConfig
 from ddp_lite.method.profiles import PROFILES
 
-DEFAULTS = dict(net='unet', channels=None, down='stride', up='bilinear', pad='reflect', noise_channels=16, net_input='noise',
-                image_input=0.0, image_blur=1.0, fill_input=0.0, lr=5e-05, schedule='step', iterations=None,
-                lr_milestones=(12000, 15000), lr_gamma=0.01, lambda_z=0.8, lambda_i=0.5, lambda_w=0.5,
-                gammas=None, warp_occlusion=False, warp_confidence=False, warp_reach=None, warp_cost='intensity', warp_texture=False, warp_combine='mean',
-                reg_noise_std=0.0, average_outputs=0.0, ensemble=1, blend_paper=False, blend_weight=0.5, blend_fill=0.0, smoothness=0.0,
-                smoothness_edge=10.0, edge_guide='grey', flatness=0.0, affinity=0.0, flatness_reach=None, step_reach=None,
-                disparity_margin=1.25, auto_stop=False, holdout_fraction=0.05, holdout='pixels', patience=200,
-                plateau_decays=0, eval_every=10, seed=0, device=None, bf16=False, channels_last=False,
-                progress=True, callback_every=0, max_memory_gb=None)
+DEFAULTS = dict(
+    # paper
+    net='unet', channels=None, down='stride', up='bilinear', pad='reflect', noise_channels=16, lr=5e-05,
+    schedule='step', iterations=None, lr_milestones=(12000, 15000), lr_gamma=0.01, lambda_z=0.8, lambda_i=0.5,
+    lambda_w=0.5, gammas=None, disparity_margin=1.25, seed=0,
+    # net_inputs
+    net_input='noise', image_input=0.0, image_blur=1.0, fill_input=0.0,
+    # holes
+    smoothness=0.0, smoothness_edge=10.0, edge_guide='grey', flatness=0.0, affinity=0.0, flatness_reach=None,
+    step_reach=None,
+    # warp
+    warp_occlusion=False, warp_confidence=False, warp_reach=None, warp_cost='intensity', warp_texture=False,
+    warp_combine='mean',
+    # combination
+    ensemble=1, blend_paper=False, blend_weight=0.5, blend_fill=0.0,
+    # stopping
+    auto_stop=False, holdout_fraction=0.05, holdout='pixels', patience=200, plateau_decays=0, eval_every=10,
+    # tricks
+    reg_noise_std=0.0, average_outputs=0.0,
+    # run
+    device=None, bf16=False, channels_last=False, max_memory_gb=None, progress=True, callback_every=0)
 
 # (profile, recipe, variant, net) → the fields that differ from DEFAULTS
 EXPECTED = {
@@ -160,3 +172,11 @@ def test_every_profile_recipe_variant_and_net_builds_its_pinned_config(key, monk
 @pytest.mark.parametrize("name", sorted(PROFILES))
 def test_a_notebooks_first_line_is_unchanged(name):
     assert PROFILES[name].describe() == DESCRIBED[name]
+
+
+@pytest.mark.parametrize("key", [("ci", "kit", "rgbd+warp", "unet"), ("class", "paper", "d", "skip")])
+def test_a_config_and_its_fields_by_name_make_each_other(key):
+    profile, recipe, variant, net = key
+    config = FitConfig.for_profile(profile, variant=variant, recipe=recipe, net=net)
+    assert FitConfig(**config.flat()) == config
+    assert list(config.flat()) == list(DEFAULTS)  # one flat order, section by section

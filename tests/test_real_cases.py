@@ -165,7 +165,7 @@ def test_compare_fills_builds_photo_from_the_kit_and_paper_fits_and_matches_phot
                  for recipe in ("kit", "photo")}
     finally:
         torch.set_num_threads(threads)
-    assert len(fits) == 2 and all(config.blend_fill == 0 for config in fits)  # kit's and paper's fits, no third
+    assert len(fits) == 2 and all(config.combination.blend_fill == 0 for config in fits)  # kit's and paper's, no third
     for recipe, px in alone.items():  # each recipe as complete_depth computes it on its own
         assert np.allclose(out[f"DDP {recipe}"], px, rtol=1e-5, atol=1e-5), recipe
     assert not np.allclose(out["DDP photo"], out["DDP kit"], atol=1e-3)

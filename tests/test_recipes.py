@@ -13,11 +13,12 @@ from ddp_lite.method.kit.recipes import RECIPES, get_recipe
 @pytest.mark.parametrize("profile", sorted(PROFILES))
 def test_the_paper_recipe_adds_nothing_at_any_size(profile):
     config = FitConfig.for_profile(profile, variant="rgbd", recipe="paper")
-    assert (config.smoothness, config.flatness, config.image_input, config.fill_input) == (0.0, 0.0, 0.0, 0.0)
-    assert config.net_input == "noise" and config.noise_channels == 16  # the paper's 16 noise channels
+    assert (config.holes.smoothness, config.holes.flatness) == (0.0, 0.0)
+    assert (config.net_inputs.image_input, config.net_inputs.fill_input) == (0.0, 0.0)
+    assert config.net_inputs.net_input == "noise" and config.paper.noise_channels == 16  # the paper's 16 noise channels
     size_and_budget = ("channels", "iterations", "lr", "lr_milestones", "auto_stop", "patience")
     kit = FitConfig.for_profile(profile, variant="rgbd", recipe="kit")
-    assert all(getattr(config, name) == getattr(kit, name) for name in size_and_budget)  # the profile decides these
+    assert all(config.flat()[name] == kit.flat()[name] for name in size_and_budget)  # the profile decides these
 
 
 def test_the_paper_recipe_optimises_only_the_papers_three_terms():
@@ -36,9 +37,9 @@ def test_the_paper_recipe_optimises_only_the_papers_three_terms():
 
 def test_ddp_recipe_selects_the_default_and_bad_names_are_refused(monkeypatch):
     monkeypatch.setenv("DDP_RECIPE", "paper")
-    assert FitConfig.for_profile("class", variant="rgbd").smoothness == 0.0
+    assert FitConfig.for_profile("class", variant="rgbd").holes.smoothness == 0.0
     monkeypatch.setenv("DDP_RECIPE", "kit")
-    assert FitConfig.for_profile("class", variant="rgbd").smoothness == RECIPES["kit"].at["class"]["smoothness"] > 0
+    assert FitConfig.for_profile("class", variant="rgbd").holes.smoothness == RECIPES["kit"].at["class"]["smoothness"] > 0
     monkeypatch.setenv("DDP_RECIPE", "papr")
     with pytest.raises(ValueError, match="DDP_RECIPE must be one of"):
         FitConfig.for_profile("class", variant="rgbd")
@@ -73,11 +74,11 @@ def test_the_loss_equation_marks_exactly_the_kits_additions():
 
 def test_a_colour_guided_fill_never_enters_a_depth_only_result():
     from ddp_lite.method.config import FitConfig
-    assert FitConfig.for_profile("class", variant="rgbd", recipe="kit").blend_fill == 0.25
-    assert FitConfig.for_profile("class", variant="d", recipe="kit").blend_fill == 0.0
-    assert FitConfig.for_profile("class", variant="d", recipe="photo").blend_fill == 0.0
-    assert FitConfig.for_profile("ci", variant="rgbd", recipe="kit").blend_fill == 0.25  # as at class
-    assert FitConfig.for_profile("ci", variant="d", recipe="kit").blend_fill == 0.0
+    assert FitConfig.for_profile("class", variant="rgbd", recipe="kit").combination.blend_fill == 0.25
+    assert FitConfig.for_profile("class", variant="d", recipe="kit").combination.blend_fill == 0.0
+    assert FitConfig.for_profile("class", variant="d", recipe="photo").combination.blend_fill == 0.0
+    assert FitConfig.for_profile("ci", variant="rgbd", recipe="kit").combination.blend_fill == 0.25  # as at class
+    assert FitConfig.for_profile("ci", variant="d", recipe="kit").combination.blend_fill == 0.0
 
 
 @pytest.mark.parametrize("profile", ["ci", "class", "paper"])

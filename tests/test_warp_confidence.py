@@ -83,7 +83,7 @@ def test_the_sweep_spans_the_range_at_the_step_asked_for():
 
 def test_the_fit_gets_no_pull_from_the_warp_term_where_it_is_not_confident():
     from ddp_lite.method.paper.disparity import DisparityTransform
-    from ddp_lite.method.kit.warp_terms import kit_warp_arguments, kit_warp_term
+    from ddp_lite.method.kit.warp_terms import WarpConfig, kit_warp_arguments, kit_warp_term
     from ddp_lite.method.paper.total_loss import PaperLoss
 
     d = 6
@@ -94,9 +94,9 @@ def test_the_fit_gets_no_pull_from_the_warp_term_where_it_is_not_confident():
     transform = DisparityTransform(D_MIN, D_MAX)
     target, mask = torch.zeros(1, 1, HEIGHT, WIDTH), torch.zeros(1, 1, HEIGHT, WIDTH, dtype=torch.bool)
     config = FitConfig(warp_confidence=True)
-    loss = PaperLoss("rgbd+warp", config, transform, target, mask, rgb, left, [(nbr, right)],
-                     **kit_warp_arguments(config, transform, mask, rgb, left, [(nbr, right)], "cpu"))
-    assert kit_warp_term(FitConfig(), transform, mask, rgb, left, [(nbr, right)], "cpu") is None  # the paper's term
+    loss = PaperLoss("rgbd+warp", config.paper, transform, target, mask, rgb, left, [(nbr, right)],
+                     **kit_warp_arguments(config.warp, config.paper.lambda_w, transform, mask, rgb, left, [(nbr, right)], "cpu"))
+    assert kit_warp_term(WarpConfig(), 0.5, transform, mask, rgb, left, [(nbr, right)], "cpu") is None  # the paper's term
     confident = loss.warp_term.keep[0]
     disparity = torch.full((1, 1, HEIGHT, WIDTH), 0.4, requires_grad=True)
     _, terms = loss(disparity, rgb.clone())

@@ -11,7 +11,7 @@ from scipy import ndimage
 from ddp_lite.method.config import FitConfig
 from ddp_lite.method.paper.disparity import DisparityTransform
 from ddp_lite.method.paper.losses import ConstantTarget, warp_loss
-from ddp_lite.method.kit.warp_terms import kit_warp_arguments, kit_warp_term
+from ddp_lite.method.kit.warp_terms import WarpConfig, kit_warp_arguments, kit_warp_term
 from ddp_lite.method.paper.total_loss import PaperLoss
 from ddp_lite.method.kit.recipes import describe_method
 from ddp_lite.method.paper.warp import Warper
@@ -117,12 +117,12 @@ def test_paper_loss_with_another_cost_or_the_weights_pulls_the_depth_and_the_def
     mask = torch.ones(1, 1, HEIGHT, WIDTH, dtype=torch.bool)
     mask[..., 10:18, 20:28] = False
     target = torch.full((1, 1, HEIGHT, WIDTH), 0.4)
-    assert kit_warp_term(FitConfig(), transform, mask, reference, left, [(neighbour, right)], "cpu") is None
+    assert kit_warp_term(WarpConfig(), 0.5, transform, mask, reference, left, [(neighbour, right)], "cpu") is None
     for settings in (dict(warp_cost="census"), dict(warp_cost="gradient"), dict(warp_cost="census+intensity"),
                      dict(warp_texture=True)):
         config, pairs = FitConfig(**settings), [(neighbour, right)]
-        loss = PaperLoss("rgbd+warp", config, transform, target, mask, reference, left, pairs,
-                         **kit_warp_arguments(config, transform, mask, reference, left, pairs, "cpu"))
+        loss = PaperLoss("rgbd+warp", config.paper, transform, target, mask, reference, left, pairs,
+                         **kit_warp_arguments(config.warp, config.paper.lambda_w, transform, mask, reference, left, pairs, "cpu"))
         disparity = torch.full((1, 1, HEIGHT, WIDTH), 0.4, requires_grad=True)
         _, terms = loss(disparity, reference.clone())
         terms["warp"].backward()
@@ -131,7 +131,7 @@ def test_paper_loss_with_another_cost_or_the_weights_pulls_the_depth_and_the_def
 
 def test_the_options_are_checked_off_by_default_and_named_as_the_kits():
     config = FitConfig()
-    assert config.warp_cost == "intensity" and config.warp_texture is False
+    assert config.warp.warp_cost == "intensity" and config.warp.warp_texture is False
     FitConfig(warp_cost="census", warp_texture=True).validate()
     with pytest.raises(ValueError, match="config.warp_cost"):
         FitConfig(warp_cost="ncc").validate()

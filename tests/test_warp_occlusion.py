@@ -76,8 +76,8 @@ def test_warp_occlusion_reaches_the_fit_and_is_checked():
     target, mask, rgb = torch.zeros(1, 1, HEIGHT, WIDTH), torch.ones(1, 1, HEIGHT, WIDTH, dtype=torch.bool), torch.rand(1, 3, HEIGHT, WIDTH)
     for flag in (False, True):
         config, pairs = FitConfig(warp_occlusion=flag), [(torch.rand(1, 3, HEIGHT, WIDTH), right)]
-        loss = PaperLoss("rgbd+warp", config, transform, target, mask, rgb, left, pairs,
-                         **kit_warp_arguments(config, transform, mask, rgb, left, pairs, "cpu"))
+        loss = PaperLoss("rgbd+warp", config.paper, transform, target, mask, rgb, left, pairs,
+                         **kit_warp_arguments(config.warp, config.paper.lambda_w, transform, mask, rgb, left, pairs, "cpu"))
         assert (loss.warpers[0].visibility is not None) is flag
     with pytest.raises(TypeError, match="config.warp_occlusion"):
         FitConfig(warp_occlusion="yes").validate()

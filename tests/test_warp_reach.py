@@ -50,8 +50,8 @@ def test_the_warp_term_passes_no_gradient_to_valid_pixels_outside_the_region():
     gradients = {}
     for reach in (None, 2.0):
         config = FitConfig(warp_reach=reach)
-        loss = PaperLoss("rgbd+warp", config, transform, target, mask, rgb, left, [(nbr, right)],
-                         **kit_warp_arguments(config, transform, mask, rgb, left, [(nbr, right)], "cpu"))
+        loss = PaperLoss("rgbd+warp", config.paper, transform, target, mask, rgb, left, [(nbr, right)],
+                         **kit_warp_arguments(config.warp, config.paper.lambda_w, transform, mask, rgb, left, [(nbr, right)], "cpu"))
         assert (loss.warp_term is None) is (reach is None)
         disparity = torch.full((1, 1, HEIGHT, WIDTH), 0.4, requires_grad=True)
         _, terms = loss(disparity, rgb.clone())

@@ -265,7 +265,8 @@ def _complete(args, writers, staged, start) -> int:
     holes = ~np.isfinite(depth)
     if not holes.any():
         raise ValueError(f"--depth {args.depth!r} has no holes (0, inf or NaN pixels): nothing to fill")
-    if os.path.splitext(args.out)[1].lower() == ".png" and np.nanmax(depth, initial=0) * config.disparity_margin > PNG_MAX_METRES:
+    farthest = np.nanmax(depth, initial=0) * config.paper.disparity_margin
+    if os.path.splitext(args.out)[1].lower() == ".png" and farthest > PNG_MAX_METRES:
         raise ValueError(f"--out: a 16-bit millimetre PNG holds at most {PNG_MAX_METRES} m, and this depth reaches "
                          f"{np.nanmax(depth):.1f} m; use .npy, .pfm or .exr")
     max_side = args.max_side or max(profile.size)
@@ -273,7 +274,7 @@ def _complete(args, writers, staged, start) -> int:
     small_rgb, small_depth = shrink(rgb, depth, shape)
     # what the fit will check, checked here with the flags' names: enough valid depth, a size the net can take
     check_depth(small_depth, f"--depth {args.depth!r} (at the working size {shape[0]}×{shape[1]})")
-    check_input_size(config.net, config.channels, shape[0], shape[1],
+    check_input_size(config.paper.net, config.paper.channels, shape[0], shape[1],
                      name=f"--depth {args.depth!r} (at the working size, --max-side {max_side})")
     refine = not (args.raw or args.no_refine) and shape != depth.shape
     print(f"{depth.shape[0]}×{depth.shape[1]} (H×W), {holes.mean():.1%} holes; fitting at "

@@ -54,9 +54,9 @@ def demo_command(args) -> int:
     config = FitConfig.for_profile(profile, variant=VARIANT, recipe=args.recipe, iterations=args.iterations,
                                    seed=args.seed, device=args.device, max_memory_gb=args.max_memory_gb)
     config.validate()
-    check_input_size(config.net, config.channels, *profile.size, name="--size")  # the net's smallest input
+    check_input_size(config.paper.net, config.paper.channels, *profile.size, name="--size")  # the net's smallest input
     # before the scene is rendered (minutes at a large --size): a fit that cannot fit in memory
-    check_memory(config, get_variant(VARIANT).out_channels, *profile.size, N_NEIGHBORS, resolve_device(config))
+    check_memory(config, get_variant(VARIANT).out_channels, *profile.size, N_NEIGHBORS, resolve_device(config.run))
     case = make_case(args.scene, profile, holes=args.holes, seed=args.seed)
     print(f"{case.scene}\n{args.holes} holes: {np.isnan(case.depth).mean():.0%} of the reference view; "
           f"warp loss uses views {[n.name for n in case.neighbors]}")

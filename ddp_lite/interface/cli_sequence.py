@@ -110,7 +110,7 @@ def sequence_command(args) -> int:
                                    progress=False,
                                    **({"iterations": args.iterations} if args.iterations else {}))
     config.validate()
-    check_input_size(config.net, config.channels, *scene.size, name="--size" if args.size else "each view")
+    check_input_size(config.paper.net, config.paper.channels, *scene.size, name="--size" if args.size else "each view")
     print(f"{scene}; profile '{profile.name}', recipe '{recipe.name}'")
     if args.dry_run:
         n_views = len(scene) if indices is None else len(indices)

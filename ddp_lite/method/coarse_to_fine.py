@@ -70,8 +70,8 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
     its weights carry over; the full-size stage sees the coarse noise upsampled bilinearly, the
     same input at twice the resolution. It runs the remaining iterations with ``config`` as
     given (auto-stop included); the learning-rate schedule continues across the two stages.
-    It is one fit: ``config.ensemble`` and ``config.blend_paper`` do not apply; ``config.blend_fill`` does,
-    to the full-size result (None: both stages fit without the held-out blobs that choose the share,
+    It is one fit: ``config.combination``'s ``ensemble`` and ``blend_paper`` do not apply; its ``blend_fill``
+    does, to the full-size result (None: both stages fit without the held-out blobs that choose the share,
     as :func:`~ddp_lite.method.complete.with_fill` does for :func:`complete_depth`).
 
     Args:
@@ -99,7 +99,8 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
         raise ValueError(f"coarse_fraction must lie in (0, 1), got {coarse_fraction!r}")
     config, depth, rgb, neighbors, gt_depth, transform = check_fit_inputs(
         rgb, depth, camera, neighbors, variant, config, gt_depth, transform)
-    if config.blend_fill != 0:  # the fill's share mixes into the full-size result, and may hold out depth to choose it
+    # the fill's share mixes into the full-size result, and may hold out depth to choose it
+    if config.combination.blend_fill != 0:
         return with_fill(lambda held_out: complete_depth_coarse_to_fine(
             rgb, held_out, camera, neighbors, variant, config.replace(blend_fill=0.0), gt_depth, transform,
             coarse_fraction, scale), depth, rgb, config)
@@ -114,8 +115,8 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
     small = _downsample_depth(depth, scale)
     h, w = small.shape
     coarse_config = config.replace(iterations=n_coarse, auto_stop=False,
-                                   lr_milestones=tuple(m for m in config.lr_milestones if m < n_coarse))
-    coarse_noise = make_input(config.net_input, config.noise_channels, h, w, seed=config.seed)
+                                   lr_milestones=tuple(m for m in config.paper.lr_milestones if m < n_coarse))
+    coarse_noise = make_input(config.net_inputs.net_input, config.paper.noise_channels, h, w, seed=config.paper.seed)
     coarse = fit_once(
         _downsample_image(rgb, scale) if rgb is not None else None, small,
         _downsample_camera(camera, scale) if camera is not None else None,
@@ -124,9 +125,9 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
         transform=transform, noise=coarse_noise)
 
     # the full-size stage: coarse weights, the same noise upsampled, the rest of the schedule
-    passed = sum(1 for m in config.lr_milestones if m <= n_coarse)
-    fine_config = config.replace(iterations=iterations - n_coarse, lr=config.lr * config.lr_gamma ** passed,
-                                 lr_milestones=tuple(m - n_coarse for m in config.lr_milestones if m > n_coarse))
+    passed = sum(1 for m in config.paper.lr_milestones if m <= n_coarse)
+    fine_config = config.replace(iterations=iterations - n_coarse, lr=config.paper.lr * config.paper.lr_gamma ** passed,
+                                 lr_milestones=tuple(m - n_coarse for m in config.paper.lr_milestones if m > n_coarse))
     fine_noise = torch.nn.functional.interpolate(coarse_noise, size=(h * scale, w * scale), mode="bilinear",
                                                  align_corners=False)[..., :H, :W].contiguous()
     fine = fit_once(rgb, depth, camera, neighbors, variant, fine_config, gt_depth=gt_depth, transform=transform,

@@ -44,7 +44,7 @@ def complete_depth(rgb, depth, camera: Camera | None = None, neighbors=(), varia
         config: a :class:`FitConfig`; None → ``FitConfig.for_profile(variant=variant)``.
         gt_depth: (H, W) metres; when given, the hole error is tracked in ``history``.
         transform: depth ↔ disparity map; None → derived from the valid input depth.
-        callback: ``callback(iteration, DepthResult-like dict)`` every ``config.callback_every``.
+        callback: ``callback(iteration, DepthResult-like dict)`` every ``config.run.callback_every``.
         init: a previous result (same variant and net) whose weights start this fit: a warm start
             for the next view of a sequence.
     Returns:
@@ -58,9 +58,9 @@ def complete_depth(rgb, depth, camera: Camera | None = None, neighbors=(), varia
     """
     spec = get_variant(variant)  # a bad name fails here, before any config is built
     config = FitConfig.for_profile(variant=variant) if config is None else config
-    check_callback(callback, config.callback_every if isinstance(config, FitConfig) else None)
+    check_callback(callback, config.run.callback_every if isinstance(config, FitConfig) else None)
     inputs, config = check_inputs(rgb, depth, camera, neighbors, spec, config, gt_depth, transform, init)
-    if config.blend_fill != 0:
+    if config.combination.blend_fill != 0:
         return with_fill(lambda held_out: _fits(replace(inputs, depth=held_out), config.replace(blend_fill=0.0),
                                                 callback, init), inputs.depth, inputs.rgb, config)
     return _fits(inputs, config, callback, init)
@@ -68,22 +68,22 @@ def complete_depth(rgb, depth, camera: Camera | None = None, neighbors=(), varia
 
 def _fits(inputs: FitInputs, config: FitConfig, callback, init) -> DepthResult:
     """One fit, a blend or an ensemble, as ``config`` asks (its ``blend_fill`` is the caller's)."""
-    if config.blend_paper:
+    if config.combination.blend_paper:
         return fit_blended(inputs, config, callback, init)
-    if config.ensemble == 1:
+    if config.combination.ensemble == 1:
         return run_fit(inputs, config, callback=callback, init=init)
     return fit_ensemble(inputs, config, callback, init)
 
 
 def fit_ensemble(inputs: FitInputs, config: FitConfig, callback, init) -> DepthResult:
-    """``config.ensemble`` independent fits from other seeds (other weights, noise and held-out pixels),
-    averaged in disparity: one fit's hole error moves ±10 % and more with the seed, the mean keeps what
+    """``config.combination.ensemble`` independent fits from other seeds (other weights, noise and held-out
+    pixels), averaged in disparity: one fit's hole error moves ±10 % and more with the seed, the mean keeps what
     the fits agree on. ``history`` is the first fit's."""
     def fit_member(k: int) -> DepthResult:
-        return run_fit(inputs, config.replace(seed=config.seed + k, ensemble=1), callback=callback, init=init)
+        return run_fit(inputs, config.replace(seed=config.paper.seed + k, ensemble=1), callback=callback, init=init)
 
     workers = parallel_members(config, inputs.spec, inputs.depth.shape, len(inputs.neighbors), callback)
-    members = run_side_by_side(fit_member, int(config.ensemble), workers)
+    members = run_side_by_side(fit_member, int(config.combination.ensemble), workers)
     return combined_result(members, inputs.transform, members[0].history)
 
 
@@ -98,14 +98,14 @@ def combined_result(members: list, transform, history: dict, weights=None) -> De
 
 
 def fit_blended(inputs: FitInputs, config: FitConfig, callback, init) -> DepthResult:
-    """``config.blend_paper``: this config's fit and the paper recipe's, blended with weight
-    ``config.blend_weight``, or (None) with the weight that best predicts a ring of valid input held out
-    of both fits (:mod:`ddp_lite.method.kit.blend`). ``history`` is the first fit's plus ``blend_weight`` and,
+    """``config.combination.blend_paper``: this config's fit and the paper recipe's, blended with weight
+    ``config.combination.blend_weight``, or (None) with the weight that best predicts a ring of valid input
+    held out of both fits (:mod:`ddp_lite.method.kit.blend`). ``history`` is the first fit's plus ``blend_weight`` and,
     with the ring, ``blend_ring_errors``."""
     depth, transform = inputs.depth, inputs.transform
-    weight, members = config.blend_weight, blend_members(config)
+    weight, members = config.combination.blend_weight, blend_members(config)
     valid = np.isfinite(depth)
-    ring = validation_ring(valid, members[0].seed) if weight is None else np.zeros_like(valid)
+    ring = validation_ring(valid, members[0].paper.seed) if weight is None else np.zeros_like(valid)
     if weight is None and ((valid & ~ring).sum() < MIN_VALID_PIXELS or ring.sum() < MIN_VALID_PIXELS):
         return run_fit(inputs, members[0], callback=callback, init=init)  # too little to judge by (or fit without)
     held_out = replace(inputs, depth=np.where(ring, np.nan, depth).astype(np.float32)) if ring.any() else inputs
@@ -131,24 +131,24 @@ def blended_result(fits: list, transform, weight: float, history: dict | None = 
 
 
 def blend_members(config: FitConfig) -> tuple[FitConfig, FitConfig]:
-    """The two fits ``config.blend_paper`` blends: this config's own fit and the paper recipe's, at the
-    same size, budget and seed. ``config.blend_fill`` is left to the caller (it mixes into the blend)."""
+    """The two fits ``config.combination.blend_paper`` blends: this config's own fit and the paper recipe's,
+    at the same size, budget and seed. Its ``blend_fill`` is left to the caller (it mixes into the blend)."""
     own = config.replace(blend_paper=False)
     return own, own.replace(**get_recipe("paper").overrides)
 
 
 def with_fill(fit, depth: np.ndarray, rgb: np.ndarray, config: FitConfig) -> DepthResult:
-    """``fit(depth) -> DepthResult`` with ``config.blend_fill`` f of the colour-guided fill of ``depth`` (H, W)
-    metres (NaN holes) mixed in (:func:`mixed_with_fill`). f = None: ``fit`` runs on ``depth`` with
+    """``fit(depth) -> DepthResult`` with ``config.combination.blend_fill`` f of the colour-guided fill of
+    ``depth`` (H, W) metres (NaN holes) mixed in (:func:`mixed_with_fill`). f = None: ``fit`` runs on ``depth`` with
     blobs of its valid pixels held out (:func:`~ddp_lite.method.kit.blend.fill_holdout`), and f is the share
     that best predicts them against a fill of the same held-out input
     (:func:`~ddp_lite.method.kit.blend.best_fill_share`); ``history`` gets ``blend_fill_errors`` (RMSE per
     share, normalised disparity). Too little valid depth to hold any out: the fit alone (f = 0)."""
-    share = config.blend_fill
+    share = config.combination.blend_fill
     if share is not None:
         return mixed_with_fill(fit(depth), depth, rgb, share)
     valid = np.isfinite(depth)
-    heldout = fill_holdout(valid, config.seed)
+    heldout = fill_holdout(valid, config.paper.seed)
     if heldout.sum() < MIN_VALID_PIXELS or (valid & ~heldout).sum() < MIN_VALID_PIXELS:
         return mixed_with_fill(fit(depth), depth, rgb, 0.0)
     held_out = np.where(heldout, np.nan, depth).astype(np.float32)

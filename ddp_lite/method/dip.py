@@ -38,13 +38,14 @@ def describe_image_fit(config: FitConfig, height: int, width: int) -> str:
     """One line for a notebook's first cell: what :func:`fit_image` runs with ``config`` on an
     ``height``×``width`` image (size, net, iterations, schedule, input). Only what an image fit uses:
     a depth recipe's hole terms and fills do not apply to a photo."""
-    extra = config.noise_channels - 2  # a meshgrid input is (u, v) and then noise channels
+    paper = config.paper
+    extra = paper.noise_channels - 2  # a meshgrid input is (u, v) and then noise channels
     inputs = (("the pixel coordinates" + (f" + {extra} noise channels" if extra > 0 else ""))
-              if config.net_input == "meshgrid" else f"{config.noise_channels} channels of fixed noise")
-    jitter = f", input jitter σ {config.reg_noise_std:.3g}" if config.reg_noise_std else ""
-    return (f"Deep Image Prior: {height}×{width} (H×W) image, {'UNet' if config.net == 'unet' else 'SkipNet'} "
-            f"{'-'.join(map(str, config.channels))}, {config.resolved_iterations('rgbd')} iterations, lr {config.lr:g}, "
-            f"auto-stop {'on' if config.auto_stop else 'off'}, input: {inputs}{jitter}")
+              if config.net_inputs.net_input == "meshgrid" else f"{paper.noise_channels} channels of fixed noise")
+    jitter = f", input jitter σ {config.tricks.reg_noise_std:.3g}" if config.tricks.reg_noise_std else ""
+    return (f"Deep Image Prior: {height}×{width} (H×W) image, {'UNet' if paper.net == 'unet' else 'SkipNet'} "
+            f"{'-'.join(map(str, paper.channels))}, {config.resolved_iterations('rgbd')} iterations, lr {paper.lr:g}, "
+            f"auto-stop {'on' if config.stopping.auto_stop else 'off'}, input: {inputs}{jitter}")
 
 
 @cached(like="image", types=(ImageResult,))
@@ -59,16 +60,17 @@ def fit_image(image, mask=None, config: FitConfig | None = None, clean=None, cal
     config.validate()
     image = check_image(image, "image")
     H, W, _ = image.shape
-    check_input_size(config.net, config.channels, H, W, "image")
-    check_callback(callback, config.callback_every)
+    check_input_size(config.paper.net, config.paper.channels, H, W, "image")
+    check_callback(callback, config.run.callback_every)
     mask = np.ones((H, W), bool) if mask is None else np.asarray(mask)
     if mask.shape != (H, W) or mask.dtype != bool:
         raise ValueError(f"mask must be bool (H, W) = {(H, W)}, got {mask.dtype} {mask.shape}")
     if mask.sum() < MIN_VALID_PIXELS:
         raise ValueError(f"mask has {int(mask.sum())} known pixels; need at least {MIN_VALID_PIXELS}")
     clean = check_image(clean, "clean", (H, W)) if clean is not None else None
-    device = resolve_device(config)
-    heldout = holdout_mask(mask, config.holdout_fraction, config.seed) if config.auto_stop else np.zeros_like(mask)
+    device = resolve_device(config.run)
+    stopping = config.stopping
+    heldout = holdout_mask(mask, stopping.holdout_fraction, config.paper.seed) if stopping.auto_stop else np.zeros_like(mask)
     target = to_tensor(image, device)
     fit_mask = to_tensor(mask & ~heldout, device)
     heldout_t = to_tensor(heldout, device)
@@ -101,7 +103,7 @@ def fit_image(image, mask=None, config: FitConfig | None = None, clean=None, cal
     start = time.perf_counter()
     iterations = config.resolved_iterations("rgbd")
     output, history, ran, best = loop.run(net, noise, loss_fn, config, iterations, heldout_error, evaluate,
-                                          user_callback, progress=FitBar(iterations, "DIP", config.progress))
+                                          user_callback, progress=FitBar(iterations, "DIP", config.run.progress))
     restored = output[0].permute(1, 2, 0).cpu().numpy().astype(np.float32)
     check_finite_output("image", restored)
     return ImageResult(image=restored, history=history,

@@ -27,46 +27,46 @@ def loss_equation(config, variant: str) -> str:
         \\min_\\theta\\ 0.98\\,L^{\\mathrm{disp}} + 0.01\\,L^{\\mathrm{RGB}},\\quad (Z, I) = f_\\theta(\\text{noise})
     """
     spec = get_variant(variant)
-    w_disp, w_rgb, w_warp = spec.loss_weights(config.gammas)
+    w_disp, w_rgb, w_warp = spec.loss_weights(config.paper.gammas)
     paper = [_weight(w_disp) + "L^{\\mathrm{disp}}"]
     if w_rgb > 0:
         paper.append(_weight(w_rgb) + "L^{\\mathrm{RGB}}")
     if w_warp > 0:
         warp = "L^{\\mathrm{warp}}"
-        cost = getattr(config, "warp_cost", "intensity")  # method.kit.warp_cost; "intensity" is the paper's
-        where = [name for name, on in (("visible", getattr(config, "warp_occlusion", False)),  # method.visibility
-                                       ("confident", getattr(config, "warp_confidence", False)),  # method.warp_confidence
-                                       ("holes", getattr(config, "warp_reach", None) is not None),  # kit.warp_terms.warp_region
+        cost = config.warp.warp_cost  # method.kit.warp_cost; "intensity" is the paper's
+        where = [name for name, on in (("visible", config.warp.warp_occlusion),  # method.visibility
+                                       ("confident", config.warp.warp_confidence),  # method.warp_confidence
+                                       ("holes", config.warp.warp_reach is not None),  # kit.warp_terms.warp_region
                                        (cost, cost != "intensity"),
-                                       ("textured", getattr(config, "warp_texture", False)),
-                                       ("min over views", getattr(config, "warp_combine", "mean") == "min"))
+                                       ("textured", config.warp.warp_texture),
+                                       ("min over views", config.warp.warp_combine == "min"))
                  if on]
         if where:  # the kit's masks, costs and weights on the warp term
             warp = f"\\underbrace{{L^{{\\mathrm{{warp}}}}_{{\\mathrm{{{', '.join(where)}}}}}}}_{{\\text{{not in the paper}}}}"
         paper.append(_weight(w_warp) + warp)
     kit = []
-    if config.smoothness > 0:
-        kit.append(_weight(config.smoothness) + "L^{\\mathrm{curv}}_{w}")
-    if config.flatness > 0:
-        kit.append(_weight(config.flatness) + "L^{\\mathrm{flat}}_{w}")
-    if config.affinity > 0:
-        kit.append(_weight(config.affinity) + "L^{\\mathrm{aff}}")
+    if config.holes.smoothness > 0:
+        kit.append(_weight(config.holes.smoothness) + "L^{\\mathrm{curv}}_{w}")
+    if config.holes.flatness > 0:
+        kit.append(_weight(config.holes.flatness) + "L^{\\mathrm{flat}}_{w}")
+    if config.holes.affinity > 0:
+        kit.append(_weight(config.holes.affinity) + "L^{\\mathrm{aff}}")
     loss = " + ".join(paper)
     if kit:
         loss += " + \\underbrace{" + " + ".join(kit) + "}_{\\text{not in the paper}}"
     outputs = "(Z, I)" if spec.uses_rgb else "Z"
-    in_paper = ["\\text{noise}"] if config.net_input != "meshgrid" or config.noise_channels > 2 else []
-    added = ["u, v"] if config.net_input == "meshgrid" else []
-    if spec.uses_rgb and config.image_input > 0:
-        added.append(f"G_{{{config.image_blur:g}}} * I_{{\\mathrm{{in}}}}")
-    if config.fill_input > 0:
+    in_paper = ["\\text{noise}"] if config.net_inputs.net_input != "meshgrid" or config.paper.noise_channels > 2 else []
+    added = ["u, v"] if config.net_inputs.net_input == "meshgrid" else []
+    if spec.uses_rgb and config.net_inputs.image_input > 0:
+        added.append(f"G_{{{config.net_inputs.image_blur:g}}} * I_{{\\mathrm{{in}}}}")
+    if config.net_inputs.fill_input > 0:
         added.append("\\text{fill}(Z_{\\mathrm{in}})")
     net_input = ", ".join(in_paper + (["\\underbrace{" + ", ".join(added) + "}_{\\text{not in the paper}}"]
                                       if added else []))
     equation = f"\\min_\\theta\\ {loss},\\quad {outputs} = f_\\theta({net_input})"
-    paper_fit, fill = getattr(config, "blend_paper", False), getattr(config, "blend_fill", 0.0)
+    paper_fit, fill = config.combination.blend_paper, config.combination.blend_fill
     if paper_fit or fill != 0:  # fits and a fill, blended (method.blend)
-        w = config.blend_weight if paper_fit else 1.0
+        w = config.combination.blend_weight if paper_fit else 1.0
         if fill is None:  # the share chosen on held-out depth
             fits = "Z" if w == 1.0 else ("(w^* Z + (1 - w^*)\\,Z_{\\mathrm{paper}})" if w is None else
                                          f"({w:.3g}\\,Z + {1 - w:.3g}\\,Z_{{\\mathrm{{paper}}}})")

@@ -41,7 +41,7 @@ __all__ = ["DepthResult", "FitInputs", "merge", "check_inputs", "run_fit", "fit_
 class DepthResult:
     """What :func:`~ddp_lite.method.complete.complete_depth` returns. Arrays are NumPy, (H, W) or (H, W, 3).
 
-    For the mean of several fits (``config.ensemble > 1``, ``fits`` of them) ``iterations`` and
+    For the mean of several fits (``config.combination.ensemble > 1``, ``fits`` of them) ``iterations`` and
     ``seconds`` are totals over the fits; ``history``, ``best_iteration`` and ``state`` are the
     first fit's.
     """
@@ -55,7 +55,7 @@ class DepthResult:
     best_iteration: int  # the iteration whose output is returned
     seconds: float
     state: dict | None = field(default=None, repr=False)  # the net's final weights (CPU), for warm starts
-    fits: int = 1  # how many fits' disparities were averaged (config.ensemble)
+    fits: int = 1  # how many fits' disparities were averaged (config.combination.ensemble)
 
     def merged(self, input_depth) -> np.ndarray:
         """"SGM+DDP": the input where it is valid, this result in its holes."""
@@ -116,13 +116,14 @@ def run_fit(inputs: FitInputs, config: FitConfig, *, callback=None, init: DepthR
     rgb, depth, camera, neighbors = inputs.rgb, inputs.depth, inputs.camera, inputs.neighbors
     spec, gt_depth, transform, variant = inputs.spec, inputs.gt_depth, inputs.transform, inputs.spec.name
     H, W = depth.shape
-    device = resolve_device(config)
+    device = resolve_device(config.run)
     iterations = config.resolved_iterations(spec)
-    _, w_rgb, w_warp = spec.loss_weights(config.gammas)
+    _, w_rgb, w_warp = spec.loss_weights(config.paper.gammas)
     # before any per-fit work: at 12 MP, the SSIM moments alone take seconds (and gigabytes)
     check_memory(config, spec.out_channels, H, W, len(neighbors) if w_warp > 0 else 0, device)
     valid = np.isfinite(depth)
-    heldout = (holdout_mask(valid, config.holdout_fraction, config.seed, config.holdout) if config.auto_stop
+    stopping = config.stopping
+    heldout = (holdout_mask(valid, stopping.holdout_fraction, config.paper.seed, stopping.holdout) if stopping.auto_stop
                else np.zeros_like(valid))
     if (valid & ~heldout).sum() < MIN_VALID_PIXELS:
         heldout = np.zeros_like(valid)
@@ -133,9 +134,10 @@ def run_fit(inputs: FitInputs, config: FitConfig, *, callback=None, init: DepthR
     fit_mask = to_tensor(valid & ~heldout, device).bool()
     # the paper's loss, with the kit's warp term, occlusion tests and hole terms (each None or off unless asked
     # for) as its arguments; the hole terms act on the unconstrained pixels: holes, and the held-out pixels
-    paper_loss = PaperLoss(spec, config, transform, target, fit_mask, rgb_t, camera, nbrs, device,
-                           **kit_warp_arguments(config, transform, fit_mask, rgb_t, camera, nbrs, device),
-                           extra_terms=[HoleTerms(config, ~(valid & ~heldout), rgb_t, rgb, device, disparity_in)])
+    paper_loss = PaperLoss(spec, config.paper, transform, target, fit_mask, rgb_t, camera, nbrs, device,
+                           **kit_warp_arguments(config.warp, config.paper.lambda_w, transform, fit_mask, rgb_t, camera,
+                                                nbrs, device),
+                           extra_terms=[HoleTerms(config.holes, ~(valid & ~heldout), rgb_t, rgb, device, disparity_in)])
 
     def loss_fn(output):  # (1, 1 or 4, H, W): Z_out, then I_out
         disparity = output[:, :1]  # one view for every term: the gradients add up in the same order
@@ -153,18 +155,20 @@ def run_fit(inputs: FitInputs, config: FitConfig, *, callback=None, init: DepthR
 
     # the view's colours as input channels, for the variants that see them (rgb_t is None otherwise)
     image = None
-    if config.image_input > 0 and rgb_t is not None:
-        image = image_channels(rgb_t, config.image_input, config.image_blur)  # (1, 3, H, W)
-    if config.fill_input > 0:  # from the fitted pixels only: the held-out ones stay unseen
+    inputs_of_net = config.net_inputs
+    if inputs_of_net.image_input > 0 and rgb_t is not None:
+        image = image_channels(rgb_t, inputs_of_net.image_input, inputs_of_net.image_blur)  # (1, 3, H, W)
+    if inputs_of_net.fill_input > 0:  # from the fitted pixels only: the held-out ones stay unseen
         fill = fill_channel(transform.to_disparity(np.where(valid & ~heldout, depth, np.nan)),
-                            rgb if spec.uses_rgb else None, config.fill_input)
+                            rgb if spec.uses_rgb else None, inputs_of_net.fill_input)
         fill = to_tensor(fill, device)  # (1, 1, H, W)
         image = fill if image is None else torch.cat([image, fill], dim=1)
     net, noise = loop.build(config, spec.out_channels, H, W, device, init.state if init is not None else None,
                             noise, image)
     start = time.perf_counter()
+    progress = FitBar(iterations, f"DDP {variant}", config.run.progress)
     output, history, ran, best = loop.run(net, noise, loss_fn, config, iterations, heldout_error, evaluate,
-                                          user_callback, progress=FitBar(iterations, f"DDP {variant}", config.progress))
+                                          user_callback, progress=progress)
     state = {name: value.detach().cpu().clone() for name, value in net.state_dict().items()}
     seconds = time.perf_counter() - start
     disparity = output[0, 0].cpu().numpy().astype(np.float32)

@@ -84,7 +84,7 @@ def _plain(value):
     equally in any process (a pickled tensor does not: its bytes differ from run to run)."""
     if isinstance(value, torch.Tensor):
         return value.detach().cpu().numpy()
-    if isinstance(value, FitConfig):  # its fields by their own names, as before it had sections
+    if isinstance(value, FitConfig):  # its fields by their own names; the progress bar changes no result
         fields = {name: _plain(item) for name, item in value.flat().items() if name != "progress"}
         return (type(value).__qualname__, fields)
     if dataclasses.is_dataclass(value) and not isinstance(value, type):

@@ -91,9 +91,9 @@ def check_fit_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth, t
     config.validate()
     depth = check_depth(depth)
     H, W = depth.shape
-    check_input_size(config.net, config.channels, H, W)
+    check_input_size(config.paper.net, config.paper.channels, H, W)
     rgb = check_image(rgb, "rgb", (H, W)) if spec.uses_rgb or rgb is not None else None
-    if config.blend_fill != 0 and rgb is None:  # the fill is guided by the colour image (None: a share chosen)
+    if config.combination.blend_fill != 0 and rgb is None:  # the fill is guided by the colour image (None: chosen)
         raise ValueError("config.blend_fill needs the colour image: pass rgb (H, W, 3), or set blend_fill=0")
     neighbors = _check_neighbors(neighbors)
     if camera is not None and not isinstance(camera, Camera):
@@ -107,7 +107,8 @@ def check_fit_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth, t
         _check_useful_neighbors(camera, depth, neighbors)
     if gt_depth is not None:  # the kit's convention: NaN = unknown (a 0 would be scored as truth)
         gt_depth = check_depth(gt_depth, "gt_depth", min_valid=0, shape=(H, W))
-    transform = DisparityTransform.from_depth(depth, margin=config.disparity_margin) if transform is None else transform
+    if transform is None:
+        transform = DisparityTransform.from_depth(depth, margin=config.paper.disparity_margin)
     if not isinstance(transform, DisparityTransform):
         raise TypeError(f"transform must be a DisparityTransform, got {type(transform).__name__}")
     _check_transform(transform, depth)

@@ -35,20 +35,21 @@ def build(config: FitConfig, out_channels: int, height: int, width: int, device,
           image=None):
     """The net and its fixed input (1, C, H, W): ``noise`` (made from the config when None), followed
     by ``image`` (1, 3, H, W) when given (``kit.net_inputs.image_channels``)."""
-    in_channels = config.noise_channels + (0 if image is None else image.shape[1])
+    paper = config.paper
+    in_channels = paper.noise_channels + (0 if image is None else image.shape[1])
     with _INIT_LOCK, torch.random.fork_rng(devices=[]):  # deterministic init without touching the caller's RNG
-        torch.manual_seed(config.seed)
-        options = dict(down=config.down, up=config.up, pad=config.pad) if config.net == "unet" else {}
-        net = build_net(config.net, in_channels, out_channels, config.channels, **options)
+        torch.manual_seed(paper.seed)
+        options = dict(down=paper.down, up=paper.up, pad=paper.pad) if paper.net == "unet" else {}
+        net = build_net(paper.net, in_channels, out_channels, paper.channels, **options)
     if init_state is not None:
         try:
             net.load_state_dict(init_state)
         except RuntimeError as error:
             raise ValueError(f"init: its weights do not fit this config's network ({error.args[0].splitlines()[0]})")
     if noise is None:
-        noise = make_input(config.net_input, config.noise_channels, height, width, seed=config.seed)
-    elif tuple(noise.shape) != (1, config.noise_channels, height, width):
-        raise ValueError(f"noise must be (1, {config.noise_channels}, {height}, {width}), got {tuple(noise.shape)}")
+        noise = make_input(config.net_inputs.net_input, paper.noise_channels, height, width, seed=paper.seed)
+    elif tuple(noise.shape) != (1, paper.noise_channels, height, width):
+        raise ValueError(f"noise must be (1, {paper.noise_channels}, {height}, {width}), got {tuple(noise.shape)}")
     if image is not None:
         noise = torch.cat([noise.to(device), image.to(device)], dim=1)  # (1, noise_channels + 3, H, W)
     return net.to(device), noise.to(device)
@@ -60,33 +61,34 @@ def run(net, noise, loss_fn, config: FitConfig, iterations: int, heldout_error=N
     history, iterations run, best iteration).
 
     ``loss_fn(output) -> (total, {name: term})``; ``heldout_error(output) -> float`` (None: no
-    auto-stop), watched every ``config.eval_every`` iterations; ``evaluate(output) -> {name: float}``,
-    tracked there too, never optimised; ``callback(iteration, output)`` every ``config.callback_every``;
+    auto-stop), watched every ``config.stopping.eval_every`` iterations; ``evaluate(output) -> {name: float}``,
+    tracked there too, never optimised; ``callback(iteration, output)`` every ``config.run.callback_every``;
     ``progress``: the caller's hook, iterated over for the iterations."""
+    paper, stopping, tricks, options = config.paper, config.stopping, config.tricks, config.run
     # the fused kernel updates all parameters in one call: ~10-25 % faster per iteration on CPU
-    optimizer = torch.optim.Adam(net.parameters(), lr=config.lr, fused=noise.device.type in ("cpu", "cuda"))
-    if config.schedule == "cosine":
+    optimizer = torch.optim.Adam(net.parameters(), lr=paper.lr, fused=noise.device.type in ("cpu", "cuda"))
+    if paper.schedule == "cosine":
         scheduler = torch.optim.lr_scheduler.CosineAnnealingLR(optimizer, T_max=iterations)
     else:
-        milestones = [m for m in config.lr_milestones if m < iterations]
-        scheduler = torch.optim.lr_scheduler.MultiStepLR(optimizer, milestones, gamma=config.lr_gamma)
-    autocast = torch.autocast(noise.device.type, dtype=torch.bfloat16, enabled=use_bf16(config.bf16, noise.device))
-    if config.channels_last:
+        milestones = [m for m in paper.lr_milestones if m < iterations]
+        scheduler = torch.optim.lr_scheduler.MultiStepLR(optimizer, milestones, gamma=paper.lr_gamma)
+    autocast = torch.autocast(noise.device.type, dtype=torch.bfloat16, enabled=use_bf16(options.bf16, noise.device))
+    if options.channels_last:
         net, noise = net.to(memory_format=torch.channels_last), noise.contiguous(memory_format=torch.channels_last)
-    jitter = torch.Generator(device=noise.device).manual_seed(config.seed + 1) if config.reg_noise_std else None
+    jitter = torch.Generator(device=noise.device).manual_seed(paper.seed + 1) if tricks.reg_noise_std else None
     terms_log = None  # (iterations, n_terms) kept on the device: no host read per iteration
     lrs = []
     evals = {"eval_iteration": [], "heldout": [], "lr_decay_iteration": []}
     averaged = best_output = None
     best_iteration = 0
-    stop_check = config.auto_stop and heldout_error is not None
-    stopper = PlateauStopper(config.patience, config.eval_every, config.plateau_decays)
+    stop_check = stopping.auto_stop and heldout_error is not None
+    stopper = PlateauStopper(stopping.patience, stopping.eval_every, stopping.plateau_decays)
     it = -1
     for it in progress:
         # one step: the net's output, the loss, Adam
         net_input = noise
         if jitter is not None:
-            net_input = noise + config.reg_noise_std * torch.randn(noise.shape, generator=jitter, device=noise.device)
+            net_input = noise + tricks.reg_noise_std * torch.randn(noise.shape, generator=jitter, device=noise.device)
         with autocast:
             output = net(net_input)
         output = output.float().contiguous()
@@ -103,13 +105,14 @@ def run(net, noise, loss_fn, config: FitConfig, iterations: int, heldout_error=N
 
         # the output this iteration offers (a running mean of the outputs, where the config asks for one)
         current = output.detach()
-        if config.average_outputs:
-            averaged = current if averaged is None else config.average_outputs * averaged + (1 - config.average_outputs) * current
+        if tricks.average_outputs:
+            weight = tricks.average_outputs
+            averaged = current if averaged is None else weight * averaged + (1 - weight) * current
             current = averaged
 
         # every eval_every iterations: score it; keep it if it is the best; cut the rate or stop on a plateau
         last = it + 1 == iterations
-        if (it + 1) % config.eval_every == 0 or last:
+        if (it + 1) % stopping.eval_every == 0 or last:
             evals["eval_iteration"].append(it + 1)
             error = float(heldout_error(current)) if heldout_error is not None else float("nan")
             evals["heldout"].append(error)
@@ -121,13 +124,13 @@ def run(net, noise, loss_fn, config: FitConfig, iterations: int, heldout_error=N
                     best_iteration, best_output = it + 1, current.clone()
                 elif event == "decay":
                     for group in optimizer.param_groups:
-                        group["lr"] *= config.lr_gamma
+                        group["lr"] *= paper.lr_gamma
                     evals["lr_decay_iteration"].append(it + 1)
                 elif event == "stop":
                     break
                 progress.heldout(error)
                 progress.expect(expected_stop(stopper, it + 1, iterations), earliest_stop(stopper, it + 1, iterations))
-        if callback is not None and config.callback_every and (it + 1) % config.callback_every == 0:
+        if callback is not None and options.callback_every and (it + 1) % options.callback_every == 0:
             callback(it + 1, current)
     progress.close()
 

@@ -7,17 +7,44 @@ not seen. The output at the best held-out error is kept. When it has not improve
 iterations (a plateau) the learning rate is cut by ``lr_gamma``, ``plateau_decays`` times, and the
 run stops at the next plateau (:class:`PlateauStopper`). Cutting the rate matters: at a constant
 rate the hole error jumps ±10 % between evaluations, and stopping on that noise gave away 13 % on
-average against the best a long run reached (``benchmarks/bench_autostop.py``).
+average against the best a long run reached (``benchmarks/bench_autostop.py``). Its settings are
+:class:`StoppingConfig`.
 """
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 import torch
 from scipy import ndimage
 
+from ..core.checks import check_bool, check_choice, check_int, check_real
+from ..core.settings import Settings
 from .runtime.tensors import to_tensor
 
-__all__ = ["PlateauStopper", "holdout_mask", "heldout_error_fn"]
+__all__ = ["StoppingConfig", "HOLDOUTS", "PlateauStopper", "holdout_mask", "heldout_error_fn"]
+
+HOLDOUTS = ("pixels", "blobs")
+
+
+@dataclass(frozen=True)
+class StoppingConfig(Settings):
+    """When a fit stops before its iterations (6 fields; off by default, the paper's fixed schedule)."""
+
+    auto_stop: bool = False
+    holdout_fraction: float = 0.05  # share of valid pixels held out when auto_stop is on
+    holdout: str = "pixels"  # their shape: "pixels" (scattered) or "blobs" (hole-like patches)
+    patience: int = 200  # iterations without held-out improvement that make a plateau
+    plateau_decays: int = 0  # cut lr by lr_gamma at the first this-many plateaus, stop at the next
+    eval_every: int = 10  # iterations between held-out (and hole) errors
+
+    def validate(self) -> None:
+        check_bool(self.auto_stop, "config.auto_stop")
+        check_choice(self.holdout, "config.holdout", HOLDOUTS)
+        check_real(self.holdout_fraction, "config.holdout_fraction", 0.0, 0.5, low_open=True, high_open=True)
+        check_int(self.patience, "config.patience", minimum=1)
+        check_int(self.plateau_decays, "config.plateau_decays", minimum=0)
+        check_int(self.eval_every, "config.eval_every", minimum=1)
 
 
 class PlateauStopper:

@@ -23,12 +23,12 @@ RUN_AFTER_CUT_SHARE = 0.4  # 240 of 600: the cut's iteration plus this share of 
 
 def expected_share(config) -> float:
     """The share of its iterations a fit of ``config`` (a FitConfig) is expected to run (1 without auto-stop)."""
-    return EXPECTED_STOP_SHARE if config.auto_stop else 1.0
+    return EXPECTED_STOP_SHARE if config.stopping.auto_stop else 1.0
 
 
 def earliest_share(config) -> float:
     """The share of its iterations a fit of ``config`` runs at least, bar one in twenty (1 without auto-stop)."""
-    return EARLIEST_STOP_SHARE if config.auto_stop else 1.0
+    return EARLIEST_STOP_SHARE if config.stopping.auto_stop else 1.0
 
 
 def earliest_stop(stopper: PlateauStopper, done: int, cap: int) -> int:

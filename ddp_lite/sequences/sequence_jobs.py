@@ -96,7 +96,7 @@ def plan_jobs(scene: Scene, config: FitConfig, views=None, threads: int = 1) -> 
         transform = DisparityTransform(float(meta["d_min"]), float(meta["d_max"]))
     else:
         transform = DisparityTransform.from_depth(np.concatenate([v.depth.ravel() for v in scene.views]),
-                                                  margin=config.disparity_margin)
+                                                  margin=config.paper.disparity_margin)
     n = min(N_NEIGHBORS, len(scene) - 1)
     jobs = []
     for i in chosen:

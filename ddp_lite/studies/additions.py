@@ -115,7 +115,7 @@ def run_additions(cases: dict[str, Case], profile=None, seeds=(0, 1, 2), variant
         fits = {(step, seed): fitted[name, step, seed] for name, step, seed in fitted if name == case_name}
         for i, step in enumerate(names):
             if mixes_fill[step]:
-                share = FitConfig.for_profile(profile, variant=variant, recipe="paper", **steps[step]).blend_fill
+                share = FitConfig.for_profile(profile, variant=variant, recipe="paper", **steps[step]).combination.blend_fill
                 for seed in seeds:
                     fits[step, seed] = mixed_with_fill(fits[names[i - 1], seed], np.asarray(case.depth, np.float32),
                                                        np.asarray(case.rgb, np.float32), share)

@@ -222,10 +222,11 @@ def _plain_fits(case: RealCase, variant: str, configs: list) -> list:
     listed before it needs none of its own), fitted side by side → [(config, DepthResult)]."""
     planned = []
     for config in configs:
-        if config.blend_fill is None:
+        if config.combination.blend_fill is None:
             continue  # its share is chosen on depth held out of the fit: a fit of its own
         base = config.replace(blend_fill=0.0)
-        if base.blend_paper and base.blend_weight is not None and all(m in planned for m in blend_members(base)):
+        blend = base.combination
+        if blend.blend_paper and blend.blend_weight is not None and all(m in planned for m in blend_members(base)):
             continue
         if base not in planned:
             planned.append(base)
@@ -240,7 +241,7 @@ def _fit_reusing(case: RealCase, variant: str, config: FitConfig, fitted: list):
     """``complete_depth`` of ``case`` under ``config``, from the plain fits in ``fitted`` (:func:`_plain_fits`):
     one of them, or a blend of two (``photo`` after ``kit`` and ``paper``, same seed), with the config's
     share of the fill mixed in after."""
-    share = config.blend_fill
+    share = config.combination.blend_fill
     if share is None:  # the share is chosen on depth held out of the fit: a fit of its own
         neighbors = case.neighbors if variant == "rgbd+warp" else ()
         return complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant, config=config)
@@ -250,7 +251,7 @@ def _fit_reusing(case: RealCase, variant: str, config: FitConfig, fitted: list):
         result = same[0]
     else:  # _plain_fits planned no fit of its own: a blend of two it did
         done = [result for wanted in blend_members(base) for c, result in fitted if c == wanted]
-        result = blended_result(done, done[0].transform, base.blend_weight)
+        result = blended_result(done, done[0].transform, base.combination.blend_weight)
     return mixed_with_fill(result, case.depth, case.rgb, share) if share else result
 
 

@@ -3,7 +3,10 @@
 mask (``warp_confidence``), its other costs and texture weights (``warp_cost``), all of them built
 into one warp term the paper's loss takes as an argument (``warp_terms``), extra net inputs (the
 colour image, a classical fill: ``net_inputs``), blends with a fill or the paper recipe's fit
-(``blend``), ensembles (``ensemble``) and the method switch (``recipes``).
+(``blend``), ensembles (``ensemble``) and the method switch (``recipes``). Each addition's settings
+are a section of the fit's config defined beside its code and checked there: ``HoleConfig``
+(``hole_terms``), ``WarpConfig`` (``warp_terms``), ``NetInputConfig`` (``net_inputs``),
+``CombinationConfig`` (``blend``, an ensemble's size included).
 
 Blends and ensembles combine whole fits: a blend holds out valid pixels as the fit's auto-stop does
 (``method/stopping.holdout_mask``, the one file of ``method/`` itself the kit uses), an ensemble runs

@@ -1,4 +1,4 @@
-"""Blends of the kit's fit, the paper's and a classical fill (``FitConfig.blend_paper``, ``blend_fill``;
+"""Blends of the kit's fit, the paper's and a classical fill (``CombinationConfig.blend_paper``, ``blend_fill``;
 the ``photo`` recipe). Not in the paper.
 
 The two recipes err in different places. On rendered scenes the kit's hole terms and inputs fill
@@ -39,14 +39,22 @@ measured, the choice does not tell the photograph from the rendered scenes: the 
 prefers the fill on both, so it only buys a larger share with its cost (``docs/real_data.md``). It
 stays a study lever (recipe ``fill-chosen``); the ``kit`` recipe takes a fixed share where the variant
 sees colour (:data:`~ddp_lite.method.kit.recipes.KIT_AT`).
+
+Their settings, with the size of an ensemble (:mod:`ddp_lite.method.kit.ensemble`), the other way to
+combine fits, are :class:`CombinationConfig`; :mod:`ddp_lite.method.complete` applies them.
 """
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 from scipy import ndimage
 
-__all__ = ["BLEND_WEIGHTS", "FILL_SHARES", "validation_ring", "best_weight", "ring_width", "fill_disparity",
-           "FILL_MEMBERS", "fill_holdout", "best_fill_share"]
+from ...core.checks import check_bool, check_int, check_real
+from ...core.settings import Settings
+
+__all__ = ["CombinationConfig", "BLEND_WEIGHTS", "FILL_SHARES", "validation_ring", "best_weight", "ring_width",
+           "fill_disparity", "FILL_MEMBERS", "fill_holdout", "best_fill_share"]
 
 BLEND_WEIGHTS = (0.0, 0.25, 0.5, 0.75, 1.0)  # the kit fit's weight; 0 is the paper's fit alone
 RING_SHARE = 0.5  # the share of the ring held out: the rest keeps the holes' edges where they are
@@ -56,6 +64,28 @@ FILL_HOLDOUT = 0.05  # the share of the valid pixels held out to choose it
 # in three of five cases and colorization in two, and their mean lets the share grow without costing the
 # rendered scenes (docs/real_data.md)
 FILL_MEMBERS = ("colorization", "bilateral-solver")
+
+
+@dataclass(frozen=True)
+class CombinationConfig(Settings):
+    """What goes into the answer besides one fit (4 fields; the defaults: one fit, as the paper)."""
+
+    ensemble: int = 1  # fits with seeds seed, seed+1, ...; their disparities are averaged
+    blend_paper: bool = False  # also fit the paper's recipe and blend the two fits
+    blend_weight: float | None = 0.5  # this config's fit's weight in that blend; None: chosen on a held-out ring
+    blend_fill: float | None = 0.0  # share of the input's colour-guided fill in the final disparity (0: none;
+    # None: chosen on held-out blobs of the valid input)
+
+    def validate(self) -> None:
+        check_int(self.ensemble, "config.ensemble", minimum=1)
+        check_bool(self.blend_paper, "config.blend_paper")
+        if self.blend_paper and self.ensemble > 1:
+            raise ValueError(f"config.blend_paper and config.ensemble > 1 cannot be combined (a blend of two fits "
+                             f"is not averaged with more), got ensemble={self.ensemble}")
+        if self.blend_weight is not None:
+            check_real(self.blend_weight, "config.blend_weight", 0.0, 1.0)
+        if self.blend_fill is not None:
+            check_real(self.blend_fill, "config.blend_fill", 0.0, 1.0, high_open=True)  # 1 would be the fill alone
 
 
 def ring_width(shape) -> int:

@@ -1,4 +1,4 @@
-"""Ensembles: the mean disparity of K fits from seeds seed, seed+1, ... (``FitConfig.ensemble = K``).
+"""Ensembles: the mean disparity of K fits from seeds seed, seed+1, ... (``CombinationConfig.ensemble = K``).
 
     Z = 1/K Σ_k Z_k,   I = 1/K Σ_k I_k,   D = depth of Z
 
@@ -16,8 +16,8 @@ __all__ = ["parallel_members", "mean_outputs"]
 
 
 def parallel_members(config, variant: str, shape, n_neighbors: int, callback) -> int:
-    """How many of ``config.ensemble`` members run at once (:func:`side_by_side.side_by_side_workers`)."""
-    return side_by_side_workers(config, variant, shape, n_neighbors, int(config.ensemble), callback)
+    """How many of ``config.combination.ensemble`` members run at once (:func:`side_by_side.side_by_side_workers`)."""
+    return side_by_side_workers(config, variant, shape, n_neighbors, int(config.combination.ensemble), callback)
 
 
 def mean_outputs(members: list, weights=None) -> tuple[np.ndarray, np.ndarray | None]:

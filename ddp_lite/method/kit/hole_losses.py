@@ -5,7 +5,7 @@
 
 on the disparity Z in the *free* pixels (holes and held-out pixels), each relaxed at colour edges:
 
-- L_curv = Σ w·(|∂²Z/∂x²| + |∂²Z/∂y²|) / Σ w, curvature (``FitConfig.smoothness`` = s): zero on any
+- L_curv = Σ w·(|∂²Z/∂x²| + |∂²Z/∂y²|) / Σ w, curvature (``HoleConfig.smoothness`` = s): zero on any
   plane, it keeps a hole far from valid pixels from bending where nothing constrains it;
 - L_flat = Σ w'·(|∂Z/∂x| + |∂Z/∂y|) / Σ w, first order (``FitConfig.flatness`` = f): a hole that
   reaches the border levels off instead of carrying the last slope outward; ``flatness_reach``
@@ -15,7 +15,7 @@ on the disparity Z in the *free* pixels (holes and held-out pixels), each relaxe
 - w = exp(-edge·|∇I|) of the grey image, or the largest over R, G, B (``smoothness_edge``,
   ``edge_guide``; :func:`smoothness_weights`);
 - L_aff = Σ |Z_p - Σ_q w_pq Z_q| / #free, Levin et al.'s colorization energy
-  (``FitConfig.affinity`` = a; :func:`affinity_loss`).
+  (``HoleConfig.affinity`` = a; :func:`affinity_loss`).
 
 On in the ``kit`` recipe at ``ci`` and ``class`` (:data:`ddp_lite.method.kit.recipes.KIT_AT` says why), but
 the affinity term, tried and off by default; the ``paper`` recipe has none. Why these weights and what

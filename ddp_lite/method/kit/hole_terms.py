@@ -1,29 +1,56 @@
-"""The kit's hole terms of one fit, ready to add to the paper's loss each iteration: their weights
-and regions are computed once from the input (the formulas: :mod:`ddp_lite.method.kit.hole_losses`).
+"""The kit's hole terms of one fit, their settings (:class:`HoleConfig`) and the terms ready to add to
+the paper's loss each iteration (:class:`HoleTerms`): their weights and regions are computed once
+from the input (the formulas: :mod:`ddp_lite.method.kit.hole_losses`).
 """
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 import torch
 
 from ...classical.guided_fills import NEIGHBOUR_OFFSETS, colorization_affinities
-from .hole_losses import affinity_loss, flatness_loss, flatness_region, smoothness_loss, smoothness_weights, step_region
+from ...core.checks import check_choice, check_real
+from ...core.settings import Settings
+from .hole_losses import (EDGE_GUIDES, affinity_loss, flatness_loss, flatness_region, smoothness_loss,
+                          smoothness_weights, step_region)
 from ..runtime.tensors import to_tensor
 
-__all__ = ["HoleTerms"]
+__all__ = ["HoleConfig", "HoleTerms"]
+
+
+@dataclass(frozen=True)
+class HoleConfig(Settings):
+    """The kit's terms on the disparity in the holes (7 fields; each weight 0: off, the paper)."""
+
+    smoothness: float = 0.0  # weight of an edge-aware second-order smoothness of disparity in the holes
+    smoothness_edge: float = 10.0  # how strongly colour edges relax both hole terms: exp(-edge · |∇I|)
+    edge_guide: str = "grey"  # |∇I| of the grey image, "rgb": the largest over the three channels, or "structure"
+    flatness: float = 0.0  # weight of an edge-aware first-order smoothness in the holes
+    affinity: float = 0.0  # weight of the colorization energy in the holes (hole_losses.affinity_loss)
+    flatness_reach: float | None = None  # enclosed holes: that term only within this many px of valid depth (None: everywhere)
+    step_reach: float | None = None  # hole terms off within this many px of a depth step in the valid input (None: on)
+
+    def validate(self) -> None:
+        check_choice(self.edge_guide, "config.edge_guide", EDGE_GUIDES)
+        for name in ("smoothness", "flatness", "affinity", "smoothness_edge"):
+            check_real(getattr(self, name), f"config.{name}", 0.0)
+        for name in ("flatness_reach", "step_reach"):
+            if getattr(self, name) is not None:
+                check_real(getattr(self, name), f"config.{name}", 0.0)
 
 
 class HoleTerms:
     """The kit's hole terms of one fit: ``add(disparity, total, terms)`` adds each that is on.
 
-    ``config``: a :class:`~ddp_lite.method.config.FitConfig` (its hole-term fields);
+    ``config``: the terms' :class:`HoleConfig`;
     ``free`` (H, W) bool: the pixels no data term constrains (holes and held-out pixels);
     ``disparity`` (H, W) the input disparity, read outside ``free`` (only for ``step_reach``);
     ``rgb_t`` (1, 3, H, W) the colour the edges are measured on (None: no edges); ``rgb``
     (H, W, 3) NumPy, for the colorization affinities (None: no affinity term).
     """
 
-    def __init__(self, config, free: np.ndarray, rgb_t: torch.Tensor | None, rgb: np.ndarray | None,
+    def __init__(self, config: HoleConfig, free: np.ndarray, rgb_t: torch.Tensor | None, rgb: np.ndarray | None,
                  device, disparity: np.ndarray | None = None):
         self.config = config
         H, W = free.shape

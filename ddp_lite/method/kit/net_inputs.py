@@ -1,8 +1,12 @@
-"""The kit's extra net inputs, joined to the fixed input by the fit (off in the ``paper`` recipe): the
-view's colour image, blurred (``FitConfig.image_input``), and a classical fill of the input disparity
-(``FitConfig.fill_input``). The net takes them as extra input channels; it does not know what they are.
+"""The kit's net inputs (:class:`NetInputConfig`): the fixed input as the pixel coordinates instead of
+noise (``net_input``), and extra channels joined to it by the fit (off in the ``paper`` recipe): the
+view's colour image, blurred (``image_input``, :func:`image_channels`), and a classical fill of the
+input disparity (``fill_input``, :func:`fill_channel`). The net takes them as extra input channels; it
+does not know what they are.
 """
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 import torch
@@ -10,9 +14,27 @@ import torch.nn.functional as F
 
 from ...classical.depth_fills import fill_linear
 from ...classical.guided_fills import fill_colorization
+from ...core.checks import check_choice, check_real
+from ...core.settings import Settings
 from ..paper.losses import blur_valid, gaussian_kernel_1d  # SSIM's separable Gaussian, reused for the image input
+from ..paper.nets import NET_INPUTS
 
-__all__ = ["image_channels", "fill_channel"]
+__all__ = ["NetInputConfig", "image_channels", "fill_channel"]
+
+
+@dataclass(frozen=True)
+class NetInputConfig(Settings):
+    """What the net is fed besides the paper's noise (4 fields; the defaults are the paper's input)."""
+
+    net_input: str = "noise"  # "noise" (the paper) or "meshgrid" (x, y in the first two channels; nets.make_input)
+    image_input: float = 0.0  # > 0: the colour image × this joins the net input (variants with colour)
+    image_blur: float = 1.0  # σ in px of the Gaussian blur on that image (0: none)
+    fill_input: float = 0.0  # > 0: a classical fill of the input disparity × this joins the net input
+
+    def validate(self) -> None:
+        check_choice(self.net_input, "config.net_input", NET_INPUTS)
+        for name in ("image_input", "image_blur", "fill_input"):
+            check_real(getattr(self, name), f"config.{name}", 0.0)
 
 
 def image_channels(image: torch.Tensor, scale: float = 1.0, blur: float = 1.0) -> torch.Tensor:

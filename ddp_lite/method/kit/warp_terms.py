@@ -1,7 +1,7 @@
 """The kit's warp term of one fit, handed to the paper's loss as its ``warp_term`` (and its occlusion
-tests as its ``visibility``): the masks and costs are built here once per fit, from the config and the
-images, and applied each iteration. Each is off unless the config asks for it; with all off
-:func:`kit_warp_term` is None and the paper's Eq. 5 runs unchanged.
+tests as its ``visibility``): the masks and costs are built here once per fit, from the settings
+(:class:`WarpConfig`) and the images, and applied each iteration. Each is off unless the config asks for
+it; with all off :func:`kit_warp_term` is None and the paper's Eq. 5 runs unchanged.
 
 - ``warp_confidence``: per neighbour, the pixels whose photometric match singles out one depth
   (:mod:`ddp_lite.method.kit.warp_confidence`), from the images alone;
@@ -21,23 +21,55 @@ reprojection (Godard et al., ICCV 2019) does the same for self-supervised depth.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import torch
 from scipy import ndimage
 
+from ...core.checks import check_bool, check_choice, check_real
+from ...core.settings import Settings
 from ..paper.disparity import DisparityTransform
 from ..paper.losses import warp_loss
 from .visibility import Visibility
 from .warp_confidence import warp_confidence
-from .warp_cost import WarpCost, epipolar_directions, texture_weights
+from .warp_cost import WARP_COSTS, WarpCost, epipolar_directions, texture_weights
 
 WARP_COMBINATIONS = ("mean", "min")  # over the N neighbours: "mean" the paper's (Eq. 5), "min" per pixel
 
-__all__ = ["WARP_COMBINATIONS", "WarpTerm", "minimum_over_neighbours", "kit_warp_term", "occlusion_tests", "kit_warp_arguments", "warp_region"]
+__all__ = ["WARP_COMBINATIONS", "WarpConfig", "WarpTerm", "minimum_over_neighbours", "kit_warp_term", "occlusion_tests", "kit_warp_arguments", "warp_region"]
+
+
+@dataclass(frozen=True)
+class WarpConfig(Settings):
+    """The kit's changes to the warp term L_warp (6 fields; the defaults are the paper's Eq. 5)."""
+
+    warp_occlusion: bool = False  # skip pixels a nearer point hides from the neighbour (visibility.Visibility)
+    warp_confidence: bool = False  # only where the images single out one depth (warp_confidence)
+    warp_reach: float | None = None  # only on the unfitted pixels (holes, held-out) and within this many px of
+    # them, off the valid input L_disp pins (warp_region; None: every pixel, the paper)
+    warp_cost: str = "intensity"  # what L_warp compares: "intensity" (L1 + SSIM on colour, the paper), "census" (a
+    # soft census, no L1/SSIM), "gradient" (L1 on the images' differences + SSIM) or "census+intensity" (half each,
+    # the census at L1 + SSIM's size) (warp_cost)
+    warp_texture: bool = False  # weighted per pixel by the reference's change along the epipolar line
+    # (warp_cost.texture_weights: flat colour little)
+    warp_combine: str = "mean"  # over the N neighbours: "mean" (the paper's Eq. 5) or "min": per pixel the neighbour
+    # that agrees best (minimum_over_neighbours)
+
+    def validate(self) -> None:
+        check_choice(self.warp_cost, "config.warp_cost", WARP_COSTS)
+        check_choice(self.warp_combine, "config.warp_combine", WARP_COMBINATIONS)
+        for name in ("warp_occlusion", "warp_confidence", "warp_texture"):
+            check_bool(getattr(self, name), f"config.{name}")
+        if self.warp_combine == "min" and self.warp_texture:
+            raise ValueError("config.warp_texture weights each neighbour's cost over the image; with "
+                             "config.warp_combine='min' use one or the other")
+        if self.warp_reach is not None:
+            check_real(self.warp_reach, "config.warp_reach", 0.0)
 
 
 def warp_region(fit_mask: torch.Tensor, reach: float) -> torch.Tensor:
-    """(1, 1, H, W) bool: the pixels the warp term keeps with ``FitConfig.warp_reach`` (the kit's, not the
+    """(1, 1, H, W) bool: the pixels the warp term keeps with ``WarpConfig.warp_reach`` (the kit's, not the
     paper's): those ``fit_mask`` (1, 1, H, W) bool leaves unfitted (holes, held-out pixels) and every pixel
     within ``reach`` px of one (Euclidean distance between pixel centres, so ``reach`` 0 is the holes alone,
     1 adds their 4-neighbours).
@@ -105,16 +137,16 @@ class WarpTerm:
         return torch.stack([self.cost(w, v, t) for w, v, t in zip(warped, valid, weights)]).mean()
 
 
-def kit_warp_term(config, transform: DisparityTransform, fit_mask: torch.Tensor, rgb: torch.Tensor | None,
-                  camera, neighbors, device) -> WarpTerm | None:
-    """The warp term ``config`` (a :class:`~ddp_lite.method.config.FitConfig`) asks for, for the paper's
-    loss (same arguments as :class:`~ddp_lite.method.paper.total_loss.PaperLoss`; no ``neighbors``: no
+def kit_warp_term(config: WarpConfig, lambda_w: float, transform: DisparityTransform, fit_mask: torch.Tensor,
+                  rgb: torch.Tensor | None, camera, neighbors, device) -> WarpTerm | None:
+    """The warp term ``config`` asks for, with the paper's SSIM share ``lambda_w``, for the paper's loss
+    (the other arguments as :class:`~ddp_lite.method.paper.total_loss.PaperLoss`'s; no ``neighbors``: no
     warp term); None where it asks for none of the kit's (the paper's Eq. 5)."""
     if not neighbors:
         return None
     # per neighbour, the pixels whose photometric match singles out one depth (1, 1, H, W) bool,
     # from the images alone, once per fit (it does not depend on the fit's depth)
-    keep = ([warp_confidence(rgb, image, camera, cam, transform.d_min, transform.d_max, config.lambda_w)
+    keep = ([warp_confidence(rgb, image, camera, cam, transform.d_min, transform.d_max, lambda_w)
              for image, cam in neighbors] if config.warp_confidence else None)
     if config.warp_reach is not None:  # the warp term only in the holes and a ring around them
         region = warp_region(fit_mask, config.warp_reach)
@@ -122,23 +154,23 @@ def kit_warp_term(config, transform: DisparityTransform, fit_mask: torch.Tensor,
     kind = config.warp_cost if config.warp_cost != "intensity" or config.warp_texture else None
     weights = ([texture_weights(rgb, epipolar_directions(camera, cam).to(device)) for _, cam in neighbors]
                if config.warp_texture else None)
-    combine = getattr(config, "warp_combine", "mean")
+    combine = config.warp_combine
     if keep is None and kind is None and combine == "mean":
         return None
-    return WarpTerm(config.lambda_w, keep, kind, weights, combine)
+    return WarpTerm(lambda_w, keep, kind, weights, combine)
 
 
-def occlusion_tests(config, camera, neighbors, device) -> list | None:
-    """One occlusion test per neighbour for the paper's warpers (``FitConfig.warp_occlusion``); None: none."""
+def occlusion_tests(config: WarpConfig, camera, neighbors, device) -> list | None:
+    """One occlusion test per neighbour for the paper's warpers (``config.warp_occlusion``); None: none."""
     if not config.warp_occlusion or not neighbors:
         return None
     return [Visibility(camera, cam, torch.float32, device) for _, cam in neighbors]
 
 
-def kit_warp_arguments(config, transform: DisparityTransform, fit_mask: torch.Tensor, rgb: torch.Tensor | None,
-                       camera, neighbors, device) -> dict:
+def kit_warp_arguments(config: WarpConfig, lambda_w: float, transform: DisparityTransform, fit_mask: torch.Tensor,
+                       rgb: torch.Tensor | None, camera, neighbors, device) -> dict:
     """The kit's share of the paper's warp term as :class:`~ddp_lite.method.paper.total_loss.PaperLoss`'s
     keyword arguments: ``warp_term`` (:func:`kit_warp_term`) and ``visibility`` (:func:`occlusion_tests`),
     each None where ``config`` asks for none (the paper's)."""
-    return {"warp_term": kit_warp_term(config, transform, fit_mask, rgb, camera, neighbors, device),
+    return {"warp_term": kit_warp_term(config, lambda_w, transform, fit_mask, rgb, camera, neighbors, device),
             "visibility": occlusion_tests(config, camera, neighbors, device)}

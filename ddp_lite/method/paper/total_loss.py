@@ -27,6 +27,7 @@ from __future__ import annotations
 import torch
 
 from .disparity import DisparityTransform
+from .config import PaperConfig
 from .losses import ConstantTarget, disparity_loss, rgb_loss, warp_loss
 from .variants import get_variant
 from .warp import Warper
@@ -38,7 +39,7 @@ class PaperLoss:
     """L_total (Eq. 2) of one fit: ``loss(Z_out, I_out)`` → (total, {"disp", "rgb", "warp": term, ...}).
 
     ``config`` carries γ (``gammas``, None: the variant's) and λz, λI, λw (``lambda_z``, ``lambda_i``,
-    ``lambda_w``): a :class:`~ddp_lite.method.config.FitConfig`. ``target`` (1, 1, H, W) is Z_in and
+    ``lambda_w``): a :class:`~ddp_lite.method.paper.config.PaperConfig`. ``target`` (1, 1, H, W) is Z_in and
     ``fit_mask`` (1, 1, H, W) bool its pixels that count; ``rgb`` (1, 3, H, W) is I_in (None without
     colour); ``neighbors`` (image (1, 3, H, W), Camera) pairs seen from ``camera``. The targets' share
     of the work is done here, once per fit.
@@ -50,7 +51,7 @@ class PaperLoss:
     ``add(Z_out, total, terms)`` → total, and records its terms in ``terms``.
     """
 
-    def __init__(self, variant, config, transform: DisparityTransform, target: torch.Tensor,
+    def __init__(self, variant, config: PaperConfig, transform: DisparityTransform, target: torch.Tensor,
                  fit_mask: torch.Tensor, rgb: torch.Tensor | None = None, camera=None, neighbors=(), device="cpu",
                  *, warp_term=None, visibility=None, extra_terms=()):
         self.config, self.transform = config, transform

@@ -1,7 +1,7 @@
 """Where and in what precision a fit runs: the device (CPU by default; CUDA or MPS when asked for or
-available) and bfloat16 for the net (``FitConfig.bf16``; not in the paper).
+available) and bfloat16 for the net (``RunOptions.bf16``; not in the paper).
 
-    bf16 = config.bf16, or for None: the device computes bfloat16 natively (AVX-512 BF16 / AMX, CUDA)
+    bf16 = options.bf16, or for None: the device computes bfloat16 natively (AVX-512 BF16 / AMX, CUDA)
 
 Only the net runs under bfloat16 autocast (:func:`ddp_lite.method.loop.run`); the losses stay in float32.
 """
@@ -48,25 +48,25 @@ def _isa_capped_below_avx512() -> bool:
     return isa != "ALL" and not isa.startswith(("AVX512", "AVX10", "AMX"))
 
 
-def resolve_device(config) -> torch.device:
-    """The ``torch.device`` a :class:`~ddp_lite.method.config.FitConfig` runs on: ``config.device``, checked
-    against this machine, or for None CUDA, then MPS, then the CPU."""
-    if config.device is not None:
-        if not isinstance(config.device, (str, torch.device)):
+def resolve_device(options) -> torch.device:
+    """The ``torch.device`` a fit with these :class:`~ddp_lite.method.runtime.options.RunOptions` runs on:
+    ``options.device``, checked against this machine, or for None CUDA, then MPS, then the CPU."""
+    if options.device is not None:
+        if not isinstance(options.device, (str, torch.device)):
             raise TypeError(f"config.device must be None or a name like 'cpu', 'cuda', 'cuda:0', 'mps', "
-                            f"got {type(config.device).__name__}")
+                            f"got {type(options.device).__name__}")
         try:
-            device = torch.device(config.device)
+            device = torch.device(options.device)
         except RuntimeError:
-            raise ValueError(f"config.device must be None, 'cpu', 'cuda[:N]' or 'mps', got {config.device!r}") from None
+            raise ValueError(f"config.device must be None, 'cpu', 'cuda[:N]' or 'mps', got {options.device!r}") from None
         mps = getattr(torch.backends, "mps", None)
         available = {"cpu": True, "cuda": torch.cuda.is_available(),
                      "mps": mps is not None and mps.is_available()}
         if not available.get(device.type, False):
-            raise ValueError(f"config.device={config.device!r}: this machine has no usable {device.type} device; "
+            raise ValueError(f"config.device={options.device!r}: this machine has no usable {device.type} device; "
                              f"use 'cpu' or None (picks cuda/mps when present)")
         if device.type == "cuda" and device.index is not None and device.index >= torch.cuda.device_count():
-            raise ValueError(f"config.device={config.device!r}: only {torch.cuda.device_count()} CUDA device(s)")
+            raise ValueError(f"config.device={options.device!r}: only {torch.cuda.device_count()} CUDA device(s)")
         return device
     if torch.cuda.is_available():
         return torch.device("cuda")

@@ -28,23 +28,25 @@ DEFAULT_MEMORY_FRACTION = 0.75
 def estimate_peak_memory_gb(config, out_channels: int, height: int, width: int, n_neighbors: int = 0) -> float:
     """An estimate (GB) of the peak memory of one fit of ``config`` (a FitConfig) on a ``height × width``
     image with ``out_channels`` net outputs and ``n_neighbors`` warp partners."""
-    channels = config.channels or (UNET_CHANNELS if config.net == "unet" else SKIP_CHANNELS)
-    levels = len(channels) - 1 if config.net == "unet" else len(channels)
+    paper = config.paper
+    channels = paper.channels or (UNET_CHANNELS if paper.net == "unet" else SKIP_CHANNELS)
+    levels = len(channels) - 1 if paper.net == "unet" else len(channels)
     factor = 2 ** levels
     pixels = (-(-height // factor) * factor) * (-(-width // factor) * factor)
-    first = 0 if config.net == "unet" else 1  # SkipNet's widest level already runs at half size
-    in_channels = config.noise_channels + (3 if config.image_input > 0 else 0) + (1 if config.fill_input > 0 else 0)
+    first = 0 if paper.net == "unet" else 1  # SkipNet's widest level already runs at half size
+    extra = config.net_inputs  # the colour image's 3 channels, the fill's 1
+    in_channels = paper.noise_channels + (3 if extra.image_input > 0 else 0) + (1 if extra.fill_input > 0 else 0)
     units = in_channels + sum(c / 4 ** (k + first) for k, c in enumerate(channels))
     with torch.device("meta"):
-        parameters = count_parameters(build_net(config.net, in_channels, out_channels, config.channels))
+        parameters = count_parameters(build_net(paper.net, in_channels, out_channels, paper.channels))
     activations = 4.0 * pixels * (FLOATS_PER_UNIT * units + FLOATS_PER_NEIGHBOR_PIXEL * n_neighbors)
     return MEMORY_BASE_GB + (activations + BYTES_PER_PARAMETER * parameters) / 2 ** 30
 
 
 def memory_limit_gb(config, device: torch.device) -> tuple[float | None, str]:
     """(limit in GB, where it comes from); (None, ...) when the machine's size is unknown."""
-    if config.max_memory_gb is not None:
-        return float(config.max_memory_gb), "config.max_memory_gb"
+    if config.run.max_memory_gb is not None:
+        return float(config.run.max_memory_gb), "config.max_memory_gb"
     if device.type == "cuda":
         total, what = torch.cuda.get_device_properties(device).total_memory, "GPU memory"
     else:

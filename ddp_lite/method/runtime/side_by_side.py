@@ -28,7 +28,7 @@ def side_by_side_workers(config, variant: str, shape, n_neighbors: int, jobs: in
     """How many of ``jobs`` fits of ``config`` (``variant``, images of ``shape`` (H, W), ``n_neighbors``
     warp partners) run at once: on a CPU one per torch thread, as many as fit in memory side by side;
     1 with a ``callback`` (it may draw figures, which wants the main thread) or on a GPU."""
-    device = resolve_device(config)
+    device = resolve_device(config.run)
     if device.type != "cpu" or callback is not None:
         return 1
     workers = max(1, min(int(jobs), torch.get_num_threads()))
