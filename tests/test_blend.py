@@ -101,15 +101,16 @@ def test_a_ring_blend_without_holes_is_one_plain_fit():
     assert np.array_equal(plain.disparity, blended.disparity) and blended.fits == 1
 
 
-def test_the_photo_recipe_is_the_mean_of_the_kit_fit_the_paper_fit_and_the_two_fills():
+def test_a_blend_of_the_kit_fit_the_paper_fit_and_the_fill_is_their_weighted_mean():
     depth = tilted_plane(32, 40, slope=0.05)
     depth[8:20, 10:28] = np.nan
     rgb = np.random.default_rng(2).random(depth.shape + (3,)).astype(np.float32)
-    photo = FitConfig.for_profile("ci", variant="rgbd", recipe="photo", progress=False, iterations=12)
+    thirds = FitConfig.for_profile("ci", variant="rgbd", recipe="kit", progress=False, iterations=12,
+                                   blend_paper=True, blend_weight=0.5, blend_fill=1 / 3)
     threads = torch.get_num_threads()
     torch.set_num_threads(1)
     try:
-        blended = complete_depth(rgb, depth, variant="rgbd", config=photo)
+        blended = complete_depth(rgb, depth, variant="rgbd", config=thirds)
         kit = complete_depth(rgb, depth, variant="rgbd", transform=blended.transform,
                              config=FitConfig.for_profile("ci", variant="rgbd", recipe="kit", progress=False, iterations=12,
                                                           blend_fill=0.0))  # the kit's fit alone
@@ -119,13 +120,55 @@ def test_the_photo_recipe_is_the_mean_of_the_kit_fit_the_paper_fit_and_the_two_f
     finally:
         torch.set_num_threads(threads)
     fill = two_fills_disparity(depth, rgb, blended.transform)
-    blend = photo.combination
-    assert blend.blend_paper and blend.blend_weight == 0.5 and blend.blend_fill == pytest.approx(1 / 3)
     assert blended.history["blend_weight"] == 0.5 and blended.history["blend_fill"] == pytest.approx(1 / 3)
     assert not np.array_equal(kit.disparity, paper.disparity)
     assert np.allclose(blended.disparity, (kit.disparity + paper.disparity + fill) / 3, atol=1e-6)
     assert np.allclose(blended.rgb, 0.5 * (kit.rgb + paper.rgb), atol=1e-6)  # the fill has no colour
     assert blended.fits == 2
+
+
+def test_the_photo_recipe_is_the_kit_fit_refined_then_the_kits_share_of_the_fill():
+    from ddp_lite.method.full_resolution import refine_full_resolution
+    depth = tilted_plane(32, 40, slope=0.05)
+    depth[8:20, 10:28] = np.nan
+    rgb = np.random.default_rng(2).random(depth.shape + (3,)).astype(np.float32)
+    photo = FitConfig.for_profile("ci", variant="rgbd", recipe="photo", progress=False, iterations=12)
+    kit_config = FitConfig.for_profile("ci", variant="rgbd", recipe="kit", progress=False, iterations=12)
+    assert photo == kit_config.replace(refine=True)  # one switch on top of the kit
+    result = complete_depth(rgb, depth, variant="rgbd", config=photo)
+    alone = complete_depth(rgb, depth, variant="rgbd", transform=result.transform,
+                           config=kit_config.replace(blend_fill=0.0))  # the same fit, neither refined nor mixed
+    share = kit_config.combination.blend_fill
+    sharp = result.transform.to_disparity(refine_full_resolution(depth, rgb, alone.depth))
+    fill = two_fills_disparity(depth, rgb, result.transform)
+    assert result.history["refined"] and result.history["blend_fill"] == share
+    assert np.allclose(result.disparity, (1 - share) * sharp + share * fill, atol=1e-5)
+    assert result.fits == 1
+
+
+def test_refine_puts_a_blurred_depth_edge_back_on_the_colour_edge():
+    # two planes, 1 m left of column 20 and 2 m right of it, with a black | white image: a fit that has
+    # only run a few iterations blurs the step across the hole; the solve toward it, guided by the
+    # image, must put the step at column 20 (the truth) and leave the valid input as it was
+    truth = np.where(np.arange(40) < 20, 1.0, 2.0)[None, :].repeat(32, axis=0).astype(np.float32)
+    rgb = np.zeros((32, 40, 3), np.float32)
+    rgb[:, 20:] = 1.0
+    depth = truth.copy()
+    depth[8:24, 12:28] = np.nan
+    config = FitConfig.for_profile("ci", variant="rgbd", recipe="kit", progress=False, iterations=8, blend_fill=0.0)
+    plain = complete_depth(rgb, depth, variant="rgbd", config=config)
+    sharp = complete_depth(rgb, depth, variant="rgbd", config=config.replace(refine=True))
+    holes = np.isnan(depth)
+
+    def hole_error(result):
+        return np.abs(1 / result.depth[holes] - 1 / truth[holes]).mean()  # 1/m
+    assert hole_error(sharp) < 0.2 * hole_error(plain)
+    assert np.array_equal(sharp.depth[~holes], depth[~holes])
+    with pytest.raises(ValueError, match="config.refine needs the colour image"):
+        complete_depth(None, depth, variant="d", config=config.replace(refine=True))
+    with pytest.raises(TypeError, match="config.refine"):
+        FitConfig(refine="yes").validate()
+    assert not FitConfig.for_profile("ci", variant="d", recipe="photo").combination.refine  # depth only: no colour
 
 
 def fill_case(seed):
@@ -241,8 +284,12 @@ def test_blend_paper_refuses_an_ensemble_and_a_non_bool():
 
 def test_the_equation_shows_the_blend_as_not_in_the_paper():
     from ddp_lite.method.equation import loss_equation
+    thirds = loss_equation(FitConfig.for_profile("ci", variant="rgbd", recipe="kit", blend_paper=True,
+                                                 blend_fill=1 / 3), "rgbd")
     photo = loss_equation(FitConfig.for_profile("ci", variant="rgbd", recipe="photo"), "rgbd")
     kit = loss_equation(FitConfig.for_profile("ci", variant="rgbd", recipe="kit", blend_fill=0.0), "rgbd")  # the fit alone
-    assert photo.endswith("\\underbrace{\\hat Z = 0.333\\,Z + 0.333\\,Z_{\\mathrm{paper}} + 0.333\\,\\mathrm{fill}(Z_{\\mathrm{in}})}"
+    assert thirds.endswith("\\underbrace{\\hat Z = 0.333\\,Z + 0.333\\,Z_{\\mathrm{paper}} + 0.333\\,\\mathrm{fill}(Z_{\\mathrm{in}})}"
+                           "_{\\text{not in the paper}}")
+    assert photo.endswith("\\underbrace{\\hat Z = 0.75\\,\\mathcal{R}_I(Z) + 0.25\\,\\mathrm{fill}(Z_{\\mathrm{in}})}"
                           "_{\\text{not in the paper}}")
-    assert photo.startswith(kit) and "Z_{\\mathrm{paper}}" not in kit
+    assert thirds.startswith(kit) and photo.startswith(kit) and "Z_{\\mathrm{paper}}" not in kit

@@ -13,7 +13,7 @@ import torch
 from ..core.camera import Camera
 from .config import FitConfig
 from .paper.disparity import DisparityTransform
-from .complete import with_fill
+from .complete import refined, with_fill
 from .fit import DepthResult, fit_once
 from .input_checks import check_fit_inputs
 from .paper.nets import make_input
@@ -70,8 +70,8 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
     its weights carry over; the full-size stage sees the coarse noise upsampled bilinearly, the
     same input at twice the resolution. It runs the remaining iterations with ``config`` as
     given (auto-stop included); the learning-rate schedule continues across the two stages.
-    It is one fit: ``config.combination``'s ``ensemble`` and ``blend_paper`` do not apply; its ``blend_fill``
-    does, to the full-size result (None: both stages fit without the held-out blobs that choose the share,
+    It is one fit: ``config.combination``'s ``ensemble`` and ``blend_paper`` do not apply; its ``refine`` and
+    ``blend_fill`` do, to the full-size result (None: both stages fit without the held-out blobs that choose the share,
     as :func:`~ddp_lite.method.complete.with_fill` does for :func:`complete_depth`).
 
     Args:
@@ -147,4 +147,4 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
     result = dataclasses.replace(fine, history=history, iterations=coarse.iterations + fine.iterations,
                                  best_iteration=coarse.iterations + fine.best_iteration,
                                  seconds=coarse.seconds + fine.seconds)
-    return result
+    return refined(result, depth, rgb) if config.combination.refine else result

@@ -1,9 +1,10 @@
 """:func:`complete_depth`, the entry point: one DDP fit, or the kit's combinations of fits a config asks for.
 
-A config asks for at most three, applied from the outside in: a share of the input's colour-guided
-fill mixed into the result (``blend_fill``, :func:`with_fill`); the blend of this config's fit with
-the paper recipe's (``blend_paper``, :func:`fit_blended`); the mean of several fits from other seeds
-(``ensemble``, :func:`fit_ensemble`). The recipe ``photo`` is the first two together. Each member is
+A config asks for at most four, applied from the outside in: a share of the input's colour-guided
+fill mixed into the result (``blend_fill``, :func:`with_fill`); the result made sharp by an image-guided
+edge-aware solve toward it (``refine``, :func:`refined`); the blend of this config's fit with the paper
+recipe's (``blend_paper``, :func:`fit_blended`); the mean of several fits from other seeds (``ensemble``,
+:func:`fit_ensemble`). The recipe ``photo`` is the kit's fit refined, with the kit's share of the fill. Each member is
 one fit of :func:`ddp_lite.method.fit.run_fit` on the inputs checked once; the weights and shares
 come from :mod:`ddp_lite.method.kit.blend`, the members' scheduling from :mod:`ddp_lite.method.kit.ensemble`.
 """
@@ -15,6 +16,7 @@ import numpy as np
 
 from .kit.blend import best_fill_share, best_weight, fill_disparity, fill_holdout, validation_ring
 from .fit_cache import cached
+from .full_resolution import refine_full_resolution
 from ..core.camera import Camera
 from ..core.checks import MIN_VALID_PIXELS, check_callback
 from .config import FitConfig
@@ -26,6 +28,7 @@ from .kit.recipes import get_recipe
 from .paper.variants import get_variant
 
 __all__ = ["complete_depth", "fit_ensemble", "fit_blended", "blend_members", "blended_result", "combined_result",
+           "refined",
            "with_fill", "mixed_with_fill"]
 
 
@@ -67,12 +70,29 @@ def complete_depth(rgb, depth, camera: Camera | None = None, neighbors=(), varia
 
 
 def _fits(inputs: FitInputs, config: FitConfig, callback, init) -> DepthResult:
-    """One fit, a blend or an ensemble, as ``config`` asks (its ``blend_fill`` is the caller's)."""
+    """One fit, a blend or an ensemble, as ``config`` asks, refined when it asks (its ``blend_fill`` is the
+    caller's)."""
     if config.combination.blend_paper:
-        return fit_blended(inputs, config, callback, init)
-    if config.combination.ensemble == 1:
-        return run_fit(inputs, config, callback=callback, init=init)
-    return fit_ensemble(inputs, config, callback, init)
+        result = fit_blended(inputs, config, callback, init)
+    elif config.combination.ensemble == 1:
+        result = run_fit(inputs, config, callback=callback, init=init)
+    else:
+        result = fit_ensemble(inputs, config, callback, init)
+    return refined(result, inputs.depth, inputs.rgb) if config.combination.refine else result
+
+
+def refined(result: DepthResult, depth: np.ndarray, rgb: np.ndarray) -> DepthResult:
+    """``config.combination.refine``: ``result`` made sharp at its own size, its depth the target of the
+    image-guided edge-aware solve of :func:`~ddp_lite.method.full_resolution.refine_full_resolution` (the
+    fast bilateral solver: confidence 1 on the valid input ``depth`` (H, W) metres, NaN holes, and 0.01 on
+    the fit in the holes, after the fit's own error on the valid pixels is carried into them), guided by
+    ``rgb`` (H, W, 3) in [0, 1]. The valid input comes back as given; ``history`` gets ``refined``.
+    A fit blurs depth edges a few pixels wide; the solve puts them on the image's colour edges."""
+    transform = result.transform
+    sharp = refine_full_resolution(depth, rgb, result.depth)  # (H, W) metres
+    disparity = np.asarray(transform.to_disparity(sharp), np.float32)
+    return replace(result, disparity=disparity, depth=transform.to_depth(disparity).astype(np.float32),
+                   history={**result.history, "refined": True})
 
 
 def fit_ensemble(inputs: FitInputs, config: FitConfig, callback, init) -> DepthResult:

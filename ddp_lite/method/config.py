@@ -125,8 +125,9 @@ class FitConfig:
         values.update(net=net, channels=profile.channels if net == "unet" else profile.skip_channels,
                       iterations=iterations, lr_milestones=profile.milestones(iterations))
         values.update(get_recipe(recipe).settings(profile.name))
-        if not get_variant(variant).uses_rgb:  # a colour-guided fill would bring colour into a depth-only result
+        if not get_variant(variant).uses_rgb:  # a colour-guided fill or solve would bring colour into a depth-only result
             values["blend_fill"] = 0.0
+            values["refine"] = False
         values.update(overrides)
         return cls(**values)
 

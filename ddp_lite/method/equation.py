@@ -3,7 +3,9 @@
 The paper's terms (Eq. 2-5, :mod:`ddp_lite.method.paper.total_loss`) come with the weights the
 variant gives them; the kit's additions (:mod:`ddp_lite.method.kit.hole_terms`, the net inputs of
 :mod:`ddp_lite.method.paper.nets`) are set apart under a brace marked "not in the paper", so a student
-sees at a glance what the recipe in force adds. Reads only the config's fields.
+sees at a glance what the recipe in force adds, and how the answer Ẑ is put together from the fit Z
+(:math:`\\mathcal{R}_I`: the image-guided solve of ``refine``; fill: the colour-guided fill of ``blend_fill``).
+Reads only the config's fields.
 """
 from __future__ import annotations
 
@@ -64,20 +66,29 @@ def loss_equation(config, variant: str) -> str:
     net_input = ", ".join(in_paper + (["\\underbrace{" + ", ".join(added) + "}_{\\text{not in the paper}}"]
                                       if added else []))
     equation = f"\\min_\\theta\\ {loss},\\quad {outputs} = f_\\theta({net_input})"
-    paper_fit, fill = config.combination.blend_paper, config.combination.blend_fill
-    if paper_fit or fill != 0:  # fits and a fill, blended (method.blend)
+    paper_fit, fill, refine = (config.combination.blend_paper, config.combination.blend_fill,
+                               config.combination.refine)
+    if paper_fit or fill != 0 or refine:  # fits and a fill, blended (method.blend), the fit made sharp first
         w = config.combination.blend_weight if paper_fit else 1.0
+        z, z_paper = "Z", "Z_{\\mathrm{paper}}"
         if fill is None:  # the share chosen on held-out depth
-            fits = "Z" if w == 1.0 else ("(w^* Z + (1 - w^*)\\,Z_{\\mathrm{paper}})" if w is None else
-                                         f"({w:.3g}\\,Z + {1 - w:.3g}\\,Z_{{\\mathrm{{paper}}}})")
+            fits = z if w == 1.0 else (f"(w^* {z} + (1 - w^*)\\,{z_paper})" if w is None else
+                                       f"({w:.3g}\\,{z} + {1 - w:.3g}\\,{z_paper})")
+            fits = f"\\mathcal{{R}}_I({fits})" if refine else fits
             mix = f"(1 - f^*)\\,{fits} + f^*\\,\\mathrm{{fill}}(Z_{{\\mathrm{{in}}}})"
         elif w is None:
-            mix = "w^* Z + (1 - w^*)\\,Z_{\\mathrm{paper}}"
+            mix = f"w^* {z} + (1 - w^*)\\,{z_paper}"
+            mix = f"\\mathcal{{R}}_I({mix})" if refine else mix
             if fill > 0:
                 mix = f"{1 - fill:.3g}\\,({mix}) + {fill:.3g}\\,\\mathrm{{fill}}(Z_{{\\mathrm{{in}}}})"
+        elif refine:  # the solve acts on the fits' blend, then the fill is mixed in
+            fits = z if w == 1.0 else f"{w:.3g}\\,{z} + {1 - w:.3g}\\,{z_paper}"
+            mix = f"\\mathcal{{R}}_I({fits})"
+            if fill > 0:
+                mix = f"{1 - fill:.3g}\\,{mix} + {fill:.3g}\\,\\mathrm{{fill}}(Z_{{\\mathrm{{in}}}})"
         else:
             mix = " + ".join(f"{share:.3g}\\,{term}" for share, term in
-                             (((1 - fill) * w, "Z"), ((1 - fill) * (1 - w), "Z_{\\mathrm{paper}}"),
+                             (((1 - fill) * w, z), ((1 - fill) * (1 - w), z_paper),
                               (fill, "\\mathrm{fill}(Z_{\\mathrm{in}})")) if share > 0)
         equation += f",\\quad \\underbrace{{\\hat Z = {mix}}}_{{\\text{{not in the paper}}}}"
     return equation

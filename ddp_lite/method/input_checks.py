@@ -95,6 +95,8 @@ def check_fit_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth, t
     rgb = check_image(rgb, "rgb", (H, W)) if spec.uses_rgb or rgb is not None else None
     if config.combination.blend_fill != 0 and rgb is None:  # the fill is guided by the colour image (None: chosen)
         raise ValueError("config.blend_fill needs the colour image: pass rgb (H, W, 3), or set blend_fill=0")
+    if config.combination.refine and rgb is None:  # the solve is guided by the colour image
+        raise ValueError("config.refine needs the colour image: pass rgb (H, W, 3), or set refine=False")
     neighbors = _check_neighbors(neighbors)
     if camera is not None and not isinstance(camera, Camera):
         raise TypeError(f"camera must be a ddp_lite.Camera, got {type(camera).__name__}")

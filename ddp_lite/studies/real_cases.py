@@ -31,7 +31,7 @@ from scipy import ndimage
 from ..classical.baselines import BASELINES
 from ..evaluation.experiments import Case
 from ..method.config import FitConfig
-from ..method.complete import blend_members, blended_result, complete_depth, mixed_with_fill
+from ..method.complete import blend_members, blended_result, complete_depth, mixed_with_fill, refined
 from ..classical.holes import random_holes
 from ..data.middlebury import load_middlebury, load_motorcycle
 from ..method.profiles import get_profile
@@ -204,7 +204,7 @@ def compare_fills(case: RealCase, profile=None, recipes=("paper", "kit"), varian
     The classical fills fill the disparity map (d = f·B/Z); DDP fits its own normalised disparity,
     from the input depth's range, with the profile's size and budget (``rgbd+warp`` warps the right
     view). Names: the fills' keys, then ``"DDP <recipe>"``. A blend of two recipes listed before it
-    (``photo`` after ``paper`` and ``kit``) is built from their fits: two fits fewer, the same method.
+    (a blend of ``paper`` and ``kit``, or ``photo``: the ``kit`` fit refined) is built from the fits it reuses: the same method, fewer fits.
     The fits run side by side (:mod:`ddp_lite.method.runtime.side_by_side`).
     """
     disparity_in = case.fb / case.depth  # (H, W) px (plus doffs: a constant, it cancels in every error)
@@ -218,13 +218,13 @@ def compare_fills(case: RealCase, profile=None, recipes=("paper", "kit"), varian
 
 
 def _plain_fits(case: RealCase, variant: str, configs: list) -> list:
-    """The plain fits the recipes ``configs`` need (each without its fill's share; a blend of two fits
-    listed before it needs none of its own), fitted side by side → [(config, DepthResult)]."""
+    """The plain fits the recipes ``configs`` need (each without its fill's share and its refinement; a blend
+    of two fits listed before it needs none of its own), fitted side by side → [(config, DepthResult)]."""
     planned = []
     for config in configs:
         if config.combination.blend_fill is None:
             continue  # its share is chosen on depth held out of the fit: a fit of its own
-        base = config.replace(blend_fill=0.0)
+        base = config.replace(blend_fill=0.0, refine=False)
         blend = base.combination
         if blend.blend_paper and blend.blend_weight is not None and all(m in planned for m in blend_members(base)):
             continue
@@ -239,19 +239,21 @@ def _plain_fits(case: RealCase, variant: str, configs: list) -> list:
 
 def _fit_reusing(case: RealCase, variant: str, config: FitConfig, fitted: list):
     """``complete_depth`` of ``case`` under ``config``, from the plain fits in ``fitted`` (:func:`_plain_fits`):
-    one of them, or a blend of two (``photo`` after ``kit`` and ``paper``, same seed), with the config's
-    share of the fill mixed in after."""
+    one of them, or a blend of two (a recipe with ``blend_paper`` after ``kit`` and ``paper``, same seed),
+    refined when the config asks (``photo`` after ``kit``), with the config's share of the fill mixed in after."""
     share = config.combination.blend_fill
     if share is None:  # the share is chosen on depth held out of the fit: a fit of its own
         neighbors = case.neighbors if variant == "rgbd+warp" else ()
         return complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant, config=config)
-    base = config.replace(blend_fill=0.0)
+    base = config.replace(blend_fill=0.0, refine=False)
     same = [result for c, result in fitted if c == base]
     if same:
         result = same[0]
     else:  # _plain_fits planned no fit of its own: a blend of two it did
         done = [result for wanted in blend_members(base) for c, result in fitted if c == wanted]
         result = blended_result(done, done[0].transform, base.combination.blend_weight)
+    if config.combination.refine:
+        result = refined(result, case.depth, case.rgb)
     return mixed_with_fill(result, case.depth, case.rgb, share) if share else result
 
 

@@ -1,11 +1,11 @@
-"""Blends of the kit's fit, the paper's and a classical fill (``CombinationConfig.blend_paper``, ``blend_fill``;
-the ``photo`` recipe). Not in the paper.
+"""Blends of the kit's fit, the paper's and a classical fill (``CombinationConfig.blend_paper``, ``blend_fill``),
+and the settings of every combination (``refine`` too). Not in the paper.
 
 The two recipes err in different places. On rendered scenes the kit's hole terms and inputs fill
 large holes far better; on the real photograph's occlusions the paper's plain loss is ahead, and
 on its blob holes the two fits' mean beats both (``docs/real_data.md``). ``blend_weight`` w gives
 
-    Z = w·Z_kit + (1 − w)·Z_paper            (w = 0.5 in the ``photo`` recipe)
+    Z = w·Z_kit + (1 − w)·Z_paper            (w = 0.5 when blended)
 
 ``blend_weight=None`` lets the image choose w, as self-validation does for deep priors: a ring of
 valid input around the holes is held out of both fits, and the weight that best predicts it wins:
@@ -21,10 +21,9 @@ It stays a study lever. The two fits run side by side on a CPU with two threads
 ``blend_fill`` f mixes in a third estimate that errs in yet other places: a colour-guided fill of the
 input (:func:`fill_disparity`), the mean of Levin et al.'s colorization fill and Barron & Poole's fast
 bilateral solver, which between them are the best classical fill on every real case (colorization on
-the occlusions and the textured blob, the solver on the rest). The ``photo`` recipe takes the three in
-equal shares:
+the occlusions and the textured blob, the solver on the rest):
 
-    Z = (1 − f)·(w·Z_kit + (1 − w)·Z_paper) + f·Z_fill          (photo: w = ½, f = ⅓)
+    Z = (1 − f)·(w·Z_kit + (1 − w)·Z_paper) + f·Z_fill          (kit at class: no paper fit, f = ¼)
 
 ``blend_fill=None`` lets the image choose f, on valid depth the fit never saw: 5 % of the valid
 pixels, in smooth blobs like holes, are held out of the fit (and of a fill computed for the choice),
@@ -38,7 +37,9 @@ is mostly the network's. The blobs, unlike a ring around the holes, cost the fit
 measured, the choice does not tell the photograph from the rendered scenes: the held-out valid depth
 prefers the fill on both, so it only buys a larger share with its cost (``docs/real_data.md``). It
 stays a study lever (recipe ``fill-chosen``); the ``kit`` recipe takes a fixed share where the variant
-sees colour (:data:`~ddp_lite.method.kit.recipes.KIT_AT`).
+sees colour (:data:`~ddp_lite.method.kit.recipes.KIT_AT`). On the real suite's 61 cases a larger fixed
+share helps the fit alone more (f = 0.8: 1.02× the best fill against 1.18× at ¼), but the fit made sharp
+first (``refine``, the ``photo`` recipe) does better at ¼ (``docs/real_suite.md``).
 
 Their settings, with the size of an ensemble (:mod:`ddp_lite.method.kit.ensemble`), the other way to
 combine fits, are :class:`CombinationConfig`; :mod:`ddp_lite.method.complete` applies them.
@@ -68,17 +69,20 @@ FILL_MEMBERS = ("colorization", "bilateral-solver")
 
 @dataclass(frozen=True)
 class CombinationConfig(Settings):
-    """What goes into the answer besides one fit (4 fields; the defaults: one fit, as the paper)."""
+    """What goes into the answer besides one fit (5 fields; the defaults: one fit, as the paper)."""
 
     ensemble: int = 1  # fits with seeds seed, seed+1, ...; their disparities are averaged
     blend_paper: bool = False  # also fit the paper's recipe and blend the two fits
     blend_weight: float | None = 0.5  # this config's fit's weight in that blend; None: chosen on a held-out ring
     blend_fill: float | None = 0.0  # share of the input's colour-guided fill in the final disparity (0: none;
     # None: chosen on held-out blobs of the valid input)
+    refine: bool = False  # the fit made sharp by an image-guided edge-aware solve toward it, before the fill's
+    # share is mixed in (method.full_resolution.refine_full_resolution at the fit's own size; variants with colour)
 
     def validate(self) -> None:
         check_int(self.ensemble, "config.ensemble", minimum=1)
         check_bool(self.blend_paper, "config.blend_paper")
+        check_bool(self.refine, "config.refine")
         if self.blend_paper and self.ensemble > 1:
             raise ValueError(f"config.blend_paper and config.ensemble > 1 cannot be combined (a blend of two fits "
                              f"is not averaged with more), got ensemble={self.ensemble}")

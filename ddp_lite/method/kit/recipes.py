@@ -12,9 +12,11 @@ A profile (``ci``, ``class``, ``paper``; ``DDP_PROFILE``) sets the size and the 
   input (:mod:`ddp_lite.method.paper.nets`); a share of a colour-guided fill of the input mixed into the result
   where the variant sees colour (:mod:`ddp_lite.method.kit.blend`). At ``paper`` it is the
   paper's method.
-- ``photo``: for real photographs, the mean of a ``kit`` fit, a ``paper`` fit and the input's
-  colour-guided fill (two fits, :mod:`ddp_lite.method.kit.blend`): ahead of each on the real Middlebury
-  pair, behind ``kit`` on the rendered scenes.
+- ``photo``: for real photographs, the ``kit`` fit made sharp by an image-guided edge-aware solve toward
+  it (``refine``: the fast bilateral solver of :mod:`ddp_lite.method.full_resolution` at the fit's own
+  size), with the kit's share of the colour-guided fill: one fit, ahead of every fill on the mean of the
+  real suite's 61 cases (``docs/real_suite.md``). ``ddp-lite complete`` runs the same solve at the
+  photo's full size instead.
 
 Every profile runs with every recipe, so ``FitConfig.for_profile("ci", recipe="paper")`` is the
 paper's method in seconds. The quality study's other recipes are ``benchmarks/study_recipes.py``;
@@ -91,12 +93,12 @@ RECIPES = {
     "paper": Recipe("paper", dict(smoothness=0.0, flatness=0.0, image_input=0.0, fill_input=0.0, net_input="noise",
                                   noise_channels=16, blend_paper=False, blend_fill=0.0),
                     "the paper's losses (Eq. 2-5) from its 16-channel noise input, nothing added", base="kit"),
-    # for real photographs: the two recipes and the colour-guided fill err in different places there (the
-    # kit on occlusions, the paper on blob holes, the fill where colour misleads), and their mean beats
-    # each (docs/real_data.md); on the rendered scenes it costs
-    "photo": Recipe("photo", dict(blend_paper=True, blend_weight=0.5, blend_fill=1 / 3),
-                    "for real photographs: the mean of the kit's fit, the paper's and a colour-guided fill, two fits",
-                    base="kit"),
+    # for real photographs: a fit blurs depth edges over a few pixels and a colour-guided solve puts them on
+    # the photo's edges; chosen on half the real suite's scenes among fill shares and solves, confirmed on the
+    # other half (docs/real_suite.md)
+    "photo": Recipe("photo", dict(refine=True),
+                    "for real photographs: the kit's fit made sharp by an image-guided bilateral solve, with the "
+                    "kit's share of a colour-guided fill; one fit", base="kit"),
 }
 
 
@@ -143,6 +145,7 @@ def describe_method(settings: dict) -> str:
             + (", the warp term per pixel from the neighbour that agrees best (not their mean)"
                if settings.get("warp_combine", "mean") == "min" else "")
             + (f", mean of {ensemble} fits" if ensemble > 1 else "")
+            + (", made sharp by an image-guided bilateral solve toward the fit" if settings.get("refine") else "")
             + ((", blended with the paper recipe's fit, " + ("weight from a held-out ring" if settings.get("blend_weight", 0.5) is None
                else f"weight {settings.get('blend_weight', 0.5):g}")) if settings.get("blend_paper") else "")
             + (", and with the input's colour-guided fill (colorization and bilateral solver, averaged), " + (
