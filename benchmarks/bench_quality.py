@@ -64,7 +64,7 @@ HOLES = ("sgm-dense", "sgm-sparse", "blobs")
 QUICK = ("desk/sgm-dense", "house/blobs", "fixture/sgm-dense")
 
 # name → FitConfig overrides on top of the profile's config: the default (the kit), the paper's
-# method, the photo recipe (the mean of a kit fit, a paper fit and a colorization fill), and the study's other recipes (study_recipes.STUDY, each with its one-line why)
+# method, the photo recipe (the kit's fit refined by an image-guided bilateral solve), and the study's other recipes (study_recipes.STUDY, each with its one-line why)
 RECIPES = {"default": {}, "paper": KIT_RECIPES["paper"].overrides, "photo": KIT_RECIPES["photo"].overrides, **STUDY}
 
 
