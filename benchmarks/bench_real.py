@@ -78,7 +78,7 @@ def run(data, size: str, recipes, variants, seeds, out: Path, profile: str = "cl
     rows, done = _done(out)
     fits_left = sum(1 for n in names for v in variants for s in seeds
                     if any((n, f"DDP {r}", v, s) not in done for r in recipes))
-    plain = len([r for r in recipes if r != "photo"])
+    plain = len([r for r in recipes if not (r == "photo" and "kit" in recipes)])  # photo refines the kit fit
     expected = fits_left * plain * SECONDS_PER_FIT[size] / max(1, min(2, plain))
     print(f"{len(names)} cases, {fits_left} case-variant-seed runs of {plain} fits left: expect about "
           f"{expected / 60:.0f} min on 2 cores (class, {size}); rows to {out}", flush=True)
