@@ -53,7 +53,7 @@ from ddp_lite.core.files import atomic_path, write_bytes_atomic  # noqa: E402
 from ddp_lite.method.complete import complete_depth  # noqa: E402
 from ddp_lite.method.config import FitConfig  # noqa: E402
 from ddp_lite.method.full_resolution import refine_full_resolution  # noqa: E402
-from ddp_lite.method.kit.blend import FILL_MEMBERS, fill_holdout  # noqa: E402
+from ddp_lite.method.kit.blend import FILL_MEMBERS, best_fill_share, fill_holdout  # noqa: E402
 from bench_real import table6_fills  # noqa: E402
 from ddp_lite.studies.real_suite import SUITE_HOLES, make_suite_case, suite_case_names  # noqa: E402
 
@@ -117,9 +117,8 @@ def rules(case, fit_depth: np.ndarray, heldout: np.ndarray, seed: int) -> dict[s
     def score(px):  # the input where it is valid, px in its holes
         return case.rmse_px(case.fb / np.where(np.isfinite(case.depth), truth_in, px), holes)
 
-    def chosen_share(fill_held):
-        errors = [_rmse((1 - f) * fit_px + f * fill_held, truth_in, heldout) for f in SHARES]
-        return SHARES[int(np.argmin(errors))]
+    def chosen_share(fill_held):  # the kit's own held-out choice, over shares up to the fill alone
+        return best_fill_share(fit_px, fill_held, truth_in, heldout, SHARES)[0]
 
     out = {f"fill {n}": score(px) for n, px in fills_all.items()}
     out["fit"] = score(fit_px)
