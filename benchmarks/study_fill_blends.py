@@ -2,7 +2,9 @@
 half of the scenes and confirmed on the other.
 
     python benchmarks/study_fill_blends.py --data DIR fit [--seeds 0 1] [--cases Art/sgbm ...]   # the fits (slow)
-    python benchmarks/study_fill_blends.py --data DIR report [--seeds 0 1]                        # the rules (seconds)
+    python benchmarks/study_fill_blends.py --data DIR fit --channels 8 16 32 64 128 --fits DIR2   # the narrow net
+    python benchmarks/study_fill_blends.py --data DIR report [--seeds 0 1]                        # the rules (minutes)
+    python benchmarks/study_fill_blends.py --data DIR report --seeds 0 1 2 --from-rows a.jsonl b.jsonl  # their tables
 
 The best classical fill differs from case to case (the bilateral solver on most, colorization on
 occlusions, the guided filter on Plastic's strokes), so "DDP over the best fill" compares DDP with an
@@ -28,7 +30,11 @@ f·fill``):
   (``method.full_resolution``: the bilateral solver guided by the image, confidence 1 on the valid input
   and c on the fit in the holes, after the fit's own error on the valid pixels is carried into them);
   ``refined + f``: that (c = 0.01) with f of the mean fill mixed in after; ``f, refined``: f of the mean fill
-  mixed into the fit first, then refined.
+  mixed into the fit first, then refined;
+- ``solve s,λ + ¼``: the refinement with the bilateral solver's spatial reach ``sigma_xy`` = s px and
+  smoothness ``lam`` = λ (the default is 8, 4), then ¼ of the mean fill; ``chosen solve + ¼``: the (s, λ) that
+  best predicts the held-out blobs (the refinement run on the held-out input); ``mean of 4 / 9 solves + ¼``:
+  the refinements over s ∈ {4, 8} × λ ∈ {4, 16} (or all nine) averaged in disparity, then ¼ of the fill.
 
 Each rule's hole RMSE over the best fill of the case (the suite's yardstick), means per hole kind, per
 half (A: Art, Dolls, Moebius, Baby1, Baby3, Bowling2, Adirondack, Jadeplant, Pipes, Playtable;
@@ -63,6 +69,8 @@ SHARES = tuple(round(0.1 * k, 1) for k in range(11))
 KIT_SHARE = 0.25
 REFINE_CONFIDENCES = (0.01, 0.1)
 REFINED_SHARES = (0.25, 0.5, 0.7)
+SMOOTHNESS = tuple((s, lam) for s in (4.0, 8.0, 16.0) for lam in (1.0, 4.0, 16.0))  # the solve's (sigma_xy px, lam)
+SOLVE_MEANS = {"mean of 4 solves": ((4.0, 4.0), (4.0, 16.0), (8.0, 4.0), (8.0, 16.0)), "mean of 9 solves": SMOOTHNESS}
 
 
 def half(case: str) -> str:
@@ -76,8 +84,9 @@ def held_out_input(case, seed: int) -> tuple[np.ndarray, np.ndarray]:
     return np.where(heldout, np.nan, case.depth).astype(np.float32), heldout
 
 
-def fit(data, names, seeds, fits: Path, variant: str, size: str) -> None:
-    """One kit fit per case and seed on the held-out input, saved to ``fits``."""
+def fit(data, names, seeds, fits: Path, variant: str, size: str, channels: tuple | None = None) -> None:
+    """One kit fit per case and seed on the held-out input, saved to ``fits`` (``channels``: the net's
+    encoder widths, None → the profile's)."""
     fits.mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
     for seed in seeds:
@@ -88,7 +97,7 @@ def fit(data, names, seeds, fits: Path, variant: str, size: str) -> None:
             case = make_suite_case(data, name, size)
             depth, heldout = held_out_input(case, seed)
             config = FitConfig.for_profile("class", variant=variant, recipe="kit", seed=seed, progress=False,
-                                           blend_fill=0.0)
+                                           blend_fill=0.0, **({"channels": channels} if channels else {}))
             began = time.perf_counter()
             neighbors = case.neighbors if variant == "rgbd+warp" else ()
             result = complete_depth(case.rgb, depth, case.camera, neighbors, variant=variant, config=config)
@@ -140,12 +149,26 @@ def rules(case, fit_depth: np.ndarray, heldout: np.ndarray, seed: int) -> dict[s
         out[f"refined + {f:g}"] = score((1 - f) * refined_px + f * mean_all)
         mixed = case.fb / ((1 - f) * fit_px + f * mean_all)  # (H, W) metres
         out[f"{f:g}, refined"] = score(case.fb / refine_full_resolution(case.depth, case.rgb, mixed))
+    solves, predicted = {}, {}  # (s, λ) → (H, W) px of the whole input's refinement; → held-out RMSE
+    for s, lam in SMOOTHNESS:
+        solves[s, lam] = case.fb / refine_full_resolution(case.depth, case.rgb, fit_depth, sigma_xy=s, lam=lam)
+        held_refined = case.fb / refine_full_resolution(held_depth, case.rgb, fit_depth, sigma_xy=s, lam=lam)
+        predicted[s, lam] = _rmse(held_refined, truth_in, heldout)
+        out[f"solve {s:g},{lam:g} + 0.25"] = score((1 - KIT_SHARE) * solves[s, lam] + KIT_SHARE * mean_all)
+    chosen = min(SMOOTHNESS, key=predicted.get)
+    out["chosen solve + 0.25"] = score((1 - KIT_SHARE) * solves[chosen] + KIT_SHARE * mean_all)
+    out["chosen solve: s,lam"] = f"{chosen[0]:g},{chosen[1]:g}"
+    for name, settings in SOLVE_MEANS.items():
+        out[f"{name} + 0.25"] = score((1 - KIT_SHARE) * np.mean([solves[k] for k in settings], axis=0)
+                                      + KIT_SHARE * mean_all)
     return out
 
 
-def report(data, names, seeds, fits: Path, variant: str, size: str, out: Path) -> None:
-    rows = []
-    for seed in seeds:
+def report(data, names, seeds, fits: Path, variant: str, size: str, out: Path, from_rows: list[Path],
+           other_fits: Path | None = None) -> None:
+    rows = [json.loads(line) for path in from_rows for line in path.read_text().splitlines()]
+    rows = [r for r in rows if r["seed"] in seeds and r["case"] in names]
+    for seed in seeds if not from_rows else ():
         for name in names:
             path = fits / f"{name.replace('/', '__')}__{variant}__{seed}.npz"
             if not path.exists():
@@ -153,15 +176,20 @@ def report(data, names, seeds, fits: Path, variant: str, size: str, out: Path) -
             case = make_suite_case(data, name, size)
             with np.load(path) as saved:
                 scores = rules(case, saved["depth"], saved["heldout"], seed)
-            rows.append(dict(case=name, seed=seed, variant=variant, size=size, half=half(name), **scores))
+                seconds = float(saved["seconds"])
+            rows.append(dict(case=name, seed=seed, variant=variant, size=size, half=half(name), fit_seconds=seconds,
+                             **scores))
     if not rows:
         print(f"no fits in {fits}")
         return
-    write_bytes_atomic(out, "".join(json.dumps(r) + "\n" for r in rows).encode())
+    if not from_rows:
+        write_bytes_atomic(out, "".join(json.dumps(r) + "\n" for r in rows).encode())
     fills = [k for k in rows[0] if k.startswith("fill ")]
     ratio_keys = ["fit", "kit"] + [f"fixed {f:.1f}" for f in SHARES[1:]] + [
         "chosen share", "chosen fill", "chosen fill + share"] + [f"refined c={c:g}" for c in REFINE_CONFIDENCES] + [
-        f"refined + {f:g}" for f in REFINED_SHARES] + [f"{f:g}, refined" for f in REFINED_SHARES]
+        f"refined + {f:g}" for f in REFINED_SHARES] + [f"{f:g}, refined" for f in REFINED_SHARES] + [
+        f"solve {s:g},{lam:g} + 0.25" for s, lam in SMOOTHNESS] + ["chosen solve + 0.25"] + [
+        f"{name} + 0.25" for name in SOLVE_MEANS]
     table6 = [f"fill {n}" for n in table6_fills()]
     for r in rows:
         r["best"] = min(r[k] for k in fills)
@@ -171,13 +199,20 @@ def report(data, names, seeds, fits: Path, variant: str, size: str, out: Path) -
     for against in ("best", "best Table 6"):
         print(f"\n{len(rows)} case-seeds ({variant}, {size}, seeds {sorted({r['seed'] for r in rows})}); "
               f"rule's hole RMSE / the {against} fill's, mean over cases (on how many below 1.0)")
-        print(f"{'rule':<22}" + "".join(f"{g:>16}" for g, _ in groups))
+        print(f"{'rule':<26}" + "".join(f"{g:>16}" for g, _ in groups))
         for key in ratio_keys:
             cells = []
             for _, keep in groups:
                 chosen = [r[key] / r[against] for r in rows if keep(r)]
                 cells.append(f"{np.mean(chosen):.3f} ({sum(x < 1 for x in chosen)}/{len(chosen)})" if chosen else "-")
-            print(f"{key:<22}" + "".join(f"{c:>16}" for c in cells))
+            print(f"{key:<26}" + "".join(f"{c:>16}" for c in cells))
+    print(f"\npaired against `photo` (refined + 0.25): mean change of the hole RMSE (lower on how many)")
+    for key in ratio_keys:
+        cells = []
+        for _, keep in groups:
+            change = [r[key] / r["refined + 0.25"] - 1 for r in rows if keep(r)]
+            cells.append(f"{100 * np.mean(change):+.1f}% ({sum(x < 0 for x in change)}/{len(change)})" if change else "-")
+        print(f"{key:<26}" + "".join(f"{c:>16}" for c in cells))
     shares = defaultdict(list)
     for r in rows:
         shares[r["case"].split("/")[1]].append(r["chosen share: f"])
@@ -188,7 +223,34 @@ def report(data, names, seeds, fits: Path, variant: str, size: str, out: Path) -
         names_chosen[r["chosen fill: name"]] += 1
     print("fill chosen on the held-out blobs: " + ", ".join(f"{k} {v}" for k, v in sorted(
         names_chosen.items(), key=lambda kv: -kv[1])))
-    print(f"rows to {out}")
+    solves_chosen = defaultdict(lambda: defaultdict(int))
+    for r in rows:
+        solves_chosen[r["case"].split("/")[1]][r["chosen solve: s,lam"]] += 1
+    print("solve (sigma_xy, lam) chosen on the held-out blobs, per hole kind: " + "; ".join(
+        f"{kind} " + ", ".join(f"({k}) {v}" for k, v in sorted(c.items(), key=lambda kv: -kv[1])[:3])
+        for kind, c in solves_chosen.items()))
+    if not from_rows:
+        print(f"rows to {out}")
+    if other_fits:
+        compare(rows, [json.loads(line) for line in other_fits.read_text().splitlines()], groups)
+
+
+def compare(rows: list[dict], others: list[dict], groups) -> None:
+    """Paired: each rule's hole RMSE in ``rows`` against the same case and seed in ``others`` (other fits)."""
+    other = {(r["case"], r["seed"]): r for r in others}
+    pairs = [(r, other[r["case"], r["seed"]]) for r in rows if (r["case"], r["seed"]) in other]
+    print(f"\npaired against the other fits ({len(pairs)} case-seeds): mean change of the hole RMSE (lower on how many)")
+    print(f"{'rule':<26}" + "".join(f"{g:>16}" for g, _ in groups))
+    for key in ("fit", "kit", "refined + 0.25"):
+        cells = []
+        for _, keep in groups:
+            change = [r[key] / o[key] - 1 for r, o in pairs if keep(r)]
+            cells.append(f"{100 * np.mean(change):+.1f}% ({sum(x < 0 for x in change)}/{len(change)})" if change else "-")
+        print(f"{key:<26}" + "".join(f"{c:>16}" for c in cells))
+    timed = [(r["fit_seconds"], o["fit_seconds"]) for r, o in pairs if "fit_seconds" in r and "fit_seconds" in o]
+    if timed:
+        print(f"fit seconds: {np.median([t for t, _ in timed]):.0f} against {np.median([t for _, t in timed]):.0f} "
+              f"(median of {len(timed)}, as they ran)")
 
 
 def main() -> None:
@@ -200,7 +262,13 @@ def main() -> None:
     parser.add_argument("--variant", default="rgbd+warp", choices=("rgbd", "rgbd+warp"))
     parser.add_argument("--size", default="eighth", choices=("eighth", "quarter"))
     parser.add_argument("--fits", type=Path, default=RESULTS / "fill_blend_fits")
+    parser.add_argument("--channels", type=int, nargs="+",
+                        help="fit: the net's encoder widths (default: the profile's; 8 16 32 64 128 is the narrow net)")
     parser.add_argument("--out", type=Path, default=RESULTS / "fill_blends_eighth.jsonl")
+    parser.add_argument("--from-rows", type=Path, nargs="+", default=[],
+                        help="report: summarise these rows files (written by earlier reports) instead of scoring")
+    parser.add_argument("--against", type=Path,
+                        help="report: also compare, paired, with the rows of other fits (e.g. the narrow net's)")
     args = parser.parse_args()
     names = suite_case_names(args.data)
     if args.cases:
@@ -209,9 +277,11 @@ def main() -> None:
             raise SystemExit(f"--cases: not in the suite under {args.data}: {unknown}")
         names = [n for n in names if n in set(args.cases)]
     if args.what == "fit":
-        fit(args.data, names, args.seeds, args.fits, args.variant, args.size)
+        fit(args.data, names, args.seeds, args.fits, args.variant, args.size,
+            tuple(args.channels) if args.channels else None)
     else:
-        report(args.data, names, args.seeds, args.fits, args.variant, args.size, args.out)
+        report(args.data, names, args.seeds, args.fits, args.variant, args.size, args.out, args.from_rows,
+               args.against)
 
 
 if __name__ == "__main__":
