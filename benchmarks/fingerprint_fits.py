@@ -27,6 +27,7 @@ from ddp_lite.method.coarse_to_fine import complete_depth_coarse_to_fine  # noqa
 from ddp_lite.method.complete import complete_depth  # noqa: E402
 from ddp_lite.world.scenes import make_scene  # noqa: E402
 from ddp_lite.method.config import FitConfig  # noqa: E402
+from ddp_lite.method.runtime.options import RunOptions  # noqa: E402
 
 SIZE = (32, 32)
 ITERATIONS = 20
@@ -48,7 +49,7 @@ def digest(result) -> str:
 
 def configs():
     """(name, variant, FitConfig, coarse_to_fine) rows."""
-    small = dict(iterations=ITERATIONS, progress=False, eval_every=5)
+    small = dict(iterations=ITERATIONS, eval_every=5)
     for profile in ("ci", "class"):
         for recipe in ("kit", "paper"):
             for variant in ("d", "rgbd", "rgbd+warp"):
@@ -74,16 +75,17 @@ def main() -> None:
     ref = scene[0]
     depth, _ = random_holes(ref.depth, seed=0)
     neighbors = [scene[1].as_neighbor(), scene[2].as_neighbor()]
+    quiet = RunOptions(progress=False)
     start = time.perf_counter()
     print(f"{'config':36s} {'sha256[:16]':16s}")
     for name, variant, config, c2f in configs():
         nbrs = neighbors if variant == "rgbd+warp" else ()
         if c2f:
             result = complete_depth_coarse_to_fine(ref.rgb, depth, ref.camera, nbrs, variant=variant,
-                                                       config=config, gt_depth=ref.depth, scale=2)
+                                                       config=config, gt_depth=ref.depth, scale=2, options=quiet)
         else:
             result = complete_depth(ref.rgb, depth, ref.camera, nbrs, variant=variant, config=config,
-                                        gt_depth=ref.depth)
+                                        gt_depth=ref.depth, options=quiet)
         print(f"{name:36s} {digest(result)}", flush=True)
     print(f"({time.perf_counter() - start:.0f} s)", file=sys.stderr)
 

@@ -88,7 +88,7 @@ def test_the_loop_reports_through_the_hook_its_caller_passes():
         def close(self):
             self.calls.append(("close",))
 
-    config = FitConfig(channels=(4, 8), iterations=20, eval_every=5, patience=100, auto_stop=True, progress=False)
+    config = FitConfig(channels=(4, 8), iterations=20, eval_every=5, patience=100, auto_stop=True)
     net, noise = loop.build(config, 1, 8, 8, torch.device("cpu"))
     target = torch.zeros(1, 1, 8, 8)
 

@@ -17,6 +17,7 @@ from .complete import refined, with_fill
 from .fit import DepthResult, fit_once
 from .input_checks import check_fit_inputs
 from .paper.nets import make_input
+from .runtime.options import RunOptions, run_options
 
 __all__ = ["complete_depth_coarse_to_fine"]
 
@@ -59,7 +60,7 @@ def _downsample_camera(camera: Camera, scale: int) -> Camera:
 def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neighbors=(), variant: str = "rgbd+warp",
                                   config: FitConfig | None = None, gt_depth=None,
                                   transform: DisparityTransform | None = None, coarse_fraction: float = 0.5,
-                                  scale: int = 2) -> DepthResult:
+                                  scale: int = 2, *, options: RunOptions | None = None) -> DepthResult:
     """:func:`~ddp_lite.method.complete.complete_depth` in two stages: first at 1/``scale`` size, then at full
     size from the coarse weights.
 
@@ -80,6 +81,7 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
         camera, neighbors, variant, config, gt_depth, transform: as in :func:`complete_depth`.
         coarse_fraction: share of the iterations spent at the coarse size, in (0, 1).
         scale: integer shrink factor of the coarse stage, ≥ 2.
+        options: how both stages run (:class:`RunOptions`), as in :func:`complete_depth`.
 
     Returns:
         :class:`DepthResult` of the full-size stage, ``.depth`` (H, W) metres. ``history`` joins
@@ -89,21 +91,22 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
 
     Example:
         >>> depth = np.full((32, 32), 2.0, np.float32); depth[10:20, 10:20] = np.nan
-        >>> cfg = FitConfig(channels=(8, 16), lr=1e-2, iterations=6, progress=False)
-        >>> complete_depth_coarse_to_fine(None, depth, variant="d", config=cfg).depth.shape
+        >>> cfg = FitConfig(channels=(8, 16), lr=1e-2, iterations=6)
+        >>> complete_depth_coarse_to_fine(None, depth, variant="d", config=cfg, options=RunOptions(progress=False)).depth.shape
         (32, 32)
     """
     if isinstance(scale, bool) or not isinstance(scale, (int, np.integer)) or scale < 2:
         raise ValueError(f"scale must be an integer ≥ 2, got {scale!r}")
     if not 0.0 < float(coarse_fraction) < 1.0:
         raise ValueError(f"coarse_fraction must lie in (0, 1), got {coarse_fraction!r}")
+    options = run_options(options)
     config, depth, rgb, neighbors, gt_depth, transform = check_fit_inputs(
         rgb, depth, camera, neighbors, variant, config, gt_depth, transform)
     # the fill's share mixes into the full-size result, and may hold out depth to choose it
     if config.combination.blend_fill != 0:
         return with_fill(lambda held_out: complete_depth_coarse_to_fine(
             rgb, held_out, camera, neighbors, variant, config.replace(blend_fill=0.0), gt_depth, transform,
-            coarse_fraction, scale), depth, rgb, config)
+            coarse_fraction, scale, options=options), depth, rgb, config)
     scale = int(scale)
     H, W = depth.shape
     iterations = config.resolved_iterations(variant)
@@ -121,7 +124,7 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
         _downsample_image(rgb, scale) if rgb is not None else None, small,
         _downsample_camera(camera, scale) if camera is not None else None,
         [(_downsample_image(img, scale), _downsample_camera(cam, scale)) for img, cam in neighbors], variant,
-        coarse_config, gt_depth=_downsample_depth(gt_depth, scale) if gt_depth is not None else None,
+        coarse_config, options=options, gt_depth=_downsample_depth(gt_depth, scale) if gt_depth is not None else None,
         transform=transform, noise=coarse_noise)
 
     # the full-size stage: coarse weights, the same noise upsampled, the rest of the schedule
@@ -130,7 +133,7 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
                                  lr_milestones=tuple(m - n_coarse for m in config.paper.lr_milestones if m > n_coarse))
     fine_noise = torch.nn.functional.interpolate(coarse_noise, size=(h * scale, w * scale), mode="bilinear",
                                                  align_corners=False)[..., :H, :W].contiguous()
-    fine = fit_once(rgb, depth, camera, neighbors, variant, fine_config, gt_depth=gt_depth, transform=transform,
+    fine = fit_once(rgb, depth, camera, neighbors, variant, fine_config, options=options, gt_depth=gt_depth, transform=transform,
                     init=coarse, noise=fine_noise)
 
     history = {}

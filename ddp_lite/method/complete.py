@@ -18,10 +18,11 @@ from .kit.blend import best_fill_share, best_weight, fill_disparity, fill_holdou
 from .fit_cache import cached
 from .full_resolution import refine_full_resolution
 from ..core.camera import Camera
-from ..core.checks import MIN_VALID_PIXELS, check_callback
+from ..core.checks import MIN_VALID_PIXELS
 from .config import FitConfig
 from .paper.disparity import DisparityTransform
 from .kit.ensemble import mean_outputs, parallel_members
+from .runtime.options import RunOptions
 from .runtime.side_by_side import run_side_by_side
 from .fit import DepthResult, FitInputs, check_inputs, run_fit
 from .kit.recipes import get_recipe
@@ -35,7 +36,8 @@ __all__ = ["complete_depth", "fit_ensemble", "fit_blended", "blend_members", "bl
 @cached(like="depth", types=(DepthResult, DisparityTransform))
 def complete_depth(rgb, depth, camera: Camera | None = None, neighbors=(), variant: str = "rgbd+warp",
                    config: FitConfig | None = None, gt_depth=None, transform: DisparityTransform | None = None,
-                   callback=None, init: DepthResult | None = None) -> DepthResult:
+                   callback=None, init: DepthResult | None = None, *, options: RunOptions | None = None
+                   ) -> DepthResult:
     """Fill the holes (NaN) of ``depth`` (H, W, metres) with a Deep Depth Prior.
 
     Args:
@@ -47,37 +49,40 @@ def complete_depth(rgb, depth, camera: Camera | None = None, neighbors=(), varia
         config: a :class:`FitConfig`; None → ``FitConfig.for_profile(variant=variant)``.
         gt_depth: (H, W) metres; when given, the hole error is tracked in ``history``.
         transform: depth ↔ disparity map; None → derived from the valid input depth.
-        callback: ``callback(iteration, DepthResult-like dict)`` every ``config.run.callback_every``.
+        callback: ``callback(iteration, DepthResult-like dict)`` every ``options.callback_every``.
         init: a previous result (same variant and net) whose weights start this fit: a warm start
             for the next view of a sequence.
+        options: how it runs, not what it computes: a :class:`RunOptions` (device, memory format and
+            limit, progress bar, callback rate); None → ``RunOptions()``.
     Returns:
         :class:`DepthResult` with ``.depth`` (H, W) metres, ``.disparity``, ``.rgb``, ``.history``.
 
     Example:
         >>> depth = np.full((32, 32), 2.0, np.float32); depth[10:20, 10:20] = np.nan
-        >>> cfg = FitConfig(channels=(8, 16), lr=1e-2, iterations=5, progress=False)
-        >>> complete_depth(np.zeros((32, 32, 3), np.float32), depth, variant="d", config=cfg).depth.shape
+        >>> cfg = FitConfig(channels=(8, 16), lr=1e-2, iterations=5)
+        >>> complete_depth(np.zeros((32, 32, 3), np.float32), depth, variant="d", config=cfg,
+        ...                options=RunOptions(progress=False)).depth.shape
         (32, 32)
     """
     spec = get_variant(variant)  # a bad name fails here, before any config is built
     config = FitConfig.for_profile(variant=variant) if config is None else config
-    check_callback(callback, config.run.callback_every if isinstance(config, FitConfig) else None)
-    inputs, config = check_inputs(rgb, depth, camera, neighbors, spec, config, gt_depth, transform, init)
+    inputs, config, options = check_inputs(rgb, depth, camera, neighbors, spec, config, gt_depth, transform, init,
+                                           options, callback)
     if config.combination.blend_fill != 0:
         return with_fill(lambda held_out: _fits(replace(inputs, depth=held_out), config.replace(blend_fill=0.0),
-                                                callback, init), inputs.depth, inputs.rgb, config)
-    return _fits(inputs, config, callback, init)
+                                                options, callback, init), inputs.depth, inputs.rgb, config)
+    return _fits(inputs, config, options, callback, init)
 
 
-def _fits(inputs: FitInputs, config: FitConfig, callback, init) -> DepthResult:
+def _fits(inputs: FitInputs, config: FitConfig, options, callback, init) -> DepthResult:
     """One fit, a blend or an ensemble, as ``config`` asks, refined when it asks (its ``blend_fill`` is the
     caller's)."""
     if config.combination.blend_paper:
-        result = fit_blended(inputs, config, callback, init)
+        result = fit_blended(inputs, config, options, callback, init)
     elif config.combination.ensemble == 1:
-        result = run_fit(inputs, config, callback=callback, init=init)
+        result = run_fit(inputs, config, options, callback=callback, init=init)
     else:
-        result = fit_ensemble(inputs, config, callback, init)
+        result = fit_ensemble(inputs, config, options, callback, init)
     return refined(result, inputs.depth, inputs.rgb) if config.combination.refine else result
 
 
@@ -95,14 +100,15 @@ def refined(result: DepthResult, depth: np.ndarray, rgb: np.ndarray) -> DepthRes
                    history={**result.history, "refined": True})
 
 
-def fit_ensemble(inputs: FitInputs, config: FitConfig, callback, init) -> DepthResult:
+def fit_ensemble(inputs: FitInputs, config: FitConfig, options, callback, init) -> DepthResult:
     """``config.combination.ensemble`` independent fits from other seeds (other weights, noise and held-out
     pixels), averaged in disparity: one fit's hole error moves ±10 % and more with the seed, the mean keeps what
     the fits agree on. ``history`` is the first fit's."""
     def fit_member(k: int) -> DepthResult:
-        return run_fit(inputs, config.replace(seed=config.paper.seed + k, ensemble=1), callback=callback, init=init)
+        return run_fit(inputs, config.replace(seed=config.paper.seed + k, ensemble=1), options, callback=callback,
+                       init=init)
 
-    workers = parallel_members(config, inputs.spec, inputs.depth.shape, len(inputs.neighbors), callback)
+    workers = parallel_members(config, options, inputs.spec, inputs.depth.shape, len(inputs.neighbors), callback)
     members = run_side_by_side(fit_member, int(config.combination.ensemble), workers)
     return combined_result(members, inputs.transform, members[0].history)
 
@@ -117,7 +123,7 @@ def combined_result(members: list, transform, history: dict, weights=None) -> De
                        state=members[0].state, fits=len(members))
 
 
-def fit_blended(inputs: FitInputs, config: FitConfig, callback, init) -> DepthResult:
+def fit_blended(inputs: FitInputs, config: FitConfig, options, callback, init) -> DepthResult:
     """``config.combination.blend_paper``: this config's fit and the paper recipe's, blended with weight
     ``config.combination.blend_weight``, or (None) with the weight that best predicts a ring of valid input
     held out of both fits (:mod:`ddp_lite.method.kit.blend`). ``history`` is the first fit's plus ``blend_weight`` and,
@@ -127,13 +133,13 @@ def fit_blended(inputs: FitInputs, config: FitConfig, callback, init) -> DepthRe
     valid = np.isfinite(depth)
     ring = validation_ring(valid, members[0].paper.seed) if weight is None else np.zeros_like(valid)
     if weight is None and ((valid & ~ring).sum() < MIN_VALID_PIXELS or ring.sum() < MIN_VALID_PIXELS):
-        return run_fit(inputs, members[0], callback=callback, init=init)  # too little to judge by (or fit without)
+        return run_fit(inputs, members[0], options, callback=callback, init=init)  # too little to judge by (or fit without)
     held_out = replace(inputs, depth=np.where(ring, np.nan, depth).astype(np.float32)) if ring.any() else inputs
 
     def fit_member(k: int) -> DepthResult:  # a warm start fits the first fit's net only
-        return run_fit(held_out, members[k], callback=callback, init=init if k == 0 else None)
+        return run_fit(held_out, members[k], options, callback=callback, init=init if k == 0 else None)
 
-    workers = parallel_members(members[0].replace(ensemble=2), inputs.spec, depth.shape, len(inputs.neighbors),
+    workers = parallel_members(members[0].replace(ensemble=2), options, inputs.spec, depth.shape, len(inputs.neighbors),
                                callback)
     fits = run_side_by_side(fit_member, 2, workers)
     extra = {}

@@ -19,7 +19,7 @@ import torch
 
 from . import loop
 from ..core.camera import Camera
-from ..core.checks import MIN_VALID_PIXELS, check_depth, check_finite_output, unmask
+from ..core.checks import MIN_VALID_PIXELS, check_callback, check_depth, check_finite_output, unmask
 from ..core.progress import FitBar
 from .config import FitConfig
 from .input_checks import check_fit_inputs
@@ -31,6 +31,7 @@ from .paper.total_loss import PaperLoss
 from .paper.variants import Variant, get_variant
 from .runtime.device import resolve_device
 from .runtime.memory import check_memory
+from .runtime.options import RunOptions, run_options
 from .runtime.tensors import to_tensor
 from .stopping import heldout_error_fn, holdout_mask
 
@@ -89,38 +90,43 @@ class FitInputs:
     transform: DisparityTransform
 
 
-def check_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth=None, transform=None, init=None
-                 ) -> tuple[FitInputs, FitConfig]:
+def check_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth=None, transform=None, init=None,
+                 options=None, callback=None) -> tuple[FitInputs, FitConfig, RunOptions]:
     """Check a fit's inputs once, before any work (:func:`~ddp_lite.method.input_checks.check_fit_inputs`):
-    (:class:`FitInputs`, the config). ``init`` must be None or a :class:`DepthResult`."""
+    (:class:`FitInputs`, the config, the run's options). ``init`` must be None or a :class:`DepthResult`;
+    ``options`` None or a :class:`RunOptions`, whose ``callback_every`` calls ``callback``."""
     spec = get_variant(variant)
+    options = run_options(options)
+    check_callback(callback, options.callback_every)
     config, depth, rgb, neighbors, gt_depth, transform = check_fit_inputs(rgb, depth, camera, neighbors, spec,
                                                                            config, gt_depth, transform)
     if init is not None and not isinstance(init, DepthResult):
         raise TypeError(f"init must be a DepthResult, got {type(init).__name__}")
-    return FitInputs(rgb, depth, camera, neighbors, spec, gt_depth, transform), config
+    return FitInputs(rgb, depth, camera, neighbors, spec, gt_depth, transform), config, options
 
 
-def fit_once(rgb, depth, camera, neighbors, variant, config, *, gt_depth=None, transform=None, callback=None,
-             init=None, noise=None) -> DepthResult:
+def fit_once(rgb, depth, camera, neighbors, variant, config, *, options=None, gt_depth=None, transform=None,
+             callback=None, init=None, noise=None) -> DepthResult:
     """One fit (no ensemble, blend or fill): :func:`check_inputs`, then :func:`run_fit`."""
-    inputs, config = check_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth, transform, init)
-    return run_fit(inputs, config, callback=callback, init=init, noise=noise)
+    inputs, config, options = check_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth, transform, init,
+                                           options, callback)
+    return run_fit(inputs, config, options, callback=callback, init=init, noise=noise)
 
 
-def run_fit(inputs: FitInputs, config: FitConfig, *, callback=None, init: DepthResult | None = None,
-            noise=None) -> DepthResult:
+def run_fit(inputs: FitInputs, config: FitConfig, options: RunOptions, *, callback=None,
+            init: DepthResult | None = None, noise=None) -> DepthResult:
     """One fit of checked ``inputs`` with ``config`` (its ``ensemble``, ``blend_*`` are the combiner's, not
-    read here), warm-started from ``init``'s weights, from the fixed network input ``noise`` (1, C, H, W)
-    when given (the coarse-to-fine stages pass theirs)."""
+    read here), run as ``options`` say (device, memory limit, progress bar, callback rate), warm-started
+    from ``init``'s weights, from the fixed network input ``noise`` (1, C, H, W) when given (the
+    coarse-to-fine stages pass theirs)."""
     rgb, depth, camera, neighbors = inputs.rgb, inputs.depth, inputs.camera, inputs.neighbors
     spec, gt_depth, transform, variant = inputs.spec, inputs.gt_depth, inputs.transform, inputs.spec.name
     H, W = depth.shape
-    device = resolve_device(config.run)
+    device = resolve_device(options)
     iterations = config.resolved_iterations(spec)
     _, w_rgb, w_warp = spec.loss_weights(config.paper.gammas)
     # before any per-fit work: at 12 MP, the SSIM moments alone take seconds (and gigabytes)
-    check_memory(config, spec.out_channels, H, W, len(neighbors) if w_warp > 0 else 0, device)
+    check_memory(config, options, spec.out_channels, H, W, len(neighbors) if w_warp > 0 else 0, device)
     valid = np.isfinite(depth)
     stopping = config.stopping
     heldout = (holdout_mask(valid, stopping.holdout_fraction, config.paper.seed, stopping.holdout) if stopping.auto_stop
@@ -166,9 +172,9 @@ def run_fit(inputs: FitInputs, config: FitConfig, *, callback=None, init: DepthR
     net, noise = loop.build(config, spec.out_channels, H, W, device, init.state if init is not None else None,
                             noise, image)
     start = time.perf_counter()
-    progress = FitBar(iterations, f"DDP {variant}", config.run.progress)
+    progress = FitBar(iterations, f"DDP {variant}", options.progress)
     output, history, ran, best = loop.run(net, noise, loss_fn, config, iterations, heldout_error, evaluate,
-                                          user_callback, progress=progress)
+                                          user_callback, progress=progress, options=options)
     state = {name: value.detach().cpu().clone() for name, value in net.state_dict().items()}
     seconds = time.perf_counter() - start
     disparity = output[0, 0].cpu().numpy().astype(np.float32)

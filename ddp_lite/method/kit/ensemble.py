@@ -15,9 +15,11 @@ from ..runtime.side_by_side import side_by_side_workers
 __all__ = ["parallel_members", "mean_outputs"]
 
 
-def parallel_members(config, variant: str, shape, n_neighbors: int, callback) -> int:
-    """How many of ``config.combination.ensemble`` members run at once (:func:`side_by_side.side_by_side_workers`)."""
-    return side_by_side_workers(config, variant, shape, n_neighbors, int(config.combination.ensemble), callback)
+def parallel_members(config, options, variant: str, shape, n_neighbors: int, callback) -> int:
+    """How many of ``config.combination.ensemble`` members run at once with the run's ``options``
+    (:func:`side_by_side.side_by_side_workers`)."""
+    return side_by_side_workers(config, options, variant, shape, n_neighbors, int(config.combination.ensemble),
+                                callback)
 
 
 def mean_outputs(members: list, weights=None) -> tuple[np.ndarray, np.ndarray | None]:
