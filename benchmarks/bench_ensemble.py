@@ -86,16 +86,16 @@ def ensemble_seconds(K: int, side_by_side: bool, iterations: int, size=(96, 128)
     from bench_fit import case
     rgb, depth, ref, nbrs = case(*size)
     config = FitConfig.for_profile("class", variant=variant, iterations=iterations, auto_stop=False, ensemble=K)
-    members = complete.parallel_members
+    members = complete.side_by_side_workers
     if not side_by_side:
-        complete.parallel_members = lambda *args, **kwargs: 1
+        complete.side_by_side_workers = lambda *args, **kwargs: 1
     try:
         start = time.perf_counter()
         complete_depth(rgb, depth, ref, nbrs if variant == "rgbd+warp" else (), variant=variant, config=config,
                        options=RunOptions(progress=False))
         return time.perf_counter() - start
     finally:
-        complete.parallel_members = members
+        complete.side_by_side_workers = members
 
 
 def main_fits(args) -> None:

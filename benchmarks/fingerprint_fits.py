@@ -7,7 +7,8 @@
 Covers the profiles ``ci`` and ``class`` (their configs, at 32×32 and 20 iterations), the three
 variants, the recipes ``kit`` and ``paper``, and a few configs with the kit's other levers on (hole
 terms with a reach and RGB edges, bf16, fill input, affinity, input jitter, output averaging, an
-ensemble, coarse-to-fine). Each row hashes the depth, disparity, colour output and loss history;
+ensemble, coarse-to-fine) and its combinations (a blend with the paper recipe's fit whose weight a held-out
+ring chooses, a fill's share chosen on held-out blobs, the refining solve). Each row hashes the depth, disparity, colour output and loss history;
 the table is identical before and after a behaviour-preserving change on the same machine.
 """
 from __future__ import annotations
@@ -67,6 +68,12 @@ def configs():
     yield "ensemble 2", "rgbd", base.replace(ensemble=2, bf16=False), False
     yield "skip net", "rgbd", base.replace(net="skip", channels=(8, 8), bf16=False), False
     yield "coarse-to-fine", "rgbd+warp", base.replace(bf16=False), True
+    yield "blend, ring-chosen weight and fill", "rgbd", base.replace(blend_paper=True, blend_weight=None,
+                                                                   blend_fill=None, bf16=False), False
+    yield "ensemble 3, chosen fill, refined", "rgbd", base.replace(ensemble=3, blend_fill=None, refine=True,
+                                                                  bf16=False), False
+    yield "coarse-to-fine, chosen fill, refined", "rgbd+warp", base.replace(blend_fill=None, refine=True,
+                                                                           bf16=False), True
 
 
 def main() -> None:

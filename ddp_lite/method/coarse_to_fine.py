@@ -13,11 +13,11 @@ import torch
 from ..core.camera import Camera
 from .config import FitConfig
 from .paper.disparity import DisparityTransform
-from .complete import refined, with_fill
-from .fit import DepthResult, fit_once
+from .complete import fill_heldout, held_out, refined, with_fill_share
+from .fit import DepthResult, check_run, fit_once, run_fit
 from .input_checks import check_fit_inputs
 from .paper.nets import make_input
-from .runtime.options import RunOptions, run_options
+from .runtime.options import RunOptions
 
 __all__ = ["complete_depth_coarse_to_fine"]
 
@@ -73,7 +73,7 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
     given (auto-stop included); the learning-rate schedule continues across the two stages.
     It is one fit: ``config.combination``'s ``ensemble`` and ``blend_paper`` do not apply; its ``refine`` and
     ``blend_fill`` do, to the full-size result (None: both stages fit without the held-out blobs that choose the share,
-    as :func:`~ddp_lite.method.complete.with_fill` does for :func:`complete_depth`).
+    as in :func:`complete_depth`: :func:`~ddp_lite.method.complete.fill_heldout`).
 
     Args:
         rgb: (H, W, 3) float in [0, 1] (may be None for ``variant="d"``).
@@ -99,14 +99,11 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
         raise ValueError(f"scale must be an integer ≥ 2, got {scale!r}")
     if not 0.0 < float(coarse_fraction) < 1.0:
         raise ValueError(f"coarse_fraction must lie in (0, 1), got {coarse_fraction!r}")
-    options = run_options(options)
-    config, depth, rgb, neighbors, gt_depth, transform = check_fit_inputs(
-        rgb, depth, camera, neighbors, variant, config, gt_depth, transform)
-    # the fill's share mixes into the full-size result, and may hold out depth to choose it
-    if config.combination.blend_fill != 0:
-        return with_fill(lambda held_out: complete_depth_coarse_to_fine(
-            rgb, held_out, camera, neighbors, variant, config.replace(blend_fill=0.0), gt_depth, transform,
-            coarse_fraction, scale, options=options), depth, rgb, config)
+    options = check_run(options)
+    inputs, config = check_fit_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth, transform)
+    blobs = fill_heldout(inputs.depth, config)  # held out of both stages to choose the fill's share
+    seen = held_out(inputs, blobs)
+    rgb, depth, camera, neighbors, gt_depth = seen.rgb, seen.depth, seen.camera, seen.neighbors, seen.gt_depth
     scale = int(scale)
     H, W = depth.shape
     iterations = config.resolved_iterations(variant)
@@ -125,7 +122,7 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
         _downsample_camera(camera, scale) if camera is not None else None,
         [(_downsample_image(img, scale), _downsample_camera(cam, scale)) for img, cam in neighbors], variant,
         coarse_config, options=options, gt_depth=_downsample_depth(gt_depth, scale) if gt_depth is not None else None,
-        transform=transform, noise=coarse_noise)
+        transform=seen.transform, noise=coarse_noise)
 
     # the full-size stage: coarse weights, the same noise upsampled, the rest of the schedule
     passed = sum(1 for m in config.paper.lr_milestones if m <= n_coarse)
@@ -133,8 +130,7 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
                                  lr_milestones=tuple(m - n_coarse for m in config.paper.lr_milestones if m > n_coarse))
     fine_noise = torch.nn.functional.interpolate(coarse_noise, size=(h * scale, w * scale), mode="bilinear",
                                                  align_corners=False)[..., :H, :W].contiguous()
-    fine = fit_once(rgb, depth, camera, neighbors, variant, fine_config, options=options, gt_depth=gt_depth, transform=transform,
-                    init=coarse, noise=fine_noise)
+    fine = run_fit(seen, fine_config, options, init=coarse, noise=fine_noise)
 
     history = {}
     for key in fine.history:
@@ -150,4 +146,7 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
     result = dataclasses.replace(fine, history=history, iterations=coarse.iterations + fine.iterations,
                                  best_iteration=coarse.iterations + fine.best_iteration,
                                  seconds=coarse.seconds + fine.seconds)
-    return refined(result, depth, rgb) if config.combination.refine else result
+    if config.combination.refine:
+        result = refined(result, depth, rgb)
+    target = inputs.transform.to_disparity(inputs.depth)  # (H, W), NaN holes: what the held-out blobs are judged by
+    return with_fill_share(result, inputs, seen, config, blobs, target)

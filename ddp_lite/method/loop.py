@@ -57,7 +57,7 @@ def build(config: FitConfig, out_channels: int, height: int, width: int, device,
 
 
 def run(net, noise, loss_fn, config: FitConfig, iterations: int, heldout_error=None, evaluate=None,
-        callback=None, *, progress: FitProgress, options: RunOptions | None = None):
+        callback=None, *, progress: FitProgress, options: RunOptions):
     """Adam on ``loss_fn(net(noise))`` for at most ``iterations``; returns (kept output (1, C, H, W),
     history, iterations run, best iteration).
 
@@ -65,9 +65,8 @@ def run(net, noise, loss_fn, config: FitConfig, iterations: int, heldout_error=N
     auto-stop), watched every ``config.stopping.eval_every`` iterations; ``evaluate(output) -> {name: float}``,
     tracked there too, never optimised; ``callback(iteration, output)`` every ``options.callback_every``;
     ``progress``: the caller's hook, iterated over for the iterations; ``options``: the run's memory format
-    and callback rate (None: ``RunOptions()``); the net's precision is the config's."""
+    and callback rate (the net's precision is the config's)."""
     paper, stopping, tricks = config.paper, config.stopping, config.tricks
-    options = RunOptions() if options is None else options
     # the fused kernel updates all parameters in one call: ~10-25 % faster per iteration on CPU
     optimizer = torch.optim.Adam(net.parameters(), lr=paper.lr, fused=noise.device.type in ("cpu", "cuda"))
     if paper.schedule == "cosine":
