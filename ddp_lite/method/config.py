@@ -167,11 +167,12 @@ class FitConfig:
 
 def _not_a_field(name: str, message: str) -> str:
     """What to say of ``name``, no field of a FitConfig: where a run option goes, or the nearest name."""
-    if name in RUN_OPTIONS or name == "run":
-        what = f"{name}=..." if name in RUN_OPTIONS else "..."
-        return (f"FitConfig has no {name!r}: {'it is a run option' if name in RUN_OPTIONS else 'run options'}, how a "
-                f"fit runs, not what it computes; pass it to the run: complete_depth(..., options=RunOptions({what})) "
-                f"(ddp_lite.RunOptions)")
+    if name in RUN_OPTIONS:
+        return (f"FitConfig has no {name!r}: it is a run option (how a fit runs, not what it computes); pass it to "
+                f"the run: complete_depth(..., options=RunOptions({name}=...)) (ddp_lite.RunOptions)")
+    if name == "run":
+        return ("FitConfig has no section 'run': the run options (how a fit runs, not what it computes) are passed "
+                "to the run: complete_depth(..., options=RunOptions(...)) (ddp_lite.RunOptions)")
     close = difflib.get_close_matches(name, FIELDS + RUN_OPTIONS, n=1)
     if not close:
         return message + "; see ddp_lite.method.config.FIELDS"
