@@ -28,6 +28,7 @@ import numpy as np  # noqa: E402
 import torch  # noqa: E402
 
 from ddp_lite.method.config import FitConfig  # noqa: E402
+from ddp_lite.method.runtime.options import RunOptions  # noqa: E402
 from ddp_lite.method.complete import complete_depth  # noqa: E402
 from ddp_lite.evaluation.experiments import make_case  # noqa: E402
 from ddp_lite.method.stopping import PlateauStopper  # noqa: E402
@@ -65,14 +66,15 @@ def main() -> None:
         case = make_case(scene, profile, holes="edge")
         for variant in args.variants:
             for seed in args.seeds:
-                config = FitConfig.for_profile(profile, variant=variant, seed=seed, progress=False)
+                config = FitConfig.for_profile(profile, variant=variant, seed=seed)
                 long_config = config.replace(iterations=args.iterations, plateau_decays=10 ** 6)
                 if args.constant_lr:
                     config = config.replace(plateau_decays=0)
                     long_config = long_config.replace(lr_gamma=1.0)
                 neighbors = case.neighbors if get_variant(variant).needs_neighbors else ()
                 result = complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant,
-                                        config=long_config, gt_depth=case.scored_gt, transform=case.transform)
+                                        config=long_config, gt_depth=case.scored_gt, transform=case.transform,
+                                        options=RunOptions(progress=False))
                 h = result.history
                 its, heldout, hole = h["eval_iteration"], h["heldout"], 100 * h["hole_rmse"]
                 stopping = config.stopping

@@ -30,6 +30,7 @@ from ddp_lite.classical import baselines  # noqa: E402
 from ddp_lite.classical.holes import random_holes  # noqa: E402
 from ddp_lite.data.middlebury import load_motorcycle  # noqa: E402
 from ddp_lite.method.config import FitConfig  # noqa: E402
+from ddp_lite.method.runtime.options import RunOptions  # noqa: E402
 from ddp_lite.method.complete import complete_depth  # noqa: E402
 from ddp_lite.sequences.working_size import fill_holes_at_full_size, shrink, working_shape  # noqa: E402
 
@@ -51,9 +52,9 @@ def run_pattern(pattern: int, profile, seed: int) -> dict:
 
     shape = working_shape(depth.shape, max(profile.size))
     small_rgb, small_depth = shrink(view.rgb, depth, shape)
-    config = FitConfig.for_profile(profile, variant="rgbd", progress=False, seed=seed)
+    config = FitConfig.for_profile(profile, variant="rgbd", seed=seed)
     start = time.perf_counter()
-    result = complete_depth(small_rgb, small_depth, variant="rgbd", config=config)
+    result = complete_depth(small_rgb, small_depth, variant="rgbd", config=config, options=RunOptions(progress=False))
     row = dict(pattern=pattern, profile=profile.name, seed=seed, working=list(shape), holes=float(holes.mean()),
                fit_seconds=time.perf_counter() - start, DDP=rmse_px(fill_holes_at_full_size(depth, result.depth)))
     for name in FILLS:  # the fills take any positive map: they fill disparity here, as bench_quality does

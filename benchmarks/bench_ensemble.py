@@ -81,20 +81,21 @@ def ensemble_seconds(K: int, side_by_side: bool, iterations: int, size=(96, 128)
     """Wall seconds of one ``complete_depth`` ensemble of K members (bench_fit's textured plane)."""
     from ddp_lite.method.config import FitConfig
     from ddp_lite.method.complete import complete_depth
+    from ddp_lite.method.runtime.options import RunOptions
     from ddp_lite.method import complete
     from bench_fit import case
     rgb, depth, ref, nbrs = case(*size)
-    config = FitConfig.for_profile("class", variant=variant, iterations=iterations, auto_stop=False, ensemble=K,
-                                   progress=False)
-    members = complete.parallel_members
+    config = FitConfig.for_profile("class", variant=variant, iterations=iterations, auto_stop=False, ensemble=K)
+    members = complete.side_by_side_workers
     if not side_by_side:
-        complete.parallel_members = lambda *args, **kwargs: 1
+        complete.side_by_side_workers = lambda *args, **kwargs: 1
     try:
         start = time.perf_counter()
-        complete_depth(rgb, depth, ref, nbrs if variant == "rgbd+warp" else (), variant=variant, config=config)
+        complete_depth(rgb, depth, ref, nbrs if variant == "rgbd+warp" else (), variant=variant, config=config,
+                       options=RunOptions(progress=False))
         return time.perf_counter() - start
     finally:
-        complete.parallel_members = members
+        complete.side_by_side_workers = members
 
 
 def main_fits(args) -> None:

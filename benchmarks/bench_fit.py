@@ -113,14 +113,24 @@ def case(height: int, width: int, seed: int = 0):
     return rgb, depth, ref, nbrs
 
 
+def config_and_options(overrides: dict, **fields):
+    """(FitConfig, RunOptions) of ``--set`` overrides: the run options' names (``channels_last=True``) go to the
+    run, which shows no progress bar; the rest, after ``fields``, to the config."""
+    from ddp_lite.method.config import FitConfig
+    from ddp_lite.method.runtime.options import RUN_OPTIONS, RunOptions
+    run = {name: value for name, value in overrides.items() if name in RUN_OPTIONS}
+    config = FitConfig(**fields, **{name: value for name, value in overrides.items() if name not in RUN_OPTIONS})
+    return config, RunOptions(**{"progress": False, **run})
+
+
 def run_one(variant: str, height: int, width: int, channels, iterations: int, overrides=None) -> dict:
     from torch.utils.flop_counter import FlopCounterMode
-    from ddp_lite.method.config import FitConfig
     from ddp_lite.method.complete import complete_depth
     from ddp_lite.method.paper.variants import get_variant
     rgb, depth, ref, nbrs = case(height, width)
     kwargs = dict(camera=ref, neighbors=nbrs) if get_variant(variant).needs_neighbors else {}
-    config = FitConfig(channels=tuple(channels), lr=1e-2, progress=False, eval_every=10 ** 9, **(overrides or {}))
+    config, kwargs["options"] = config_and_options(overrides or {}, channels=tuple(channels), lr=1e-2,
+                                                   eval_every=10 ** 9)
     with FlopCounterMode(display=False) as counter:
         complete_depth(rgb, depth, variant=variant, config=config.replace(iterations=1), **kwargs)
     flops = counter.get_total_flops()
@@ -142,7 +152,8 @@ def main() -> None:
     parser.add_argument("--iterations", type=int, default=20)
     parser.add_argument("--narrow", action="store_true", help="also the ci profile's 16–128 net")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                        help="FitConfig override, repeatable: bf16=True, pad='zeros', channels_last=True")
+                        help="FitConfig field or RunOptions override, repeatable: bf16=True, pad='zeros', "
+                             "channels_last=True")
     parser.add_argument("--one", nargs=4, metavar=("VARIANT", "H", "W", "CHANNELS"), help=argparse.SUPPRESS)
     args = parser.parse_args()
     overrides = parse_overrides(args.set)

@@ -91,6 +91,7 @@ def fit_small(case: Case, profile, seed: int, cache: str | None, isa: str):
     """DDP at the working size as ``complete`` fits it → (working-size completed depth, fit seconds, shape)."""
     from ddp_lite.method.complete import complete_depth
     from ddp_lite.method.config import FitConfig
+    from ddp_lite.method.runtime.options import RunOptions
     from ddp_lite.sequences.working_size import shrink, working_shape
     shape = working_shape(case.depth.shape, max(profile.size))
     path = None
@@ -101,9 +102,9 @@ def fit_small(case: Case, profile, seed: int, cache: str | None, isa: str):
             stored = np.load(path)
             return stored["depth"], float(stored["seconds"]), shape
     small_rgb, small_depth = shrink(case.rgb, case.depth, shape)
-    config = FitConfig.for_profile(profile, variant="rgbd", recipe="kit", progress=False, seed=seed)
+    config = FitConfig.for_profile(profile, variant="rgbd", recipe="kit", seed=seed)
     start = time.perf_counter()
-    result = complete_depth(small_rgb, small_depth, variant="rgbd", config=config)
+    result = complete_depth(small_rgb, small_depth, variant="rgbd", config=config, options=RunOptions(progress=False))
     seconds = time.perf_counter() - start
     if path:
         np.savez(path + ".tmp.npz", depth=result.depth, seconds=seconds)

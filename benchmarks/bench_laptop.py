@@ -51,13 +51,14 @@ def loop_ratio(isa: str, threads: int, channels: str, variant: str = "rgbd+warp"
 
 CLASS_FIT = """
 import json, time, torch
-from ddp_lite import FitConfig, complete_depth
+from ddp_lite import FitConfig, RunOptions, complete_depth
 from ddp_lite.studies.real_cases import make_real_case, factor_for_profile
 torch.set_num_threads({threads})
 case = make_real_case("sgbm", factor_for_profile("class"))
-config = FitConfig.for_profile("class", variant="rgbd", recipe="kit", progress=False)
+config = FitConfig.for_profile("class", variant="rgbd", recipe="kit")
 start = time.perf_counter()
-result = complete_depth(case.rgb, case.depth, variant="rgbd", config=config, transform=case.transform)
+result = complete_depth(case.rgb, case.depth, variant="rgbd", config=config, transform=case.transform,
+                        options=RunOptions(progress=False))
 seconds = time.perf_counter() - start
 print(json.dumps(dict(seconds=seconds, iterations=int(result.iterations), shape=list(case.depth.shape),
                       px=case.rmse_px(result.depth))))

@@ -1,4 +1,4 @@
-"""Interleaved A/B of FitConfig speed options in one process: s/it of the real fit loop per option.
+"""Interleaved A/B of speed options (FitConfig fields and RunOptions) in one process: s/it of the real fit loop per option.
 
     python benchmarks/bench_options.py                                   # 96×128 UNet 32–512 and 48×64 16–128
     python benchmarks/bench_options.py --compile                         # also torch.compile of the net
@@ -17,6 +17,7 @@ the final hole RMSE ×100 of normalised disparity per seed, options interleaved.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import importlib.util
 import inspect
 import os
@@ -54,19 +55,20 @@ def prepare(package, size, channels, variant: str, options: dict, compile_mode=N
     as_own = lambda cam: package.Camera(cam.K, cam.cam_from_world, cam.width, cam.height)  # noqa: E731
     ref, nbrs = as_own(ref), [(image, as_own(cam)) for image, cam in nbrs]
     kwargs = dict(camera=ref, neighbors=nbrs) if variant == "rgbd+warp" else {}
-    config = package.FitConfig(channels=channels, lr=1e-2, progress=False, eval_every=10 ** 9, iterations=1, **options)
+    config, run_kwargs = split_options(package, options, channels=channels, lr=1e-2, eval_every=10 ** 9, iterations=1)
     # the loop is ddp_lite.method.loop.run (ddp_lite.loop.run in flat packages; ddp_lite.fit._run before that)
     owner = sys.modules.get(package.__name__ + ".method.loop") or sys.modules.get(package.__name__ + ".loop")
     owner, name = (owner, "run") if owner is not None else (fit, "_run")
     pieces, run = {}, getattr(owner, name)
 
     def capture(net, noise, loss_fn, config, iterations, *args, **kw):
-        pieces.update(net=net, noise=noise, loss_fn=loss_fn, config=config)
+        pieces.update(net=net, noise=noise, loss_fn=loss_fn, config=config,
+                      run_options={k: v for k, v in kw.items() if k == "options"})
         return run(net, noise, loss_fn, config, iterations, *args, **kw)
 
     setattr(owner, name, capture)
     try:
-        package.complete_depth(rgb, depth, variant=variant, config=config, **kwargs)
+        package.complete_depth(rgb, depth, variant=variant, config=config, **kwargs, **run_kwargs)
     finally:
         setattr(owner, name, run)
     net = pieces["net"]
@@ -80,10 +82,22 @@ def prepare(package, size, channels, variant: str, options: dict, compile_mode=N
     def step(n: int) -> float:
         quiet = {} if hook is None else {"progress": hook(n, enabled=False)}
         start = time.perf_counter()
-        run(net, pieces["noise"], pieces["loss_fn"], pieces["config"], n, **quiet)
+        run(net, pieces["noise"], pieces["loss_fn"], pieces["config"], n, **quiet, **pieces["run_options"])
         return (time.perf_counter() - start) / n
 
     return step
+
+
+def split_options(package, options: dict, **fields):
+    """(``package.FitConfig``, keyword arguments of its ``complete_depth``) for ``options`` after ``fields``, no
+    progress bar: a run option goes to ``options=RunOptions(...)`` where the package has them, else (an
+    older tree) every name to its FitConfig."""
+    run_options = getattr(package, "RunOptions", None)
+    if run_options is None:
+        return package.FitConfig(progress=False, **fields, **options), {}
+    names = {f.name for f in dataclasses.fields(run_options)}
+    config = package.FitConfig(**fields, **{k: v for k, v in options.items() if k not in names})
+    return config, {"options": run_options(progress=False, **{k: v for k, v in options.items() if k in names})}
 
 
 ERROR_OPTIONS = ("float32", "bf16", "pad zeros", "bf16+zeros")
@@ -93,6 +107,7 @@ def hole_errors(scenes=("house", "desk"), seeds=(0, 1, 2)) -> None:
     """Print hole RMSE ×100 per scene, seed and option, and each fit's s/it (options run in turn)."""
     from ddp_lite.method.config import FitConfig
     from ddp_lite.method.complete import complete_depth
+    from ddp_lite.method.runtime.options import RunOptions
     from ddp_lite.evaluation.experiments import make_case
     print(f"\n== hole RMSE ×100 (final iteration), rgbd, ci profile 48×64, UNet 16-32-64-128, holes='sgm'")
     print(f"{'scene':<7} {'seed':>4} " + " ".join(f"{o:>11}" for o in ERROR_OPTIONS) + "   s/it per option")
@@ -102,9 +117,9 @@ def hole_errors(scenes=("house", "desk"), seeds=(0, 1, 2)) -> None:
         for seed in seeds:
             row, speed = [], []
             for option in ERROR_OPTIONS:
-                config = FitConfig.for_profile("ci", variant="rgbd", seed=seed, progress=False, **OPTIONS[option])
+                config = FitConfig.for_profile("ci", variant="rgbd", seed=seed, **OPTIONS[option])  # config fields only
                 result = complete_depth(case_.rgb, case_.depth, case_.camera, (), variant="rgbd", config=config,
-                                        gt_depth=case_.scored_gt)
+                                        gt_depth=case_.scored_gt, options=RunOptions(progress=False))
                 errors[option].append(result.history["hole_rmse"][-1] * 100)
                 row.append(errors[option][-1])
                 speed.append(result.seconds / result.iterations)

@@ -47,6 +47,7 @@ import numpy as np  # noqa: E402
 from ddp_lite.classical.stereo import sgm_depth  # noqa: E402
 from ddp_lite.method.complete import complete_depth  # noqa: E402
 from ddp_lite.method.config import FitConfig  # noqa: E402
+from ddp_lite.method.runtime.options import RunOptions  # noqa: E402
 from ddp_lite.method.paper.disparity import DisparityTransform  # noqa: E402
 from ddp_lite.classical import baselines  # noqa: E402
 from ddp_lite.evaluation.experiments import Case, make_case, sgm_depth_at_scale  # noqa: E402
@@ -210,12 +211,11 @@ def run(args) -> None:
                 for seed in args.seeds:
                     if (name, recipe, variant, seed, size) in done:
                         continue
-                    config = FitConfig.for_profile(profile, variant=variant, progress=False,
-                                                       **{"seed": seed, **overrides})
+                    config = FitConfig.for_profile(profile, variant=variant, **{"seed": seed, **overrides})
                     neighbors = case.neighbors if variant == "rgbd+warp" else ()
                     start = time.perf_counter()
                     result = complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant,
-                                                config=config)
+                                            config=config, options=RunOptions(progress=False))
                     record(dict(case=name, method=recipe, variant=variant, seed=seed, size=size,
                                 px=rmse_px(result.merged(case.depth), case, fb),
                                 seconds=time.perf_counter() - start, iterations=result.iterations,

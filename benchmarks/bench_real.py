@@ -31,6 +31,7 @@ import numpy as np
 
 from ddp_lite.classical import baselines
 from ddp_lite.method.config import FitConfig
+from ddp_lite.method.runtime.options import RunOptions
 from ddp_lite.studies.real_cases import _fit_reusing, _plain_fits
 from ddp_lite.studies.real_suite import SUITE_HOLES, make_suite_case, suite_case_names
 
@@ -50,6 +51,9 @@ def _done(path: Path) -> tuple[list[dict], set]:
     return rows, {(r["case"], r["method"], r["variant"], r["seed"]) for r in rows}
 
 
+QUIET = RunOptions(progress=False)  # how every fit here runs
+
+
 def recipe_config(profile: str, variant: str, recipe: str, seed: int) -> FitConfig:
     """The config of one fit: ``recipe`` a kit recipe's name (kit, paper, photo) or that name with
     ``FitConfig`` overrides, ``kit:warp_combine=min,gammas=(0.96,0.02)`` (bare words are read as strings)."""
@@ -63,7 +67,7 @@ def recipe_config(profile: str, variant: str, recipe: str, seed: int) -> FitConf
             overrides[key.strip()] = ast.literal_eval(value.strip())
         except (ValueError, SyntaxError):
             overrides[key.strip()] = value.strip()
-    return FitConfig.for_profile(profile, variant=variant, recipe=name, seed=seed, progress=False, **overrides)
+    return FitConfig.for_profile(profile, variant=variant, recipe=name, seed=seed, **overrides)
 
 
 def run(data, size: str, recipes, variants, seeds, out: Path, profile: str = "class", cases=None) -> None:
@@ -106,10 +110,10 @@ def run(data, size: str, recipes, variants, seeds, out: Path, profile: str = "cl
                     case = case or make_suite_case(data, name, size)
                     began = time.perf_counter()
                     configs = [recipe_config(profile, variant, r, seed) for r in wanted]
-                    fitted = _plain_fits(case, variant, configs)
+                    fitted = _plain_fits(case, variant, configs, QUIET)
                     seconds = (time.perf_counter() - began) / max(1, len(fitted))
                     for recipe, config in zip(wanted, configs):
-                        result = _fit_reusing(case, variant, config, fitted)
+                        result = _fit_reusing(case, variant, config, fitted, QUIET)
                         record(dict(case=name, method=f"DDP {recipe}", variant=variant, seed=seed, size=size,
                                     px=case.rmse_px(result.merged(case.depth)), seconds=seconds,
                                     iterations=int(getattr(result, "iterations", 0) or 0)))

@@ -52,7 +52,7 @@ def main() -> None:
     sgm = sgm_depth_at_scale("desk", profile.size, args.views, seed=0, ref=range(args.views), params="dense")
     write_tum(scene, root / "tum", depths=sgm)
     sequence = load_sequence(root / "tum", "tum")
-    config = FitConfig.for_profile(profile, variant="rgbd+warp", progress=False)
+    config = FitConfig.for_profile(profile, variant="rgbd+warp")  # run_sequence shows no bar per view
     quiet = lambda *_: None  # noqa: E731
     print(f"{platform.processor() or platform.machine()}; {sequence}; profile '{profile.name}', "
           f"{config.paper.iterations} iterations per view, one thread per fit")

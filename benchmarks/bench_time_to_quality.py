@@ -37,6 +37,7 @@ from ddp_lite.method.config import FitConfig  # noqa: E402
 from ddp_lite.method.complete import complete_depth  # noqa: E402
 from ddp_lite.evaluation.experiments import make_case  # noqa: E402
 from ddp_lite.method.coarse_to_fine import complete_depth_coarse_to_fine  # noqa: E402
+from ddp_lite.method.runtime.options import RunOptions  # noqa: E402
 from _common import add_profile_args, profile_from_args  # noqa: E402
 
 SCENES = ("house", "desk", "room", "street")
@@ -75,17 +76,17 @@ def best(result) -> float:
     return float(hole[full].min())
 
 
-def fit(case, config, coarse_to_fine=False, init=None, **kwargs):
+def fit(case, config, coarse_to_fine=False, init=None, options=RunOptions(progress=False), **kwargs):
     if coarse_to_fine:
         return complete_depth_coarse_to_fine(case.rgb, case.depth, case.camera, case.neighbors, variant=VARIANT,
                                              config=config, gt_depth=case.scored_gt, transform=case.transform,
-                                             **kwargs)
+                                             options=options, **kwargs)
     return complete_depth(case.rgb, case.depth, case.camera, case.neighbors, variant=VARIANT, config=config,
-                          gt_depth=case.scored_gt, transform=case.transform, init=init)
+                          gt_depth=case.scored_gt, transform=case.transform, init=init, options=options)
 
 
 def recipes(profile, budget: int, seed: int = 0) -> dict[str, FitConfig]:
-    default = FitConfig.for_profile(profile, variant=VARIANT, progress=False, eval_every=10, seed=seed)
+    default = FitConfig.for_profile(profile, variant=VARIANT, eval_every=10, seed=seed)
     dip = default.replace(lr=0.01, iterations=budget, lr_milestones=(), auto_stop=False)
     paper = default.replace(lr=5e-5, iterations=budget, lr_milestones=(round(0.75 * budget), round(0.94 * budget)),
                             lr_gamma=0.01, auto_stop=False)
@@ -174,9 +175,11 @@ def main() -> None:
         scene = args.warm_scene
         case = cases.get(scene) or make_case(scene, profile, holes="edge")
         print(f"\n== precision / memory format ({scene}, default recipe)")
-        variants = {"float32": {}, "bf16": dict(bf16=True), "channels_last": dict(channels_last=True),
-                    "bf16+channels_last": dict(bf16=True, channels_last=True)}
-        results = {name: fit(case, configs["default"].replace(**changes)) for name, changes in variants.items()}
+        variants = {"float32": (False, False), "bf16": (True, False), "channels_last": (False, True),
+                    "bf16+channels_last": (True, True)}  # (bf16: the config's, channels_last: the run's)
+        results = {name: fit(case, configs["default"].replace(bf16=bf16),
+                             options=RunOptions(progress=False, channels_last=channels_last))
+                   for name, (bf16, channels_last) in variants.items()}
         target = tol * min(best(r) for r in results.values())
         print(f"best {target / tol:.2f}, target {target:.2f}\n{HEAD}")
         for name, result in results.items():

@@ -24,11 +24,12 @@ def one(H: int, W: int, variant: str, channels) -> dict:
 
     from ddp_lite.method.config import FitConfig
     from ddp_lite.method.complete import complete_depth
+    from ddp_lite.method.runtime.options import RunOptions
     depth = np.full((H, W), 2.0, np.float32)
     depth[H // 4:H // 2, W // 4:W // 2] = np.nan
     rgb = np.random.default_rng(0).random((H, W, 3)).astype(np.float32)
-    config = FitConfig(channels=tuple(channels), iterations=1, progress=False, device="cpu")
-    complete_depth(rgb, depth, variant=variant, config=config)
+    config = FitConfig(channels=tuple(channels), iterations=1)
+    complete_depth(rgb, depth, variant=variant, config=config, options=RunOptions(device="cpu", progress=False))
     return {"peak_gib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2 ** 20}
 
 

@@ -7,7 +7,8 @@
 Covers the profiles ``ci`` and ``class`` (their configs, at 32×32 and 20 iterations), the three
 variants, the recipes ``kit`` and ``paper``, and a few configs with the kit's other levers on (hole
 terms with a reach and RGB edges, bf16, fill input, affinity, input jitter, output averaging, an
-ensemble, coarse-to-fine). Each row hashes the depth, disparity, colour output and loss history;
+ensemble, coarse-to-fine) and its combinations (a blend with the paper recipe's fit whose weight a held-out
+ring chooses, a fill's share chosen on held-out blobs, the refining solve). Each row hashes the depth, disparity, colour output and loss history;
 the table is identical before and after a behaviour-preserving change on the same machine.
 """
 from __future__ import annotations
@@ -27,6 +28,7 @@ from ddp_lite.method.coarse_to_fine import complete_depth_coarse_to_fine  # noqa
 from ddp_lite.method.complete import complete_depth  # noqa: E402
 from ddp_lite.world.scenes import make_scene  # noqa: E402
 from ddp_lite.method.config import FitConfig  # noqa: E402
+from ddp_lite.method.runtime.options import RunOptions  # noqa: E402
 
 SIZE = (32, 32)
 ITERATIONS = 20
@@ -48,7 +50,7 @@ def digest(result) -> str:
 
 def configs():
     """(name, variant, FitConfig, coarse_to_fine) rows."""
-    small = dict(iterations=ITERATIONS, progress=False, eval_every=5)
+    small = dict(iterations=ITERATIONS, eval_every=5)
     for profile in ("ci", "class"):
         for recipe in ("kit", "paper"):
             for variant in ("d", "rgbd", "rgbd+warp"):
@@ -66,6 +68,12 @@ def configs():
     yield "ensemble 2", "rgbd", base.replace(ensemble=2, bf16=False), False
     yield "skip net", "rgbd", base.replace(net="skip", channels=(8, 8), bf16=False), False
     yield "coarse-to-fine", "rgbd+warp", base.replace(bf16=False), True
+    yield "blend, ring-chosen weight and fill", "rgbd", base.replace(blend_paper=True, blend_weight=None,
+                                                                   blend_fill=None, bf16=False), False
+    yield "ensemble 3, chosen fill, refined", "rgbd", base.replace(ensemble=3, blend_fill=None, refine=True,
+                                                                  bf16=False), False
+    yield "coarse-to-fine, chosen fill, refined", "rgbd+warp", base.replace(blend_fill=None, refine=True,
+                                                                           bf16=False), True
 
 
 def main() -> None:
@@ -74,16 +82,17 @@ def main() -> None:
     ref = scene[0]
     depth, _ = random_holes(ref.depth, seed=0)
     neighbors = [scene[1].as_neighbor(), scene[2].as_neighbor()]
+    quiet = RunOptions(progress=False)
     start = time.perf_counter()
     print(f"{'config':36s} {'sha256[:16]':16s}")
     for name, variant, config, c2f in configs():
         nbrs = neighbors if variant == "rgbd+warp" else ()
         if c2f:
             result = complete_depth_coarse_to_fine(ref.rgb, depth, ref.camera, nbrs, variant=variant,
-                                                       config=config, gt_depth=ref.depth, scale=2)
+                                                       config=config, gt_depth=ref.depth, scale=2, options=quiet)
         else:
             result = complete_depth(ref.rgb, depth, ref.camera, nbrs, variant=variant, config=config,
-                                        gt_depth=ref.depth)
+                                        gt_depth=ref.depth, options=quiet)
         print(f"{name:36s} {digest(result)}", flush=True)
     print(f"({time.perf_counter() - start:.0f} s)", file=sys.stderr)
 

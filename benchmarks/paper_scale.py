@@ -8,7 +8,7 @@ rgbd+warp) against every classical fill, with seconds per iteration and peak mem
 
 The five hole kinds of ``ddp_lite.studies.real_cases`` (three blob patterns, real SGBM holes, occlusion
 holes), the pair pooled to the profile's size (``factor_for_profile``: ``paper`` → full size, 500×740).
-A fit runs on CUDA when the machine has it (``FitConfig.device`` None). ``--budget-s`` times a few
+A fit runs on CUDA when the machine has it (``RunOptions.device`` None). ``--budget-s`` times a few
 iterations of each recipe and variant first, then cuts every fit's iterations, and its learning-rate
 milestones in proportion, so that the fits fill the time left; it prints how many iterations ran.
 The table is ``bench_quality.py``'s (hole RMSE in disparity px; ratio = DDP / the best classical fill
@@ -37,6 +37,7 @@ from ddp_lite.classical import baselines  # noqa: E402
 from ddp_lite.studies.real_cases import REAL_HOLES, factor_for_profile  # noqa: E402
 from ddp_lite.studies.table6 import TABLE6_SCENES, table6_case  # noqa: E402
 from ddp_lite.method.runtime.device import resolve_device  # noqa: E402
+from ddp_lite.method.runtime.options import RunOptions  # noqa: E402
 from _common import add_profile_args, profile_from_args  # noqa: E402
 from bench_quality import build_case, region_errors, report, rmse_px  # noqa: E402
 
@@ -86,8 +87,7 @@ def peak_memory_mb(device: torch.device) -> float:
 
 def configs(profile, recipes, variants, seed: int) -> dict:
     """{(recipe, variant): FitConfig} at the profile."""
-    return {(recipe, variant): FitConfig.for_profile(profile, variant=variant, recipe=recipe, seed=seed,
-                                                          progress=False)
+    return {(recipe, variant): FitConfig.for_profile(profile, variant=variant, recipe=recipe, seed=seed)
             for recipe in recipes for variant in variants}
 
 
@@ -95,7 +95,8 @@ def fit(case, variant: str, config) -> tuple[object, float]:
     """``complete_depth`` of a real case → (result, wall seconds including the fit's setup)."""
     neighbors = case.neighbors if variant == "rgbd+warp" else ()
     start = time.perf_counter()
-    result = complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant, config=config)
+    result = complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant, config=config,
+                            options=RunOptions(progress=False))
     return result, time.perf_counter() - start
 
 
@@ -121,7 +122,7 @@ def run(args) -> None:
     planned = configs(profile, args.recipes, args.variants, args.seed)
     full = next(iter(planned.values())).paper.iterations
     milestones = next(iter(planned.values())).paper.lr_milestones
-    device = resolve_device(next(iter(planned.values())).run)
+    device = resolve_device(RunOptions())
     if args.table6:  # the paper's own Table 6 scenes, pooled to the profile's size
         names = [f"table6/{scene}" for scene in TABLE6_SCENES]
         cases = [(case, case.fb) for case in (table6_case(s, profile, args.seed, args.data) for s in TABLE6_SCENES)]

@@ -16,7 +16,7 @@ import torch
 from torch.profiler import ProfilerActivity, profile
 
 sys.path.insert(0, os.path.dirname(__file__))
-from bench_fit import case, cpu_summary, parse_overrides  # noqa: E402
+from bench_fit import case, config_and_options, cpu_summary, parse_overrides  # noqa: E402
 
 SIZES = {"96x128": ((96, 128), (32, 64, 128, 256, 512)), "48x64": ((48, 64), (16, 32, 64, 128))}
 
@@ -28,10 +28,10 @@ def main() -> None:
     parser.add_argument("--rows", type=int, default=15)
     parser.add_argument("--threads", type=int, default=1)
     parser.add_argument("--only", choices=sorted(SIZES), help="one size only")
-    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="FitConfig override")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                        help="FitConfig field or RunOptions override")
     args = parser.parse_args()
     torch.set_num_threads(args.threads)
-    from ddp_lite.method.config import FitConfig
     from ddp_lite.method.complete import complete_depth
     print(cpu_summary())
     print(f"torch {torch.__version__}, {torch.get_num_threads()} thread(s), overrides {parse_overrides(args.set)}")
@@ -40,7 +40,8 @@ def main() -> None:
             continue
         rgb, depth, ref, nbrs = case(height, width)
         kwargs = dict(camera=ref, neighbors=nbrs) if args.variant == "rgbd+warp" else {}
-        config = FitConfig(channels=channels, lr=1e-2, progress=False, eval_every=10 ** 9, **parse_overrides(args.set))
+        config, kwargs["options"] = config_and_options(parse_overrides(args.set), channels=channels, lr=1e-2,
+                                                       eval_every=10 ** 9)
         complete_depth(rgb, depth, variant=args.variant, config=config.replace(iterations=5), **kwargs)
         with profile(activities=[ProfilerActivity.CPU]) as prof:
             result = complete_depth(rgb, depth, variant=args.variant, config=config.replace(iterations=args.iterations),

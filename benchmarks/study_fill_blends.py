@@ -58,6 +58,7 @@ from ddp_lite.classical.baselines import BASELINES  # noqa: E402
 from ddp_lite.core.files import atomic_path, write_bytes_atomic  # noqa: E402
 from ddp_lite.method.complete import complete_depth  # noqa: E402
 from ddp_lite.method.config import FitConfig  # noqa: E402
+from ddp_lite.method.runtime.options import RunOptions  # noqa: E402
 from ddp_lite.method.full_resolution import refine_full_resolution  # noqa: E402
 from ddp_lite.method.kit.blend import FILL_MEMBERS, best_fill_share, fill_holdout  # noqa: E402
 from bench_real import table6_fills  # noqa: E402
@@ -96,11 +97,12 @@ def fit(data, names, seeds, fits: Path, variant: str, size: str, channels: tuple
                 continue
             case = make_suite_case(data, name, size)
             depth, heldout = held_out_input(case, seed)
-            config = FitConfig.for_profile("class", variant=variant, recipe="kit", seed=seed, progress=False,
-                                           blend_fill=0.0, **({"channels": channels} if channels else {}))
+            config = FitConfig.for_profile("class", variant=variant, recipe="kit", seed=seed, blend_fill=0.0,
+                                           **({"channels": channels} if channels else {}))
             began = time.perf_counter()
             neighbors = case.neighbors if variant == "rgbd+warp" else ()
-            result = complete_depth(case.rgb, depth, case.camera, neighbors, variant=variant, config=config)
+            result = complete_depth(case.rgb, depth, case.camera, neighbors, variant=variant, config=config,
+                                    options=RunOptions(progress=False))
             seconds = time.perf_counter() - began
             with atomic_path(path) as temporary:
                 np.savez_compressed(temporary, depth=result.depth, heldout=heldout, seconds=seconds)

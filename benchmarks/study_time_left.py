@@ -28,6 +28,7 @@ def record(lane: int, lanes: int, out: str) -> None:
     import torch
     from ddp_lite.method.complete import complete_depth
     from ddp_lite.method.config import FitConfig
+    from ddp_lite.method.runtime.options import RunOptions
     from bench_quality import build_case, suite  # benchmarks/ is on the path: the scripts run from there
     from ddp_lite.method.profiles import get_profile
     torch.set_num_threads(1)
@@ -39,10 +40,11 @@ def record(lane: int, lanes: int, out: str) -> None:
             case, _ = build_case(name, profile)
             if variant == "rgbd+warp" and not case.neighbors:
                 continue
-            config = FitConfig.for_profile(profile, variant=variant, progress=False, seed=seed)
+            config = FitConfig.for_profile(profile, variant=variant, seed=seed)
             start = time.perf_counter()
             result = complete_depth(case.rgb, case.depth, case.camera,
-                                        case.neighbors if variant == "rgbd+warp" else (), variant=variant, config=config)
+                                    case.neighbors if variant == "rgbd+warp" else (), variant=variant, config=config,
+                                    options=RunOptions(progress=False))
             history = result.history
             rows.write(json.dumps(dict(case=name, variant=variant, seed=seed, cap=config.paper.iterations,
                                        ran=int(result.iterations), cuts=[int(i) for i in history["lr_decay_iteration"]],

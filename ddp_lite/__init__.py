@@ -21,7 +21,7 @@ import: ``core`` (the data model and shared checks), ``world`` (synthetic scenes
 # own module (``from ddp_lite.method.paper.losses import ssim``).
 _FRONT_DOOR = {
     "complete_depth": "method.complete", "DepthResult": "method.fit", "merge": "method.fit",
-    "FitConfig": "method.config", "VARIANTS": "method.paper.variants",
+    "FitConfig": "method.config", "RunOptions": "method.runtime.options", "VARIANTS": "method.paper.variants",
     "fit_image": "method.dip", "ImageResult": "method.dip",
     "get_profile": "method.profiles", "Profile": "method.profiles", "PROFILES": "method.profiles",
     "get_recipe": "method.kit.recipes",

@@ -88,7 +88,7 @@ def pytest_collection_modifyitems(config, items):
 
 
 # What several test files share; they import it with ``from conftest import ...`` (tests/ is on sys.path).
-TINY = dict(channels=(8, 16, 32), lr=1e-2, progress=False)  # a small, fast FitConfig for short fits
+TINY = dict(channels=(8, 16, 32), lr=1e-2)  # a small, fast FitConfig for short fits
 
 
 def tilted_plane(height: int, width: int, slope: float = 0.04):

@@ -49,6 +49,7 @@ from ddp_lite.method.config import FitConfig  # noqa: E402
 from ddp_lite.method.dip import fit_image  # noqa: E402
 from ddp_lite.method.complete import complete_depth  # noqa: E402
 from ddp_lite.method.fit import merge  # noqa: E402
+from ddp_lite.method.runtime.options import RunOptions  # noqa: E402
 from ddp_lite.core.views import View  # noqa: E402
 
 H, W = 24, 32
@@ -99,7 +100,7 @@ def camera(pose=None, h=H, w=W):
 
 
 def tiny(**fields):
-    return FitConfig(**{"channels": (8, 16), "iterations": 2, "progress": False, **fields})
+    return FitConfig(**{"channels": (8, 16), "iterations": 2, **fields})
 
 
 # --------------------------------------------------------------------------- FitConfig fields
@@ -124,12 +125,10 @@ CONFIG_BAD = {
     "disparity_margin": [0.5, float("inf"), float("nan")],
     "holdout_fraction": [0.0, 0.5, float("nan")],
     "patience": [0, 2.5], "plateau_decays": [-1, 1.5], "eval_every": [0, True],
-    "seed": [-1, 1.5, "0"], "callback_every": [-1, 0.5],
-    "auto_stop": ["yes", 1], "bf16": ["no", 0], "channels_last": [1], "progress": ["false"],
+    "seed": [-1, 1.5, "0"],
+    "auto_stop": ["yes", 1], "bf16": ["no", 0],
     "net": ["resnet", 3, None], "down": ["avg"], "up": ["cubic"], "pad": ["circular"],
     "schedule": ["linear", None], "net_input": ["grid", None, 2], "edge_guide": ["colour", None, 3],
-    "device": ["tpu", "cuda", "cuda:7", 3, "gpu"],
-    "max_memory_gb": [0.0, -1.0, float("nan"), "8"],
 }
 for _field, _values in CONFIG_BAD.items():
     for _i, _value in enumerate(_values):
@@ -137,6 +136,28 @@ for _field, _values in CONFIG_BAD.items():
             r, d = rgb(), depth()
             return lambda: complete_depth(r, d, variant="d", config=tiny(**{field: value}))
         case(f"config.{_field}={_value!r}", BAD, _field)(_setup)
+
+# the run's options: checked at the run, each message naming its field
+OPTIONS_BAD = {
+    "callback_every": [-1, 0.5], "channels_last": [1], "progress": ["false"],
+    "device": ["tpu", "cuda", "cuda:7", 3, "gpu"],
+    "max_memory_gb": [0.0, -1.0, float("nan"), "8"],
+}
+for _field, _values in OPTIONS_BAD.items():
+    for _i, _value in enumerate(_values):
+        def _setup(tmp, field=_field, value=_value):
+            r, d = rgb(), depth()
+            return lambda: complete_depth(r, d, variant="d", config=tiny(), options=RunOptions(**{field: value}))
+        case(f"options.{_field}={_value!r}", BAD, f"options.{_field}")(_setup)
+# a run option given to the method's config: refused, saying where it goes
+for _field in OPTIONS_BAD:
+    case(f"FitConfig({_field}=...)", TypeError, f"options=RunOptions({_field}=")(
+        lambda tmp, field=_field: (lambda: tiny(**{field: OPTIONS_BAD[field][0]})))
+case("for_profile(progress=False)", TypeError, "progress")(
+    lambda tmp: (lambda: FitConfig.for_profile("ci", variant="d", progress=False)))
+case("config.replace(device='cpu')", TypeError, "device")(lambda tmp: (lambda: tiny().replace(device="cpu")))
+case("config.run", AttributeError, "RunOptions")(lambda tmp: (lambda: tiny().run))
+case("config.progress", AttributeError, "run option")(lambda tmp: (lambda: tiny().progress))
 
 
 # --------------------------------------------------------------------------- complete_depth's inputs
@@ -175,6 +196,8 @@ FIT_BAD = {
     "variant None": (dict(variant=None), "variant"),
     "config dict": (dict(config={"lr": 1e-2}), "config"),
     "config str": (dict(config="ci"), "config"),
+    "options dict": (dict(options={"progress": False}), "options"),
+    "options a FitConfig": (dict(options=lambda: tiny()), "options"),
     "camera array": (dict(camera=lambda: np.eye(3)), "camera"),
     "camera other size": (dict(camera=lambda: camera(h=H * 2, w=W * 2)), "camera"),
     "warp without neighbours": (dict(variant="rgbd+warp", camera=lambda: camera()), "neighbor"),
@@ -197,8 +220,8 @@ FIT_BAD = {
     "transform str": (dict(transform="auto"), "transform"),
     "init str": (dict(init="last"), "init"),
     "3000×4000 at ci": (dict(rgb=None, variant="d", depth=lambda: np.full((3000, 4000), 2.0, np.float32),
-                             config=lambda: FitConfig.for_profile("ci", variant="d", progress=False)), "max_memory_gb"),
-    "max_memory_gb too small": (dict(config=lambda: tiny(max_memory_gb=0.01)), "max_memory_gb"),
+                             config=lambda: FitConfig.for_profile("ci", variant="d")), "max_memory_gb"),
+    "max_memory_gb too small": (dict(options=lambda: RunOptions(max_memory_gb=0.01)), "max_memory_gb"),
 }
 for _id, (_kw, _name) in FIT_BAD.items():
     case(f"complete_depth {_id}", BAD, _name)(_fit(**_kw))

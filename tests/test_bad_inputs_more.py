@@ -261,11 +261,9 @@ case("iterations=10**9", ValueError, "config.iterations")(
 for _shape in ((1, 40), (4, 4), (8, 8)):
     case(f"depth {_shape[0]}×{_shape[1]} for the ci net", ValueError, "at least")(
         lambda tmp, s=_shape: (lambda: complete_depth(rgb(*s), watch(np.full(s, 2.0, np.float32)), variant="d",
-                                                      config=FitConfig.for_profile("ci", variant="d", progress=False,
-                                                                                   iterations=1))))
+                                                      config=FitConfig.for_profile("ci", variant="d", iterations=1))))
 case("fit_image 8×8 for the ci net", ValueError, "at least")(
-    lambda tmp: (lambda: fit_image(rgb(8, 8), config=FitConfig.for_profile("ci", variant="rgbd", progress=False,
-                                                                           iterations=1))))
+    lambda tmp: (lambda: fit_image(rgb(8, 8), config=FitConfig.for_profile("ci", variant="rgbd", iterations=1))))
 
 
 # --------------------------------------------------------------------------- files
@@ -426,7 +424,7 @@ def test_conventions_that_are_accepted():
     with pytest.raises(AttributeError, match=r"config\.paper\.lr"):
         config.lr
     # the smallest size the ci net takes runs: the SSIM window (11) beats its down-sampling factor + 1 (9)
-    ci = FitConfig.for_profile("ci", variant="d", progress=False, iterations=1)
+    ci = FitConfig.for_profile("ci", variant="d", iterations=1)
     complete_depth(rgb(11, 11), np.full((11, 11), 2.0, np.float32), variant="d", config=ci)
 
 

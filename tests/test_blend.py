@@ -105,17 +105,17 @@ def test_a_blend_of_the_kit_fit_the_paper_fit_and_the_fill_is_their_weighted_mea
     depth = tilted_plane(32, 40, slope=0.05)
     depth[8:20, 10:28] = np.nan
     rgb = np.random.default_rng(2).random(depth.shape + (3,)).astype(np.float32)
-    thirds = FitConfig.for_profile("ci", variant="rgbd", recipe="kit", progress=False, iterations=12,
+    thirds = FitConfig.for_profile("ci", variant="rgbd", recipe="kit", iterations=12,
                                    blend_paper=True, blend_weight=0.5, blend_fill=1 / 3)
     threads = torch.get_num_threads()
     torch.set_num_threads(1)
     try:
         blended = complete_depth(rgb, depth, variant="rgbd", config=thirds)
         kit = complete_depth(rgb, depth, variant="rgbd", transform=blended.transform,
-                             config=FitConfig.for_profile("ci", variant="rgbd", recipe="kit", progress=False, iterations=12,
+                             config=FitConfig.for_profile("ci", variant="rgbd", recipe="kit", iterations=12,
                                                           blend_fill=0.0))  # the kit's fit alone
         paper = complete_depth(rgb, depth, variant="rgbd", transform=blended.transform,
-                               config=FitConfig.for_profile("ci", variant="rgbd", recipe="paper", progress=False,
+                               config=FitConfig.for_profile("ci", variant="rgbd", recipe="paper",
                                                             iterations=12))
     finally:
         torch.set_num_threads(threads)
@@ -132,8 +132,8 @@ def test_the_photo_recipe_is_the_kit_fit_refined_then_the_kits_share_of_the_fill
     depth = tilted_plane(32, 40, slope=0.05)
     depth[8:20, 10:28] = np.nan
     rgb = np.random.default_rng(2).random(depth.shape + (3,)).astype(np.float32)
-    photo = FitConfig.for_profile("ci", variant="rgbd", recipe="photo", progress=False, iterations=12)
-    kit_config = FitConfig.for_profile("ci", variant="rgbd", recipe="kit", progress=False, iterations=12)
+    photo = FitConfig.for_profile("ci", variant="rgbd", recipe="photo", iterations=12)
+    kit_config = FitConfig.for_profile("ci", variant="rgbd", recipe="kit", iterations=12)
     assert photo == kit_config.replace(refine=True)  # one switch on top of the kit
     result = complete_depth(rgb, depth, variant="rgbd", config=photo)
     alone = complete_depth(rgb, depth, variant="rgbd", transform=result.transform,
@@ -155,7 +155,7 @@ def test_refine_puts_a_blurred_depth_edge_back_on_the_colour_edge():
     rgb[:, 20:] = 1.0
     depth = truth.copy()
     depth[8:24, 12:28] = np.nan
-    config = FitConfig.for_profile("ci", variant="rgbd", recipe="kit", progress=False, iterations=8, blend_fill=0.0)
+    config = FitConfig.for_profile("ci", variant="rgbd", recipe="kit", iterations=8, blend_fill=0.0)
     plain = complete_depth(rgb, depth, variant="rgbd", config=config)
     sharp = complete_depth(rgb, depth, variant="rgbd", config=config.replace(refine=True))
     holes = np.isnan(depth)
@@ -176,7 +176,7 @@ def fill_case(seed):
     depth = tilted_plane(24, 32, slope=0.05)
     depth[6:16, 8:20] = np.nan
     rgb = np.random.default_rng(seed).random(depth.shape + (3,)).astype(np.float32)
-    return depth, rgb, FitConfig.for_profile("ci", variant="rgbd", recipe="kit", progress=False, iterations=6,
+    return depth, rgb, FitConfig.for_profile("ci", variant="rgbd", recipe="kit", iterations=6,
                                              blend_fill=0.0)
 
 

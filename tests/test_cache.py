@@ -18,6 +18,7 @@ from ddp_lite.method.complete import complete_depth
 from ddp_lite.method.config import FitConfig
 from ddp_lite.method.dip import fit_image
 from ddp_lite.method import fit_cache
+from ddp_lite.method.runtime.options import RunOptions
 
 H, W = 24, 32
 
@@ -38,8 +39,8 @@ def _config(**changes):
     return FitConfig(**TINY, iterations=4).replace(**changes)
 
 
-def _fit(rgb, depth, **config_changes):
-    return complete_depth(rgb, depth, variant="d", config=_config(**config_changes))
+def _fit(rgb, depth, options=None, **config_changes):
+    return complete_depth(rgb, depth, variant="d", config=_config(**config_changes), options=options)
 
 
 def _members(path) -> dict:
@@ -98,10 +99,11 @@ def test_each_input_that_decides_a_fit_gets_its_own_entry(folder, monkeypatch):
     one_pixel[0, 0] += 1e-3
     _fit(rgb, one_pixel)  # an array by value
     _fit(rgb, depth, seed=1)  # a config field
+    _fit(rgb, depth, options=RunOptions(channels_last=True))  # a run option other than the progress bar
     complete_depth(rgb, depth, None, (), "d", _config(), tilted_plane(H, W))  # gt_depth, positionally
     monkeypatch.setattr(fit_cache, "_library_digest", lambda: "an edited ddp_lite")
     _fit(rgb, depth)  # the library's source
-    assert len(list(folder.iterdir())) == 5
+    assert len(list(folder.iterdir())) == 6
 
 
 def test_the_profile_decides_a_call_without_a_config(monkeypatch):
@@ -115,7 +117,8 @@ def test_the_profile_decides_a_call_without_a_config(monkeypatch):
 def test_what_does_not_decide_a_fit_shares_the_entry(folder):
     rgb, depth = _inputs()
     _fit(rgb, depth)
-    _fit(rgb.copy(), depth.copy(), progress=True)  # equal copies; a progress bar
+    _fit(rgb.copy(), depth.copy(), options=RunOptions(progress=False))  # equal copies; no progress bar
+    _fit(rgb, depth, options=RunOptions())  # the default options, given
     complete_depth(rgb, depth, None, (), "d", _config())  # positional, the defaults given or not
     complete_depth(rgb=rgb, depth=depth, variant="d", config=_config(), gt_depth=None)
     assert len(list(folder.iterdir())) == 1
@@ -124,7 +127,8 @@ def test_what_does_not_decide_a_fit_shares_the_entry(folder):
 def test_no_entry_without_the_variable_with_a_callback_or_for_bad_input(folder, monkeypatch):
     rgb, depth = _inputs()
     seen = []
-    complete_depth(rgb, depth, variant="d", config=_config(callback_every=2), callback=lambda i, _: seen.append(i))
+    complete_depth(rgb, depth, variant="d", config=_config(), options=RunOptions(callback_every=2),
+                   callback=lambda i, _: seen.append(i))
     assert seen == [2, 4] and not folder.exists()
     with pytest.raises(ValueError, match="depth"):
         _fit(rgb, depth[:, :-1])  # the fit's own check still speaks

@@ -567,7 +567,7 @@ def test_sequence_log_gives_the_whole_runs_share_and_time_left(tmp_path):
     from ddp_lite.world.scenes import make_scene
     from ddp_lite.sequences.sequence import run_sequence
     lines = []
-    config = FitConfig.for_profile("ci", variant="rgbd+warp", progress=False, iterations=1)
+    config = FitConfig.for_profile("ci", variant="rgbd+warp", iterations=1)
     run_sequence(make_scene("desk", size=(24, 32), n_views=3), tmp_path / "o", config, fuse=False, log=lines.append)
     views = [line for line in lines if line.strip().startswith("view ")]
     assert len(views) == 3, lines

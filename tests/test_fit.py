@@ -11,6 +11,7 @@ from ddp_lite.method.complete import complete_depth
 from ddp_lite.method.paper.losses import disparity_loss, warp_loss
 from ddp_lite.method.dip import fit_image
 from ddp_lite.method.fit import merge
+from ddp_lite.method.runtime.options import RunOptions
 from ddp_lite.method.paper.warp import warp_to_reference
 from ddp_lite.method.stopping import PlateauStopper
 from conftest import TINY, tilted_plane
@@ -234,8 +235,9 @@ def test_warm_start_begins_where_the_previous_fit_ended():
 def test_bfloat16_and_channels_last_still_fill_the_hole():
     gt, depth = slanted_plane()
     holes = np.isnan(depth)
-    config = FitConfig(iterations=150, bf16=True, channels_last=True, **TINY)
-    result = complete_depth(np.zeros((32, 48, 3), np.float32), depth, variant="d", config=config)
+    config = FitConfig(iterations=150, bf16=True, **TINY)
+    result = complete_depth(np.zeros((32, 48, 3), np.float32), depth, variant="d", config=config,
+                            options=RunOptions(channels_last=True))
     rmse = float(np.sqrt(np.mean((result.depth[holes] - gt[holes]) ** 2)))
     assert rmse < 0.7 * float(np.sqrt(np.mean((nearest_fill(depth)[holes] - gt[holes]) ** 2)))
 

@@ -77,7 +77,7 @@ def test_nyu_branch_on_a_labelled_mat_fixture(tmp_path):
         f["images"] = rgb[None].transpose(0, 3, 2, 1)
         f["rawDepths"] = raw[None].transpose(0, 2, 1)
         f["depths"] = toolbox[None].transpose(0, 2, 1)
-    config = FitConfig.for_profile("ci", variant="rgbd", progress=False, iterations=5)
+    config = FitConfig.for_profile("ci", variant="rgbd", iterations=5)
     table = nyu_fill_table(tmp_path / "nyu.mat", "ci", config=config, methods=("linear",))
     assert set(table) == {"DDP (rgbd)", "dataset's fill", "linear"}
     from ddp_lite.data.datasets import load_nyu

@@ -25,8 +25,8 @@ DEFAULTS = dict(
     auto_stop=False, holdout_fraction=0.05, holdout='pixels', patience=200, plateau_decays=0, eval_every=10,
     # tricks
     reg_noise_std=0.0, average_outputs=0.0,
-    # run
-    device=None, bf16=False, channels_last=False, max_memory_gb=None, progress=True, callback_every=0)
+    # precision
+    bf16=False)
 
 # (profile, recipe, variant, net) → the fields that differ from DEFAULTS
 EXPECTED = {

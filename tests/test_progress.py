@@ -71,6 +71,7 @@ def test_the_loop_reports_through_the_hook_its_caller_passes():
     from ddp_lite.core.progress import FitBar, command_progress
     from ddp_lite.method import loop
     from ddp_lite.method.config import FitConfig
+    from ddp_lite.method.runtime.options import RunOptions
 
     class Recorder:
         def __init__(self, iterations):
@@ -88,7 +89,7 @@ def test_the_loop_reports_through_the_hook_its_caller_passes():
         def close(self):
             self.calls.append(("close",))
 
-    config = FitConfig(channels=(4, 8), iterations=20, eval_every=5, patience=100, auto_stop=True, progress=False)
+    config = FitConfig(channels=(4, 8), iterations=20, eval_every=5, patience=100, auto_stop=True)
     net, noise = loop.build(config, 1, 8, 8, torch.device("cpu"))
     target = torch.zeros(1, 1, 8, 8)
 
@@ -98,7 +99,7 @@ def test_the_loop_reports_through_the_hook_its_caller_passes():
 
     recorder = Recorder(20)
     _, history, ran, _ = loop.run(net, noise, loss_fn, config, 20, lambda out: float(out.abs().mean()),
-                                  progress=recorder)
+                                  progress=recorder, options=RunOptions())
     kinds = [call[0] for call in recorder.calls]
     assert ran == 20 and kinds == ["heldout", "expect"] * 4 + ["close"]
     assert np.allclose([c[1] for c in recorder.calls if c[0] == "heldout"], history["heldout"])

@@ -160,8 +160,8 @@ def test_compare_fills_builds_photo_from_the_kit_and_paper_fits_and_matches_phot
     try:
         out = real_cases.compare_fills(case, profile, recipes=("paper", "kit", "photo"))
         alone = {recipe: case.fb / real(case.rgb, case.depth, case.camera, (), variant="rgbd",
-                                          config=FitConfig.for_profile(profile, variant="rgbd", recipe=recipe,
-                                                                       progress=False)).merged(case.depth)
+                                          config=FitConfig.for_profile(profile, variant="rgbd",
+                                                                       recipe=recipe)).merged(case.depth)
                  for recipe in ("kit", "photo")}
     finally:
         torch.set_num_threads(threads)

@@ -82,7 +82,12 @@ def one_thread():
 
 
 def test_ensemble_members_run_side_by_side_with_the_numbers_of_one_thread_in_turn():
-    from ddp_lite.method.kit.ensemble import parallel_members
+    from ddp_lite.method.runtime.options import RunOptions
+    from ddp_lite.method.runtime.side_by_side import side_by_side_workers
+
+    def parallel_members(config, variant, shape, n_neighbors, callback):  # what complete_depth asks for them
+        return side_by_side_workers(config, RunOptions(), variant, shape, n_neighbors, config.combination.ensemble,
+                                    callback)
     _, depth = plane_with_hole()
     rgb = np.random.default_rng(0).random(depth.shape + (3,)).astype(np.float32)
     config = FitConfig(**TINY, iterations=12, ensemble=2, auto_stop=True, patience=20, eval_every=2)

@@ -27,7 +27,7 @@ def test_the_paper_recipe_optimises_only_the_papers_three_terms():
     nbrs = [scene[1].as_neighbor()]
     terms = {}
     for recipe in ("paper", "kit"):
-        config = FitConfig.for_profile("ci", variant="rgbd+warp", recipe=recipe, iterations=3, progress=False,
+        config = FitConfig.for_profile("ci", variant="rgbd+warp", recipe=recipe, iterations=3,
                                        channels=(8, 16))
         result = complete_depth(scene[0].rgb, depth, scene[0].camera, nbrs, variant="rgbd+warp", config=config)
         terms[recipe] = {k for k in result.history if k in ("disp", "rgb", "warp", "smooth", "flat")}

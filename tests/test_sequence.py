@@ -100,7 +100,7 @@ def test_views_side_by_side_in_process_give_the_serial_depths(serial, tum, tmp_p
     threads = torch.get_num_threads()
     torch.set_num_threads(2)  # as on a 2-core laptop: two views at once, one thread each
     try:
-        config = FitConfig.for_profile("ci", variant=VARIANT, seed=0, progress=False, iterations=ITERATIONS)
+        config = FitConfig.for_profile("ci", variant=VARIANT, seed=0, iterations=ITERATIONS)
         summary = run_sequence(read_tum(tum), tmp_path, config, log=lines.append)
     finally:
         torch.set_num_threads(threads)
@@ -136,7 +136,7 @@ def test_an_interrupted_run_resumes_with_only_the_missing_views(serial, tum, tmp
     kept = {n: (tmp_path / manifest["views"][n]["files"]["npy"]).read_bytes() for n in done}
 
     scene = read_tum(tum)
-    config = FitConfig.for_profile("ci", variant=VARIANT, seed=0, progress=False, iterations=ITERATIONS)
+    config = FitConfig.for_profile("ci", variant=VARIANT, seed=0, iterations=ITERATIONS)
     summary = run_sequence(scene, tmp_path, config, log=lambda *_: None)
     assert set(summary["skipped"]) == done
     assert sorted(summary["computed"]) == sorted(set(reference) - done)
@@ -152,7 +152,7 @@ def test_an_interrupted_run_resumes_with_only_the_missing_views(serial, tum, tmp
 def test_a_worker_killed_mid_run_loses_and_duplicates_nothing(serial, tum, cluster, tmp_path):
     _, reference = serial
     scene = read_tum(tum)
-    config = FitConfig.for_profile("ci", variant=VARIANT, seed=0, progress=False, iterations=ITERATIONS)
+    config = FitConfig.for_profile("ci", variant=VARIANT, seed=0, iterations=ITERATIONS)
     client = cluster  # its nanny starts a new worker in place of the killed one
     killed = []
 

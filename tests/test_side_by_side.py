@@ -9,7 +9,7 @@ import torch
 from ddp_lite.evaluation.experiments import make_case, run_cases, run_jobs
 from ddp_lite.method.runtime.side_by_side import run_side_by_side
 
-TINY_FIT = dict(channels=(8, 16, 32), iterations=8, auto_stop=False, lr_milestones=(), progress=False)
+TINY_FIT = dict(channels=(8, 16, 32), iterations=8, auto_stop=False, lr_milestones=())
 
 
 def _with_threads(n, function):

@@ -36,8 +36,8 @@ from scipy.sparse.linalg import spsolve
 from ..core.checks import check_image, check_int, check_real
 from .depth_fills import check_fill_input, fill_linear, nearest_values
 
-__all__ = ["fill_colorization", "colorization_affinities", "NEIGHBOUR_OFFSETS", "fill_guided_filter",
-           "fill_bilateral_solver", "joint_bilateral_fill", "fill_cross_bilateral", "fill_fast_global_smoother"]
+__all__ = ["fill_colorization", "colorization_affinities", "colorization_weights", "NEIGHBOUR_OFFSETS",
+           "fill_guided_filter", "fill_bilateral_solver", "joint_bilateral_fill", "fill_cross_bilateral", "fill_fast_global_smoother"]
 
 
 # 3×3 window minus its centre, (dy, dx)
@@ -45,10 +45,10 @@ _OFFSETS = [(dy, dx) for dy in (-1, 0, 1) for dx in (-1, 0, 1) if (dy, dx) != (0
 NEIGHBOUR_OFFSETS = tuple(_OFFSETS)
 
 
-def _colorization_weights(image: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Levin et al.'s affinities of ``image`` (H, W, 3) in [0, 1]: weights (8, H, W) over the 3×3
-    neighbours in ``_OFFSETS`` order, summing to 1 per pixel (0 outside the image), and the flat
-    index (8, H, W) of each neighbour (-1 outside)."""
+def colorization_weights(image: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Levin et al.'s affinities of ``image`` (H, W, 3) float64 in [0, 1], as ``check_image`` leaves it (not
+    checked again here): weights (8, H, W) over the 3×3 neighbours in ``NEIGHBOUR_OFFSETS`` order, summing to
+    1 per pixel (0 outside the image), and the flat index (8, H, W) of each neighbour (-1 outside)."""
     H, W = image.shape[:2]
     gray = image @ np.array([0.2989, 0.5870, 0.1140])  # MATLAB's rgb2gray weights, (H, W)
     index = np.arange(H * W).reshape(H, W)
@@ -74,7 +74,7 @@ def colorization_affinities(rgb) -> np.ndarray:
     of one surface still links its pixels while an edge between two surfaces does not. Each pixel's
     eight weights sum to 1."""
     image = check_image(rgb, "rgb")
-    return _colorization_weights(image.astype(np.float64))[0].astype(np.float32)
+    return colorization_weights(image.astype(np.float64))[0].astype(np.float32)
 
 
 def fill_colorization(depth, rgb=None, alpha: float = 1.0) -> np.ndarray:
@@ -94,7 +94,7 @@ def fill_colorization(depth, rgb=None, alpha: float = 1.0) -> np.ndarray:
     if valid.all():
         return depth.astype(np.float32)
     H, W = depth.shape
-    weights, nbr_index = _colorization_weights(image)
+    weights, nbr_index = colorization_weights(image)
     inside = nbr_index >= 0
     index = np.arange(H * W).reshape(H, W)
 

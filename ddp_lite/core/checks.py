@@ -98,14 +98,14 @@ def check_int_tuple(value, name: str, minimum: int, min_length: int = 0) -> tupl
 
 
 def check_callback(callback, every) -> None:
-    """A fit's ``callback``: None, or a function that ``every`` (config.callback_every) > 0 will call."""
+    """A fit's ``callback``: None, or a function that ``every`` (options.callback_every) > 0 will call."""
     if callback is None:
         return
     if not callable(callback):
         raise TypeError(f"callback must be a function callback(iteration, outputs), got {type(callback).__name__}")
     if every == 0:
-        raise ValueError("callback is given but config.callback_every is 0, so it would never be called; "
-                         "set config.callback_every to how often (iterations) to call it")
+        raise ValueError("callback is given but options.callback_every is 0, so it would never be called; "
+                         "set options.callback_every (RunOptions) to how often (iterations) to call it")
 
 
 # --------------------------------------------------------------------------- arrays a fit takes

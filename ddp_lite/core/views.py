@@ -14,15 +14,16 @@ renderer (``scenes``, ``render``) both build these types.
 from __future__ import annotations
 
 import os
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from .files import atomic_path
-from .camera import Camera
+from .camera import Camera, view_overlap, view_parallax
 from .checks import check_depth, check_image
 
-__all__ = ["View", "Scene", "image_and_camera", "LABELS", "LABEL_SKY", "LABEL_TEXTURELESS", "LABEL_PLANKS", "LABEL_TEXTURED"]
+__all__ = ["View", "Scene", "image_and_camera", "check_neighbor_views", "MIN_PARALLAX_PX", "LABELS", "LABEL_SKY", "LABEL_TEXTURELESS", "LABEL_PLANKS", "LABEL_TEXTURED"]
 
 # Scene.labels values: the texture class of the surface a pixel sees
 LABEL_SKY, LABEL_TEXTURELESS, LABEL_PLANKS, LABEL_TEXTURED = 0, 1, 2, 3
@@ -154,3 +155,36 @@ def image_and_camera(item, name: str) -> tuple[np.ndarray, Camera]:
     if not isinstance(camera, Camera):
         raise TypeError(f"{name} must be an (rgb, Camera) pair or a View, got camera {type(camera).__name__}")
     return check_image(rgb, f"{name} rgb", (camera.height, camera.width)), camera
+
+
+MIN_PARALLAX_PX = 0.5  # below this a neighbour's warp cannot tell one depth from another
+
+
+def check_neighbor_views(camera: Camera, depth: np.ndarray, neighbors) -> None:
+    """Check that the ``neighbors`` ((rgb, Camera) pairs) of a reference view (``camera``, its valid depth
+    ``depth`` (H, W) metres, NaN holes) can tell its depths apart, as a warp term needs: ``ValueError`` if none
+    sees any valid pixel, or one repeats another or sits at the reference's own pose (it adds nothing but
+    weight); a warning for one that sees none of them, or whose parallax over the valid depth is below
+    ``MIN_PARALLAX_PX``."""
+    blind = [i for i, (_, cam) in enumerate(neighbors) if view_overlap(camera, depth, cam) == 0.0]
+    if len(blind) == len(neighbors):
+        raise ValueError(f"neighbors: none of the {len(neighbors)} neighbour camera(s) sees any valid reference "
+                         f"pixel (check their poses: cam_from_world, metres), so the warp term would be 0")
+    for i in blind:
+        warnings.warn(f"neighbors[{i}] sees none of the reference's valid pixels; its warp term is 0", stacklevel=3)
+    for i, (image, cam) in enumerate(neighbors):
+        if np.allclose(cam.cam_from_world, camera.cam_from_world, rtol=0.0, atol=1e-12):
+            raise ValueError(f"neighbors[{i}] has the reference's own pose (zero baseline): its warp compares the "
+                             f"reference with itself and adds nothing; use another view")
+        for j in range(i):
+            other_image, other = neighbors[j]
+            if (np.array_equal(other.cam_from_world, cam.cam_from_world) and np.array_equal(other.K, cam.K)
+                    and np.array_equal(other_image, image)):
+                raise ValueError(f"neighbors[{i}] repeats neighbors[{j}] (same image and camera): it only doubles "
+                                 f"that view's weight; list each neighbour once")
+        parallax = view_parallax(camera, depth, cam)
+        if parallax < MIN_PARALLAX_PX:
+            baseline = float(np.linalg.norm(cam.center - camera.center))
+            warnings.warn(f"neighbors[{i}]: a baseline of {baseline:.3g} (pose units) gives at most {parallax:.2g} px "
+                          f"of parallax over the valid depth ({np.nanmin(depth):.3g}–{np.nanmax(depth):.3g} m), so its "
+                          f"warp cannot tell depths apart; are depth and poses in the same unit (metres)?", stacklevel=3)

@@ -17,6 +17,7 @@ from ..method.paper.disparity import DisparityTransform
 from ..method.config import FitConfig
 from ..method.complete import complete_depth
 from ..method.fit import DepthResult
+from ..method.runtime.options import RunOptions
 from ..method.runtime.side_by_side import run_fits
 from .fusion import points_from_depth
 from ..classical.holes import edge_band_holes, random_holes
@@ -119,33 +120,36 @@ def make_case(scene_name: str = "house", profile: Profile | str | None = None, r
                 scene, ref, labels)
 
 
-def run_variants(case: Case, variants=("d", "rgbd", "rgbd+warp"), profile=None, net: str = "unet",
-                 **config_overrides) -> dict[str, DepthResult]:
+def run_variants(case: Case, variants=("d", "rgbd", "rgbd+warp"), profile=None, net: str = "unet", *,
+                 options: RunOptions | None = None, **config_overrides) -> dict[str, DepthResult]:
     """Fit each DDP variant on ``case`` with the profile's config; {variant: DepthResult}. The fits are
     independent and run side by side (:mod:`ddp_lite.method.runtime.side_by_side`)."""
-    results = run_jobs([(case, variant, net, config_overrides) for variant in variants], profile)
+    results = run_jobs([(case, variant, net, config_overrides) for variant in variants], profile, options)
     return dict(zip(variants, results))
 
 
-def run_cases(cases, variant: str = "rgbd", profile=None, net: str = "unet", **config_overrides) -> list[DepthResult]:
+def run_cases(cases, variant: str = "rgbd", profile=None, net: str = "unet", *, options: RunOptions | None = None,
+              **config_overrides) -> list[DepthResult]:
     """Fit ``variant`` on each of ``cases`` with the profile's config, side by side → one DepthResult per case."""
-    return run_jobs([(case, variant, net, config_overrides) for case in cases], profile)
+    return run_jobs([(case, variant, net, config_overrides) for case in cases], profile, options)
 
 
-def run_jobs(jobs, profile=None) -> list[DepthResult]:
+def run_jobs(jobs, profile=None, options: RunOptions | None = None) -> list[DepthResult]:
     """Each ``(case, variant, net, {FitConfig field: value})`` of ``jobs`` fitted with the profile's config
-    (the case's ground truth for the fit's history) → DepthResults in the same order. The fits are
+    (the case's ground truth for the fit's history), run with ``options`` (:class:`RunOptions`; None →
+    ``RunOptions()``) → DepthResults in the same order. The fits are
     independent: on a CPU they run side by side, one torch thread each, as many at once as torch has
     threads (:mod:`ddp_lite.method.runtime.side_by_side`); a fit gives the numbers of one thread."""
+    options = RunOptions() if options is None else options
     configs = [FitConfig.for_profile(profile, variant=variant, net=net, **options) for _, variant, net, options in jobs]
     partners = [case.neighbors if get_variant(variant).needs_neighbors else () for case, variant, *_ in jobs]
 
     def fit(k: int) -> DepthResult:
         case, variant = jobs[k][0], jobs[k][1]
         return complete_depth(case.rgb, case.depth, case.camera, partners[k], variant=variant, config=configs[k],
-                              gt_depth=case.scored_gt, transform=case.transform)
+                              gt_depth=case.scored_gt, transform=case.transform, options=options)
     return run_fits(fit, [(config, variant, case.depth.shape, len(neighbors))
-                          for config, (case, variant, *_), neighbors in zip(configs, jobs, partners)])
+                          for config, (case, variant, *_), neighbors in zip(configs, jobs, partners)], options)
 
 
 def error_table(case: Case, estimates: dict, band: int = 3) -> dict[str, dict[str, float]]:
@@ -240,9 +244,9 @@ def ablation(cases, configs: dict | None = None, profile=None, holes: str = "edg
     configs = TABLE2_CONFIGS if configs is None else configs
     runs, examples = [], {}
     made = [(scene, seed, make_case(scene, profile, holes=holes, seed=seed)) for scene, seed in cases]
-    jobs = [(case, variant, net, {**config_overrides, **(extra[0] if extra else {}), "seed": seed, "progress": False})
+    jobs = [(case, variant, net, {**config_overrides, **(extra[0] if extra else {}), "seed": seed})
             for _, seed, case in made for net, variant, *extra in configs.values()]
-    fitted = iter(run_jobs(jobs, profile))  # every fit of the table side by side, in the table's order
+    fitted = iter(run_jobs(jobs, profile, RunOptions(progress=False)))  # every fit of the table side by side, in the table's order
     for scene, seed, case in made:
         gt_points = points_from_depth(case.scored_gt, case.camera)
         distance = tau * float(np.nanmedian(case.scored_gt))

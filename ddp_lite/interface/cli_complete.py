@@ -238,6 +238,7 @@ def complete_command(args) -> int:
 def _complete(args, writers, staged, start) -> int:
     from ..method.config import FitConfig
     from ..method.complete import complete_depth
+    from ..method.runtime.options import RunOptions, run_options
     from ..method.profiles import get_profile
     from ..core.progress import command_progress
     from ..method.time_left import earliest_share, expected_share
@@ -246,11 +247,11 @@ def _complete(args, writers, staged, start) -> int:
     from ..method.full_resolution import refine_full_resolution
     from ..sequences.working_size import fill_holes_at_full_size, shrink, working_shape
     profile = get_profile(args.profile)
-    config = FitConfig.for_profile(profile, variant=args.variant, recipe=args.recipe, device=args.device,
-                                   seed=args.seed, max_memory_gb=args.max_memory_gb,
+    config = FitConfig.for_profile(profile, variant=args.variant, recipe=args.recipe, seed=args.seed,
                                    **({"iterations": args.iterations} if args.iterations else {}),
                                    **({"blend_fill": 0.0} if args.raw else {}))  # the net's alone: no fill's share
-    config.validate()  # --device, before the inputs are read
+    config.validate()
+    options = run_options(RunOptions(device=args.device, max_memory_gb=args.max_memory_gb))  # before the inputs are read
     rgb = _read_rgb(args.rgb)
     depth = _read_depth(args.depth, args.depth_scale)
     check_same_size(rgb.shape, depth.shape, args.rgb, "--rgb", "--depth")  # names an EXIF rotation if that is why
@@ -288,7 +289,7 @@ def _complete(args, writers, staged, start) -> int:
     classical = _classical_fills(depth, rgb, gt)
     planned = config.resolved_iterations(args.variant) * config.fit_count()  # every fit of the command
     with command_progress(planned, expected_share(config), earliest_share(config)):
-        result = complete_depth(small_rgb, small_depth, variant=args.variant, config=config)
+        result = complete_depth(small_rgb, small_depth, variant=args.variant, config=config, options=options)
     refine_seconds = None
     if refine:
         print(f"fit done in {result.seconds:.1f} s; sharpening the fill at {depth.shape[0]}×{depth.shape[1]} ...",

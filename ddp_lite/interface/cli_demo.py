@@ -23,6 +23,7 @@ from ..evaluation.experiments import error_table, format_table, make_case
 from ..method.config import FitConfig
 from ..method.complete import complete_depth
 from ..method.runtime.memory import check_memory
+from ..method.runtime.options import RunOptions, run_options
 from ..method.time_left import earliest_share, expected_share
 from ..method.paper.nets import check_input_size
 from ..evaluation.metrics import hole_rmse
@@ -52,18 +53,20 @@ def demo_command(args) -> int:
     profile = get_profile(args.profile)  # --profile, else DDP_PROFILE, else class
     profile = dataclasses.replace(profile, size=tuple(args.size)) if args.size else profile
     config = FitConfig.for_profile(profile, variant=VARIANT, recipe=args.recipe, iterations=args.iterations,
-                                   seed=args.seed, device=args.device, max_memory_gb=args.max_memory_gb)
+                                   seed=args.seed)
     config.validate()
+    options = run_options(RunOptions(device=args.device, max_memory_gb=args.max_memory_gb))
     check_input_size(config.paper.net, config.paper.channels, *profile.size, name="--size")  # the net's smallest input
     # before the scene is rendered (minutes at a large --size): a fit that cannot fit in memory
-    check_memory(config, get_variant(VARIANT).out_channels, *profile.size, N_NEIGHBORS, resolve_device(config.run))
+    check_memory(config, options, get_variant(VARIANT).out_channels, *profile.size, N_NEIGHBORS,
+                 resolve_device(options))
     case = make_case(args.scene, profile, holes=args.holes, seed=args.seed)
     print(f"{case.scene}\n{args.holes} holes: {np.isnan(case.depth).mean():.0%} of the reference view; "
           f"warp loss uses views {[n.name for n in case.neighbors]}")
     planned = config.resolved_iterations(VARIANT) * config.fit_count()  # every fit of the command
     with command_progress(planned, expected_share(config), earliest_share(config)):
         result = complete_depth(case.rgb, case.depth, case.camera, case.neighbors, variant=VARIANT, config=config,
-                                gt_depth=case.scored_gt, transform=case.transform)
+                                gt_depth=case.scored_gt, transform=case.transform, options=options)
     estimates = {"linear": fill_linear(case.depth), "colorization": fill_colorization(case.depth, case.rgb),
                  "DDP rgbd+warp": result.depth}
     table = error_table(case, estimates)

@@ -14,6 +14,7 @@ import sys
 import numpy as np
 
 from ..method.config import FitConfig
+from ..method.runtime.options import RunOptions, run_options
 from ..data.formats import load_sequence
 from ..core.outpaths import check_output_folder, output_lock
 from ..method.paper.nets import check_input_size
@@ -106,10 +107,10 @@ def sequence_command(args) -> int:
     check_out_folder(args.out, list(getattr(scene, "sources", [])) + [os.path.abspath(args.path)])  # a dry run too
     indices = _view_indices(scene, args.views)
     recipe = get_recipe(args.recipe)  # --recipe, else DDP_RECIPE, else kit
-    config = FitConfig.for_profile(profile, variant=VARIANT, recipe=recipe, seed=args.seed, device=args.device,
-                                   progress=False,
+    config = FitConfig.for_profile(profile, variant=VARIANT, recipe=recipe, seed=args.seed,
                                    **({"iterations": args.iterations} if args.iterations else {}))
     config.validate()
+    fit_options = run_options(RunOptions(device=args.device, progress=False))  # --device, before any fit
     check_input_size(config.paper.net, config.paper.channels, *scene.size, name="--size" if args.size else "each view")
     print(f"{scene}; profile '{profile.name}', recipe '{recipe.name}'")
     if args.dry_run:
@@ -127,7 +128,7 @@ def sequence_command(args) -> int:
               "profile": profile.name}
     with output_lock([args.out], "--out"), open_client(workers, args.scheduler) as client:  # one writer at a time
         summary = run_sequence(scene, args.out, config, indices, client=client, threads=args.threads,
-                               retries=args.retries, source=source)
+                               retries=args.retries, source=source, options=fit_options)
     if summary["failed"]:
         print(f"{len(summary['failed'])} view(s) failed; see {summary['manifest']}. Re-run to retry them.",
               file=sys.stderr)

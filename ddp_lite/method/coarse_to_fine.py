@@ -13,10 +13,11 @@ import torch
 from ..core.camera import Camera
 from .config import FitConfig
 from .paper.disparity import DisparityTransform
-from .complete import refined, with_fill
-from .fit import DepthResult, fit_once
+from .complete import fill_heldout, held_out, refined, with_fill_share
+from .fit import DepthResult, check_run, fit_once, run_fit
 from .input_checks import check_fit_inputs
 from .paper.nets import make_input
+from .runtime.options import RunOptions
 
 __all__ = ["complete_depth_coarse_to_fine"]
 
@@ -59,7 +60,7 @@ def _downsample_camera(camera: Camera, scale: int) -> Camera:
 def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neighbors=(), variant: str = "rgbd+warp",
                                   config: FitConfig | None = None, gt_depth=None,
                                   transform: DisparityTransform | None = None, coarse_fraction: float = 0.5,
-                                  scale: int = 2) -> DepthResult:
+                                  scale: int = 2, *, options: RunOptions | None = None) -> DepthResult:
     """:func:`~ddp_lite.method.complete.complete_depth` in two stages: first at 1/``scale`` size, then at full
     size from the coarse weights.
 
@@ -72,7 +73,7 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
     given (auto-stop included); the learning-rate schedule continues across the two stages.
     It is one fit: ``config.combination``'s ``ensemble`` and ``blend_paper`` do not apply; its ``refine`` and
     ``blend_fill`` do, to the full-size result (None: both stages fit without the held-out blobs that choose the share,
-    as :func:`~ddp_lite.method.complete.with_fill` does for :func:`complete_depth`).
+    as in :func:`complete_depth`: :func:`~ddp_lite.method.complete.fill_heldout`).
 
     Args:
         rgb: (H, W, 3) float in [0, 1] (may be None for ``variant="d"``).
@@ -80,6 +81,7 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
         camera, neighbors, variant, config, gt_depth, transform: as in :func:`complete_depth`.
         coarse_fraction: share of the iterations spent at the coarse size, in (0, 1).
         scale: integer shrink factor of the coarse stage, ≥ 2.
+        options: how both stages run (:class:`RunOptions`), as in :func:`complete_depth`.
 
     Returns:
         :class:`DepthResult` of the full-size stage, ``.depth`` (H, W) metres. ``history`` joins
@@ -89,21 +91,19 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
 
     Example:
         >>> depth = np.full((32, 32), 2.0, np.float32); depth[10:20, 10:20] = np.nan
-        >>> cfg = FitConfig(channels=(8, 16), lr=1e-2, iterations=6, progress=False)
-        >>> complete_depth_coarse_to_fine(None, depth, variant="d", config=cfg).depth.shape
+        >>> cfg = FitConfig(channels=(8, 16), lr=1e-2, iterations=6)
+        >>> complete_depth_coarse_to_fine(None, depth, variant="d", config=cfg, options=RunOptions(progress=False)).depth.shape
         (32, 32)
     """
     if isinstance(scale, bool) or not isinstance(scale, (int, np.integer)) or scale < 2:
         raise ValueError(f"scale must be an integer ≥ 2, got {scale!r}")
     if not 0.0 < float(coarse_fraction) < 1.0:
         raise ValueError(f"coarse_fraction must lie in (0, 1), got {coarse_fraction!r}")
-    config, depth, rgb, neighbors, gt_depth, transform = check_fit_inputs(
-        rgb, depth, camera, neighbors, variant, config, gt_depth, transform)
-    # the fill's share mixes into the full-size result, and may hold out depth to choose it
-    if config.combination.blend_fill != 0:
-        return with_fill(lambda held_out: complete_depth_coarse_to_fine(
-            rgb, held_out, camera, neighbors, variant, config.replace(blend_fill=0.0), gt_depth, transform,
-            coarse_fraction, scale), depth, rgb, config)
+    options = check_run(options)
+    inputs, config = check_fit_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth, transform)
+    blobs = fill_heldout(inputs.depth, config)  # held out of both stages to choose the fill's share
+    seen = held_out(inputs, blobs)
+    rgb, depth, camera, neighbors, gt_depth = seen.rgb, seen.depth, seen.camera, seen.neighbors, seen.gt_depth
     scale = int(scale)
     H, W = depth.shape
     iterations = config.resolved_iterations(variant)
@@ -121,8 +121,8 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
         _downsample_image(rgb, scale) if rgb is not None else None, small,
         _downsample_camera(camera, scale) if camera is not None else None,
         [(_downsample_image(img, scale), _downsample_camera(cam, scale)) for img, cam in neighbors], variant,
-        coarse_config, gt_depth=_downsample_depth(gt_depth, scale) if gt_depth is not None else None,
-        transform=transform, noise=coarse_noise)
+        coarse_config, options=options, gt_depth=_downsample_depth(gt_depth, scale) if gt_depth is not None else None,
+        transform=seen.transform, noise=coarse_noise)
 
     # the full-size stage: coarse weights, the same noise upsampled, the rest of the schedule
     passed = sum(1 for m in config.paper.lr_milestones if m <= n_coarse)
@@ -130,8 +130,7 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
                                  lr_milestones=tuple(m - n_coarse for m in config.paper.lr_milestones if m > n_coarse))
     fine_noise = torch.nn.functional.interpolate(coarse_noise, size=(h * scale, w * scale), mode="bilinear",
                                                  align_corners=False)[..., :H, :W].contiguous()
-    fine = fit_once(rgb, depth, camera, neighbors, variant, fine_config, gt_depth=gt_depth, transform=transform,
-                    init=coarse, noise=fine_noise)
+    fine = run_fit(seen, fine_config, options, init=coarse, noise=fine_noise)
 
     history = {}
     for key in fine.history:
@@ -147,4 +146,7 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
     result = dataclasses.replace(fine, history=history, iterations=coarse.iterations + fine.iterations,
                                  best_iteration=coarse.iterations + fine.best_iteration,
                                  seconds=coarse.seconds + fine.seconds)
-    return refined(result, depth, rgb) if config.combination.refine else result
+    if config.combination.refine:
+        result = refined(result, depth, rgb)
+    target = inputs.transform.to_disparity(inputs.depth)  # (H, W), NaN holes: what the held-out blobs are judged by
+    return with_fill_share(result, inputs, seen, config, blobs, target)

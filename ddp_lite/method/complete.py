@@ -1,12 +1,18 @@
-""":func:`complete_depth`, the entry point: one DDP fit, or the kit's combinations of fits a config asks for.
+""":func:`complete_depth`, the entry point: one DDP fit, or the kit's combinations of fits a config asks for,
+top to bottom:
 
-A config asks for at most four, applied from the outside in: a share of the input's colour-guided
-fill mixed into the result (``blend_fill``, :func:`with_fill`); the result made sharp by an image-guided
-edge-aware solve toward it (``refine``, :func:`refined`); the blend of this config's fit with the paper
-recipe's (``blend_paper``, :func:`fit_blended`); the mean of several fits from other seeds (``ensemble``,
-:func:`fit_ensemble`). The recipe ``photo`` is the kit's fit refined, with the kit's share of the fill. Each member is
-one fit of :func:`ddp_lite.method.fit.run_fit` on the inputs checked once; the weights and shares
-come from :mod:`ddp_lite.method.kit.blend`, the members' scheduling from :mod:`ddp_lite.method.kit.ensemble`.
+    check the inputs once → hold out the valid pixels that choose a combination → fit (side by side
+    where they may) → combine the fits → refine → mix in the fill's share
+
+A config asks for at most four combinations: the mean of fits from other seeds (``ensemble``); the blend of
+this config's fit with the paper recipe's (``blend_paper``, :func:`blend_members`, :func:`blended_result`),
+with the weight ``blend_weight`` or, for None, the one that best predicts a ring of valid input held out of
+both fits; the result made sharp by an image-guided edge-aware solve toward it (``refine``, :func:`refined`);
+a share of the input's colour-guided fill mixed in (``blend_fill``, :func:`mixed_with_fill`), or, for None,
+the share that best predicts blobs of valid input held out of the fits. The recipe ``photo`` is the kit's fit
+refined, with the kit's share of the fill. Each fit is one :func:`ddp_lite.method.fit.run_fit` on the inputs
+checked once; the weights, shares and held-out pixels come from :mod:`ddp_lite.method.kit.blend`, the mean from
+:mod:`ddp_lite.method.kit.ensemble`.
 """
 from __future__ import annotations
 
@@ -18,24 +24,25 @@ from .kit.blend import best_fill_share, best_weight, fill_disparity, fill_holdou
 from .fit_cache import cached
 from .full_resolution import refine_full_resolution
 from ..core.camera import Camera
-from ..core.checks import MIN_VALID_PIXELS, check_callback
+from ..core.checks import MIN_VALID_PIXELS
 from .config import FitConfig
 from .paper.disparity import DisparityTransform
-from .kit.ensemble import mean_outputs, parallel_members
-from .runtime.side_by_side import run_side_by_side
-from .fit import DepthResult, FitInputs, check_inputs, run_fit
+from .kit.ensemble import mean_outputs
+from .input_checks import FitInputs, check_fit_inputs
+from .runtime.options import RunOptions
+from .runtime.side_by_side import run_side_by_side, side_by_side_workers
+from .fit import DepthResult, check_run, run_fit
 from .kit.recipes import get_recipe
-from .paper.variants import get_variant
 
-__all__ = ["complete_depth", "fit_ensemble", "fit_blended", "blend_members", "blended_result", "combined_result",
-           "refined",
-           "with_fill", "mixed_with_fill"]
+__all__ = ["complete_depth", "fill_heldout", "held_out", "with_fill_share", "blend_members", "blended_result",
+           "combined_result", "refined", "mixed_with_fill"]
 
 
 @cached(like="depth", types=(DepthResult, DisparityTransform))
 def complete_depth(rgb, depth, camera: Camera | None = None, neighbors=(), variant: str = "rgbd+warp",
                    config: FitConfig | None = None, gt_depth=None, transform: DisparityTransform | None = None,
-                   callback=None, init: DepthResult | None = None) -> DepthResult:
+                   callback=None, init: DepthResult | None = None, *, options: RunOptions | None = None
+                   ) -> DepthResult:
     """Fill the holes (NaN) of ``depth`` (H, W, metres) with a Deep Depth Prior.
 
     Args:
@@ -47,38 +54,117 @@ def complete_depth(rgb, depth, camera: Camera | None = None, neighbors=(), varia
         config: a :class:`FitConfig`; None → ``FitConfig.for_profile(variant=variant)``.
         gt_depth: (H, W) metres; when given, the hole error is tracked in ``history``.
         transform: depth ↔ disparity map; None → derived from the valid input depth.
-        callback: ``callback(iteration, DepthResult-like dict)`` every ``config.run.callback_every``.
+        callback: ``callback(iteration, DepthResult-like dict)`` every ``options.callback_every``.
         init: a previous result (same variant and net) whose weights start this fit: a warm start
             for the next view of a sequence.
+        options: how it runs, not what it computes: a :class:`RunOptions` (device, memory format and
+            limit, progress bar, callback rate); None → ``RunOptions()``.
     Returns:
         :class:`DepthResult` with ``.depth`` (H, W) metres, ``.disparity``, ``.rgb``, ``.history``.
 
     Example:
         >>> depth = np.full((32, 32), 2.0, np.float32); depth[10:20, 10:20] = np.nan
-        >>> cfg = FitConfig(channels=(8, 16), lr=1e-2, iterations=5, progress=False)
-        >>> complete_depth(np.zeros((32, 32, 3), np.float32), depth, variant="d", config=cfg).depth.shape
+        >>> cfg = FitConfig(channels=(8, 16), lr=1e-2, iterations=5)
+        >>> complete_depth(np.zeros((32, 32, 3), np.float32), depth, variant="d", config=cfg,
+        ...                options=RunOptions(progress=False)).depth.shape
         (32, 32)
     """
-    spec = get_variant(variant)  # a bad name fails here, before any config is built
-    config = FitConfig.for_profile(variant=variant) if config is None else config
-    check_callback(callback, config.run.callback_every if isinstance(config, FitConfig) else None)
-    inputs, config = check_inputs(rgb, depth, camera, neighbors, spec, config, gt_depth, transform, init)
-    if config.combination.blend_fill != 0:
-        return with_fill(lambda held_out: _fits(replace(inputs, depth=held_out), config.replace(blend_fill=0.0),
-                                                callback, init), inputs.depth, inputs.rgb, config)
-    return _fits(inputs, config, callback, init)
+    options = check_run(options, callback, init)
+    inputs, config = check_fit_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth, transform)
+    target = inputs.transform.to_disparity(inputs.depth)  # (H, W), NaN holes: what held-out pixels are judged by
+    # what the fits see: the input less the valid pixels held out to choose the fill's share and a blend's weight
+    blobs = fill_heldout(inputs.depth, config)
+    seen = held_out(inputs, blobs)
+    members, ring = _fit_members(seen.depth, config)
+    fitted = held_out(seen, ring)
+    # the fits, side by side where they may; a warm start fits the config's own net (a blend's second is the paper's)
+    workers = side_by_side_workers(members[0], options, seen.spec, seen.depth.shape, len(seen.neighbors),
+                                   len(members), callback)
+    fits = run_side_by_side(lambda k: run_fit(fitted, members[k], options, callback=callback,
+                                              init=init if k == 0 or not config.combination.blend_paper else None),
+                            len(members), workers)
+    result = _combined(fits, config, ring, target)
+    if config.combination.refine:
+        result = refined(result, seen.depth, seen.rgb)
+    return with_fill_share(result, inputs, seen, config, blobs, target)
 
 
-def _fits(inputs: FitInputs, config: FitConfig, callback, init) -> DepthResult:
-    """One fit, a blend or an ensemble, as ``config`` asks, refined when it asks (its ``blend_fill`` is the
-    caller's)."""
-    if config.combination.blend_paper:
-        result = fit_blended(inputs, config, callback, init)
-    elif config.combination.ensemble == 1:
-        result = run_fit(inputs, config, callback=callback, init=init)
-    else:
-        result = fit_ensemble(inputs, config, callback, init)
-    return refined(result, inputs.depth, inputs.rgb) if config.combination.refine else result
+def fill_heldout(depth: np.ndarray, config: FitConfig) -> np.ndarray | None:
+    """``blend_fill=None``: the valid pixels of ``depth`` (H, W) metres held out of the fits to choose the fill's
+    share, blobs of :func:`~ddp_lite.method.kit.blend.fill_holdout` (H, W) bool; None where the share is given,
+    or where too little valid depth is left to hold any out (the share is then 0)."""
+    if config.combination.blend_fill is not None:
+        return None
+    valid = np.isfinite(depth)
+    heldout = fill_holdout(valid, config.paper.seed)
+    if heldout.sum() < MIN_VALID_PIXELS or (valid & ~heldout).sum() < MIN_VALID_PIXELS:
+        return None
+    return heldout
+
+
+def held_out(inputs: FitInputs, heldout: np.ndarray | None) -> FitInputs:
+    """``inputs`` with the ``heldout`` (H, W) bool pixels of their depth made holes; None: ``inputs`` as they are."""
+    if heldout is None:
+        return inputs
+    return replace(inputs, depth=np.where(heldout, np.nan, inputs.depth).astype(np.float32))
+
+
+def _fit_members(depth: np.ndarray, config: FitConfig) -> tuple[list, np.ndarray | None]:
+    """(the configs of the fits ``config`` asks for, one per fit; the ring held out of them, or None): the config
+    itself; an ensemble's members, seeds seed, seed+1, ...; or a blend's two (:func:`blend_members`), with, for
+    ``blend_weight=None``, the ring of valid ``depth`` (H, W) metres held out of both to choose the weight
+    (:func:`~ddp_lite.method.kit.blend.validation_ring`); too little valid depth to judge by, or to fit
+    without the ring: the config's own fit alone."""
+    combination = config.combination
+    if combination.blend_paper:
+        members = list(blend_members(config))
+        if combination.blend_weight is not None:
+            return members, None
+        valid = np.isfinite(depth)
+        ring = validation_ring(valid, config.paper.seed)
+        if (valid & ~ring).sum() < MIN_VALID_PIXELS or ring.sum() < MIN_VALID_PIXELS:
+            return members[:1], None
+        return members, ring
+    return [config.replace(seed=config.paper.seed + k, ensemble=1) if combination.ensemble > 1 else config
+            for k in range(combination.ensemble)], None
+
+
+def _combined(fits: list, config: FitConfig, ring: np.ndarray | None, target: np.ndarray) -> DepthResult:
+    """One result of the ``fits`` of :func:`_fit_members`: the one fit; an ensemble's mean (:func:`combined_result`);
+    a blend's weighted sum (:func:`blended_result`), its weight ``blend_weight``, or the one that best predicts
+    ``target`` (the input depth in normalised disparity, (H, W)) on the ``ring`` held out of both fits
+    (``history`` gets ``blend_ring_errors``)."""
+    if len(fits) == 1:
+        return fits[0]
+    combination, transform = config.combination, fits[0].transform
+    if not combination.blend_paper:
+        return combined_result(fits, transform, fits[0].history)
+    weight, extra = combination.blend_weight, {}
+    if ring is not None:
+        weight, extra["blend_ring_errors"] = best_weight(fits[0].disparity, fits[1].disparity, target, ring)
+    return blended_result(fits, transform, weight, extra)
+
+
+def with_fill_share(result: DepthResult, inputs: FitInputs, seen: FitInputs, config: FitConfig,
+                    heldout: np.ndarray | None, target: np.ndarray) -> DepthResult:
+    """``result``, fitted on ``seen`` (``inputs`` less the ``heldout`` blobs of :func:`fill_heldout`), with
+    ``config.combination.blend_fill`` f of the colour-guided fill of ``inputs`` mixed in (:func:`mixed_with_fill`;
+    f = 0: ``result`` as it is). f = None: the share whose mix with a fill of ``seen`` best predicts ``target``
+    (the input depth in normalised disparity, (H, W)) on the held-out blobs
+    (:func:`~ddp_lite.method.kit.blend.best_fill_share`; ``history`` gets ``blend_fill_errors``, RMSE per share),
+    or 0 where none were held out."""
+    share, errors = config.combination.blend_fill, None
+    if share == 0:
+        return result
+    if share is None and heldout is None:
+        share = 0.0
+    elif share is None:
+        share, errors = best_fill_share(result.disparity, fill_disparity(seen.depth, seen.rgb, result.transform),
+                                        target, heldout)
+    mixed = mixed_with_fill(result, inputs.depth, inputs.rgb, share)
+    if errors is not None:
+        mixed.history["blend_fill_errors"] = errors
+    return mixed
 
 
 def refined(result: DepthResult, depth: np.ndarray, rgb: np.ndarray) -> DepthResult:
@@ -95,18 +181,6 @@ def refined(result: DepthResult, depth: np.ndarray, rgb: np.ndarray) -> DepthRes
                    history={**result.history, "refined": True})
 
 
-def fit_ensemble(inputs: FitInputs, config: FitConfig, callback, init) -> DepthResult:
-    """``config.combination.ensemble`` independent fits from other seeds (other weights, noise and held-out
-    pixels), averaged in disparity: one fit's hole error moves ±10 % and more with the seed, the mean keeps what
-    the fits agree on. ``history`` is the first fit's."""
-    def fit_member(k: int) -> DepthResult:
-        return run_fit(inputs, config.replace(seed=config.paper.seed + k, ensemble=1), callback=callback, init=init)
-
-    workers = parallel_members(config, inputs.spec, inputs.depth.shape, len(inputs.neighbors), callback)
-    members = run_side_by_side(fit_member, int(config.combination.ensemble), workers)
-    return combined_result(members, inputs.transform, members[0].history)
-
-
 def combined_result(members: list, transform, history: dict, weights=None) -> DepthResult:
     """One result from several fits: their (weighted) mean outputs; totals of iterations and seconds;
     the first fit's best iteration and weights."""
@@ -115,32 +189,6 @@ def combined_result(members: list, transform, history: dict, weights=None) -> De
                        history=history, transform=transform, iterations=sum(m.iterations for m in members),
                        best_iteration=members[0].best_iteration, seconds=sum(m.seconds for m in members),
                        state=members[0].state, fits=len(members))
-
-
-def fit_blended(inputs: FitInputs, config: FitConfig, callback, init) -> DepthResult:
-    """``config.combination.blend_paper``: this config's fit and the paper recipe's, blended with weight
-    ``config.combination.blend_weight``, or (None) with the weight that best predicts a ring of valid input
-    held out of both fits (:mod:`ddp_lite.method.kit.blend`). ``history`` is the first fit's plus ``blend_weight`` and,
-    with the ring, ``blend_ring_errors``."""
-    depth, transform = inputs.depth, inputs.transform
-    weight, members = config.combination.blend_weight, blend_members(config)
-    valid = np.isfinite(depth)
-    ring = validation_ring(valid, members[0].paper.seed) if weight is None else np.zeros_like(valid)
-    if weight is None and ((valid & ~ring).sum() < MIN_VALID_PIXELS or ring.sum() < MIN_VALID_PIXELS):
-        return run_fit(inputs, members[0], callback=callback, init=init)  # too little to judge by (or fit without)
-    held_out = replace(inputs, depth=np.where(ring, np.nan, depth).astype(np.float32)) if ring.any() else inputs
-
-    def fit_member(k: int) -> DepthResult:  # a warm start fits the first fit's net only
-        return run_fit(held_out, members[k], callback=callback, init=init if k == 0 else None)
-
-    workers = parallel_members(members[0].replace(ensemble=2), inputs.spec, depth.shape, len(inputs.neighbors),
-                               callback)
-    fits = run_side_by_side(fit_member, 2, workers)
-    extra = {}
-    if weight is None:
-        weight, extra["blend_ring_errors"] = best_weight(fits[0].disparity, fits[1].disparity,
-                                                         transform.to_disparity(depth), ring)
-    return blended_result(fits, transform, weight, extra)
 
 
 def blended_result(fits: list, transform, weight: float, history: dict | None = None) -> DepthResult:
@@ -155,30 +203,6 @@ def blend_members(config: FitConfig) -> tuple[FitConfig, FitConfig]:
     at the same size, budget and seed. Its ``blend_fill`` is left to the caller (it mixes into the blend)."""
     own = config.replace(blend_paper=False)
     return own, own.replace(**get_recipe("paper").overrides)
-
-
-def with_fill(fit, depth: np.ndarray, rgb: np.ndarray, config: FitConfig) -> DepthResult:
-    """``fit(depth) -> DepthResult`` with ``config.combination.blend_fill`` f of the colour-guided fill of
-    ``depth`` (H, W) metres (NaN holes) mixed in (:func:`mixed_with_fill`). f = None: ``fit`` runs on ``depth`` with
-    blobs of its valid pixels held out (:func:`~ddp_lite.method.kit.blend.fill_holdout`), and f is the share
-    that best predicts them against a fill of the same held-out input
-    (:func:`~ddp_lite.method.kit.blend.best_fill_share`); ``history`` gets ``blend_fill_errors`` (RMSE per
-    share, normalised disparity). Too little valid depth to hold any out: the fit alone (f = 0)."""
-    share = config.combination.blend_fill
-    if share is not None:
-        return mixed_with_fill(fit(depth), depth, rgb, share)
-    valid = np.isfinite(depth)
-    heldout = fill_holdout(valid, config.paper.seed)
-    if heldout.sum() < MIN_VALID_PIXELS or (valid & ~heldout).sum() < MIN_VALID_PIXELS:
-        return mixed_with_fill(fit(depth), depth, rgb, 0.0)
-    held_out = np.where(heldout, np.nan, depth).astype(np.float32)
-    fitted = fit(held_out)
-    transform = fitted.transform
-    share, errors = best_fill_share(fitted.disparity, fill_disparity(held_out, rgb, transform),
-                                    transform.to_disparity(depth), heldout)
-    result = mixed_with_fill(fitted, depth, rgb, share)
-    result.history["blend_fill_errors"] = errors
-    return result
 
 
 def mixed_with_fill(result: DepthResult, depth: np.ndarray, rgb: np.ndarray, share: float) -> DepthResult:

@@ -1,4 +1,4 @@
-"""FitConfig: everything a fit needs besides the data, in eight sections, each defined beside the code
+"""FitConfig: what a fit computes, besides the data, in eight sections, each defined beside the code
 that reads it and validated there.
 
     paper         the paper's settings: net, schedule, loss shares, γ, disparity range, seed  (paper/config.py)
@@ -9,7 +9,12 @@ that reads it and validated there.
                   a classical fill                                                           (kit/blend.py)
     stopping      auto-stop on held-out pixels                                               (stopping.py)
     tricks        Deep Image Prior's per-iteration tricks                                    (dip_tricks.py)
-    run           how it runs, not what it computes: device, precision, memory, progress    (runtime/options.py)
+    precision     the arithmetic the net runs in: bfloat16 or float32                        (runtime/device.py)
+
+How a fit runs and not what it computes (the device, the memory format and limit, the progress bar, the
+callback's rate) is no part of it: that is a :class:`~ddp_lite.method.runtime.options.RunOptions`, passed
+to the run (``complete_depth(..., config=config, options=RunOptions(progress=False))``). ``FitConfig`` refuses
+those names with a ``TypeError`` that says so.
 
 Each section is a frozen dataclass; ``config.holes.smoothness`` reads a field by its section. Users and
 recipes pass fields by their own names: ``FitConfig(lr=1e-2, smoothness=1.0)``, ``config.replace(lr=1e-2)``,
@@ -35,26 +40,29 @@ from .kit.warp_terms import WarpConfig
 from .paper.config import MAX_SEED, PaperConfig
 from .paper.variants import get_variant
 from .profiles import Profile, get_profile
-from .runtime.options import RunOptions
+from .runtime.device import Precision
+from .runtime.options import RUN_OPTIONS
 from .stopping import StoppingConfig
 
 __all__ = ["FitConfig", "SECTIONS", "FIELDS"]
 
 SECTIONS = {"paper": PaperConfig, "net_inputs": NetInputConfig, "holes": HoleConfig, "warp": WarpConfig,
-            "combination": CombinationConfig, "stopping": StoppingConfig, "tricks": DipTricks, "run": RunOptions}
+            "combination": CombinationConfig, "stopping": StoppingConfig, "tricks": DipTricks, "precision": Precision}
 SECTION_OF = {f.name: section for section, cls in SECTIONS.items() for f in dataclasses.fields(cls)}  # field → section
 FIELDS = tuple(SECTION_OF)  # every field by its own name, section by section: the order of every flat view
 
 
 @dataclass(init=False, slots=True)
 class FitConfig:
-    """Everything a fit needs besides the data: eight sections (this module's docstring). Defaults are the
+    """What a fit computes besides the data: eight sections (this module's docstring). Defaults are the
     paper's (supplement).
 
     Use :meth:`for_profile` for the sizes and schedules of ``DDP_PROFILE``. Fields are given by their own
     names (``FitConfig(lr=1e-2)``, ``config.replace(lr=1e-2)``) and read by their sections
     (``config.paper.lr``); ``config.lr``, ``config.lr = 1e-2`` and a misspelt name raise ``AttributeError``
-    saying what to write instead. NumPy integers given for integer fields become Python ints.
+    saying what to write instead, as does a run option (``FitConfig(progress=False)``: ``TypeError``, it goes
+    to the run as ``options=RunOptions(progress=False)``). NumPy integers given for integer fields become
+    Python ints.
 
     Example:
         >>> config = FitConfig(lr=1e-2, smoothness=1.0)
@@ -69,7 +77,7 @@ class FitConfig:
     combination: CombinationConfig
     stopping: StoppingConfig
     tricks: DipTricks
-    run: RunOptions
+    precision: Precision
 
     def __init__(self, **settings):
         """Fields by their own names (``lr=1e-2``) or whole sections (``holes=HoleConfig(...)``); a field
@@ -79,7 +87,7 @@ class FitConfig:
             if name in SECTION_OF:
                 changes[SECTION_OF[name]][name] = value
             elif name not in SECTIONS:
-                raise TypeError(f"FitConfig got an unexpected field {name!r}" + _did_you_mean(name))
+                raise TypeError(_not_a_field(name, f"FitConfig got an unexpected field {name!r}"))
         for section, cls in SECTIONS.items():
             given = settings.get(section) or cls()
             object.__setattr__(self, section, dataclasses.replace(given, **changes[section]))
@@ -87,17 +95,17 @@ class FitConfig:
     def __getattr__(self, name):  # only names that are no attribute come here: say where the field is
         if name in SECTION_OF:
             raise AttributeError(f"FitConfig reads {name!r} by its section: config.{SECTION_OF[name]}.{name}")
-        raise AttributeError(f"FitConfig has no field {name!r}" + _did_you_mean(name))
+        raise AttributeError(_not_a_field(name, f"FitConfig has no field {name!r}"))
 
     def __setattr__(self, name, value):  # a whole section may be set; a field, or a typo, must not pass in silence
         if name in SECTION_OF:
             raise AttributeError(f"FitConfig changes {name!r} by a copy: config = config.replace({name}=...)")
         if name not in SECTIONS:
-            raise AttributeError(f"FitConfig has no field {name!r}" + _did_you_mean(name))
+            raise AttributeError(_not_a_field(name, f"FitConfig has no field {name!r}"))
         object.__setattr__(self, name, value)
 
     def flat(self) -> dict:
-        """Every field by its own name, ``{"net": "unet", ..., "callback_every": 0}``, in :data:`FIELDS` order
+        """Every field by its own name, ``{"net": "unet", ..., "bf16": False}``, in :data:`FIELDS` order
         (the fit cache's key, a sequence's manifest); ``FitConfig(**config.flat())`` is ``config`` again."""
         return {name: getattr(getattr(self, section), name) for name, section in SECTION_OF.items()}
 
@@ -157,9 +165,20 @@ class FitConfig:
                              f"got {self.paper.noise_channels}")
 
 
-def _did_you_mean(name: str) -> str:
-    close = difflib.get_close_matches(name, FIELDS, n=1)
-    return f"; did you mean {close[0]!r}?" if close else "; see ddp_lite.method.config.FIELDS"
+def _not_a_field(name: str, message: str) -> str:
+    """What to say of ``name``, no field of a FitConfig: where a run option goes, or the nearest name."""
+    if name in RUN_OPTIONS:
+        return (f"FitConfig has no {name!r}: it is a run option (how a fit runs, not what it computes); pass it to "
+                f"the run: complete_depth(..., options=RunOptions({name}=...)) (ddp_lite.RunOptions)")
+    if name == "run":
+        return ("FitConfig has no section 'run': the run options (how a fit runs, not what it computes) are passed "
+                "to the run: complete_depth(..., options=RunOptions(...)) (ddp_lite.RunOptions)")
+    close = difflib.get_close_matches(name, FIELDS + RUN_OPTIONS, n=1)
+    if not close:
+        return message + "; see ddp_lite.method.config.FIELDS"
+    if close[0] in RUN_OPTIONS:
+        return message + f"; did you mean the run option {close[0]!r}? (options=RunOptions({close[0]}=...))"
+    return message + f"; did you mean {close[0]!r}?"
 
 
 # the Profile fields for_profile copies as they are (channels, iterations, lr_milestones are derived)

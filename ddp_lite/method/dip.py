@@ -17,6 +17,7 @@ from .paper.nets import check_input_size
 from .fit_cache import cached
 from .runtime.device import resolve_device
 from .runtime.memory import check_memory
+from .runtime.options import RunOptions, run_options
 from .runtime.tensors import to_tensor
 from .stopping import holdout_mask
 
@@ -49,9 +50,11 @@ def describe_image_fit(config: FitConfig, height: int, width: int) -> str:
 
 
 @cached(like="image", types=(ImageResult,))
-def fit_image(image, mask=None, config: FitConfig | None = None, clean=None, callback=None) -> ImageResult:
+def fit_image(image, mask=None, config: FitConfig | None = None, clean=None, callback=None, *,
+              options: RunOptions | None = None) -> ImageResult:
     """Deep Image Prior on an image: fit ``image`` (H, W, 3) float [0, 1] where ``mask`` (H, W) bool
     is True (default: everywhere) with a masked MSE; ``clean`` (H, W, 3), if given, is tracked as PSNR.
+    ``options``: how it runs (:class:`RunOptions`: device, memory limit, progress bar, ``callback``'s rate).
 
     Denoising: pass the noisy image and no mask. Inpainting: pass the mask of known pixels.
     """
@@ -61,14 +64,15 @@ def fit_image(image, mask=None, config: FitConfig | None = None, clean=None, cal
     image = check_image(image, "image")
     H, W, _ = image.shape
     check_input_size(config.paper.net, config.paper.channels, H, W, "image")
-    check_callback(callback, config.run.callback_every)
+    options = run_options(options)
+    check_callback(callback, options.callback_every)
     mask = np.ones((H, W), bool) if mask is None else np.asarray(mask)
     if mask.shape != (H, W) or mask.dtype != bool:
         raise ValueError(f"mask must be bool (H, W) = {(H, W)}, got {mask.dtype} {mask.shape}")
     if mask.sum() < MIN_VALID_PIXELS:
         raise ValueError(f"mask has {int(mask.sum())} known pixels; need at least {MIN_VALID_PIXELS}")
     clean = check_image(clean, "clean", (H, W)) if clean is not None else None
-    device = resolve_device(config.run)
+    device = resolve_device(options)
     stopping = config.stopping
     heldout = holdout_mask(mask, stopping.holdout_fraction, config.paper.seed) if stopping.auto_stop else np.zeros_like(mask)
     target = to_tensor(image, device)
@@ -98,12 +102,13 @@ def fit_image(image, mask=None, config: FitConfig | None = None, clean=None, cal
         def user_callback(iteration, output):
             callback(iteration, output[0].permute(1, 2, 0).cpu().numpy())
 
-    check_memory(config, 3, H, W, 0, device)
+    check_memory(config, options, 3, H, W, 0, device)
     net, noise = loop.build(config, 3, H, W, device)
     start = time.perf_counter()
     iterations = config.resolved_iterations("rgbd")
     output, history, ran, best = loop.run(net, noise, loss_fn, config, iterations, heldout_error, evaluate,
-                                          user_callback, progress=FitBar(iterations, "DIP", config.run.progress))
+                                          user_callback, progress=FitBar(iterations, "DIP", options.progress),
+                                          options=options)
     restored = output[0].permute(1, 2, 0).cpu().numpy().astype(np.float32)
     check_finite_output("image", restored)
     return ImageResult(image=restored, history=history,

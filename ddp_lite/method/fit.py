@@ -1,6 +1,7 @@
 """Deep Depth Prior: fill the holes of one depth map by fitting a net from fixed noise (paper Sec. 3).
 
-One fit, on inputs checked once (:func:`check_inputs`): :func:`run_fit` builds the paper's loss
+One fit, on inputs checked once (:func:`~ddp_lite.method.input_checks.check_fit_inputs`, and the run's own
+arguments, :func:`check_run`): :func:`run_fit` builds the paper's loss
 (:mod:`ddp_lite.method.paper.total_loss`) with, when the config asks for them, the kit's hole terms
 (:mod:`ddp_lite.method.kit.hole_terms`) and warp term (:mod:`ddp_lite.method.kit.warp_terms`) as its
 arguments, joins the kit's net inputs (:mod:`ddp_lite.method.kit.net_inputs`), and hands it to the
@@ -18,23 +19,22 @@ import numpy as np
 import torch
 
 from . import loop
-from ..core.camera import Camera
-from ..core.checks import MIN_VALID_PIXELS, check_depth, check_finite_output, unmask
+from ..core.checks import MIN_VALID_PIXELS, check_callback, check_depth, check_finite_output, unmask
 from ..core.progress import FitBar
 from .config import FitConfig
-from .input_checks import check_fit_inputs
+from .input_checks import FitInputs, check_fit_inputs
 from .kit.hole_terms import HoleTerms
 from .kit.net_inputs import fill_channel, image_channels
 from .kit.warp_terms import kit_warp_arguments
 from .paper.disparity import DisparityTransform
 from .paper.total_loss import PaperLoss
-from .paper.variants import Variant, get_variant
 from .runtime.device import resolve_device
 from .runtime.memory import check_memory
+from .runtime.options import RunOptions, run_options
 from .runtime.tensors import to_tensor
 from .stopping import heldout_error_fn, holdout_mask
 
-__all__ = ["DepthResult", "FitInputs", "merge", "check_inputs", "run_fit", "fit_once", "hole_errors_fn"]
+__all__ = ["DepthResult", "merge", "check_run", "run_fit", "fit_once", "hole_errors_fn"]
 
 
 @dataclass
@@ -76,51 +76,39 @@ def merge(input_depth, ddp_depth) -> np.ndarray:
         raise ValueError(f"input_depth {input_depth.shape} and ddp_depth {ddp_depth.shape} must have the same shape")
     return np.where(np.isfinite(input_depth), input_depth, ddp_depth).astype(np.float32)
 
-@dataclass(frozen=True)
-class FitInputs:
-    """One fit's inputs as :func:`check_inputs` leaves them: checked, converted, the variant resolved."""
-
-    rgb: np.ndarray | None  # (H, W, 3) float32 in [0, 1]; None where the variant has no use for it
-    depth: np.ndarray  # (H, W) float32 metres, NaN = hole
-    camera: Camera | None
-    neighbors: list  # (rgb, Camera) pairs
-    spec: Variant
-    gt_depth: np.ndarray | None  # (H, W) metres, NaN = unknown
-    transform: DisparityTransform
-
-
-def check_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth=None, transform=None, init=None
-                 ) -> tuple[FitInputs, FitConfig]:
-    """Check a fit's inputs once, before any work (:func:`~ddp_lite.method.input_checks.check_fit_inputs`):
-    (:class:`FitInputs`, the config). ``init`` must be None or a :class:`DepthResult`."""
-    spec = get_variant(variant)
-    config, depth, rgb, neighbors, gt_depth, transform = check_fit_inputs(rgb, depth, camera, neighbors, spec,
-                                                                           config, gt_depth, transform)
+def check_run(options, callback=None, init=None) -> RunOptions:
+    """A run's own arguments, checked before any work: ``options`` (None → ``RunOptions()``), the ``callback``
+    its ``callback_every`` calls, and ``init``, None or a :class:`DepthResult` to warm-start from."""
+    options = run_options(options)
+    check_callback(callback, options.callback_every)
     if init is not None and not isinstance(init, DepthResult):
         raise TypeError(f"init must be a DepthResult, got {type(init).__name__}")
-    return FitInputs(rgb, depth, camera, neighbors, spec, gt_depth, transform), config
+    return options
 
 
-def fit_once(rgb, depth, camera, neighbors, variant, config, *, gt_depth=None, transform=None, callback=None,
-             init=None, noise=None) -> DepthResult:
-    """One fit (no ensemble, blend or fill): :func:`check_inputs`, then :func:`run_fit`."""
-    inputs, config = check_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth, transform, init)
-    return run_fit(inputs, config, callback=callback, init=init, noise=noise)
+def fit_once(rgb, depth, camera, neighbors, variant, config, *, options=None, gt_depth=None, transform=None,
+             callback=None, init=None, noise=None) -> DepthResult:
+    """One fit (no ensemble, blend or fill): :func:`check_run` and
+    :func:`~ddp_lite.method.input_checks.check_fit_inputs`, then :func:`run_fit`."""
+    options = check_run(options, callback, init)
+    inputs, config = check_fit_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth, transform)
+    return run_fit(inputs, config, options, callback=callback, init=init, noise=noise)
 
 
-def run_fit(inputs: FitInputs, config: FitConfig, *, callback=None, init: DepthResult | None = None,
-            noise=None) -> DepthResult:
+def run_fit(inputs: FitInputs, config: FitConfig, options: RunOptions, *, callback=None,
+            init: DepthResult | None = None, noise=None) -> DepthResult:
     """One fit of checked ``inputs`` with ``config`` (its ``ensemble``, ``blend_*`` are the combiner's, not
-    read here), warm-started from ``init``'s weights, from the fixed network input ``noise`` (1, C, H, W)
-    when given (the coarse-to-fine stages pass theirs)."""
+    read here), run as ``options`` say (device, memory limit, progress bar, callback rate), warm-started
+    from ``init``'s weights, from the fixed network input ``noise`` (1, C, H, W) when given (the
+    coarse-to-fine stages pass theirs)."""
     rgb, depth, camera, neighbors = inputs.rgb, inputs.depth, inputs.camera, inputs.neighbors
     spec, gt_depth, transform, variant = inputs.spec, inputs.gt_depth, inputs.transform, inputs.spec.name
     H, W = depth.shape
-    device = resolve_device(config.run)
+    device = resolve_device(options)
     iterations = config.resolved_iterations(spec)
     _, w_rgb, w_warp = spec.loss_weights(config.paper.gammas)
     # before any per-fit work: at 12 MP, the SSIM moments alone take seconds (and gigabytes)
-    check_memory(config, spec.out_channels, H, W, len(neighbors) if w_warp > 0 else 0, device)
+    check_memory(config, options, spec.out_channels, H, W, len(neighbors) if w_warp > 0 else 0, device)
     valid = np.isfinite(depth)
     stopping = config.stopping
     heldout = (holdout_mask(valid, stopping.holdout_fraction, config.paper.seed, stopping.holdout) if stopping.auto_stop
@@ -166,9 +154,9 @@ def run_fit(inputs: FitInputs, config: FitConfig, *, callback=None, init: DepthR
     net, noise = loop.build(config, spec.out_channels, H, W, device, init.state if init is not None else None,
                             noise, image)
     start = time.perf_counter()
-    progress = FitBar(iterations, f"DDP {variant}", config.run.progress)
+    progress = FitBar(iterations, f"DDP {variant}", options.progress)
     output, history, ran, best = loop.run(net, noise, loss_fn, config, iterations, heldout_error, evaluate,
-                                          user_callback, progress=progress)
+                                          user_callback, progress=progress, options=options)
     state = {name: value.detach().cpu().clone() for name, value in net.state_dict().items()}
     seconds = time.perf_counter() - start
     disparity = output[0, 0].cpu().numpy().astype(np.float32)

@@ -4,8 +4,9 @@ Re-running a notebook re-does every fit in it, minutes at ``class``. With the en
 ``DDP_CACHE`` naming a folder (``DDP_CACHE=~/.cache/ddp-lite make lab``), :func:`complete_depth` and
 :func:`fit_image` store each result there, under a hash of everything that decides it:
 
-- every argument: arrays by value, cameras and views by their fields, the ``FitConfig`` (its
-  ``progress`` flag aside: a progress bar changes no number), a warm start's weights;
+- every argument: arrays by value, cameras and views by their fields, the ``FitConfig`` (the net's
+  precision, ``bf16``, included), the ``RunOptions`` (None as ``RunOptions()``; its ``progress`` flag aside:
+  a progress bar changes no number), a warm start's weights;
 - the source code of ``ddp_lite`` itself, and the torch and NumPy versions: an edited library
   never reads an old result;
 - torch's thread count, the CPU's vector instructions and whether a GPU is there: CPU reductions
@@ -45,6 +46,7 @@ import torch
 
 from ..core.files import describe_kind, regular_file
 from .runtime.cache_entry import BadEntry, Unstorable, read_entry, write_entry
+from .runtime.options import RunOptions
 from .config import FitConfig
 from .profiles import current_profile_name
 from .kit.recipes import current_recipe_name
@@ -84,8 +86,10 @@ def _plain(value):
     equally in any process (a pickled tensor does not: its bytes differ from run to run)."""
     if isinstance(value, torch.Tensor):
         return value.detach().cpu().numpy()
-    if isinstance(value, FitConfig):  # its fields by their own names; the progress bar changes no result
-        fields = {name: _plain(item) for name, item in value.flat().items() if name != "progress"}
+    if isinstance(value, FitConfig):  # its fields by their own names
+        return (type(value).__qualname__, {name: _plain(item) for name, item in value.flat().items()})
+    if isinstance(value, RunOptions):  # the progress bar changes no result
+        fields = {f.name: _plain(getattr(value, f.name)) for f in dataclasses.fields(value) if f.name != "progress"}
         return (type(value).__qualname__, fields)
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
         return (type(value).__qualname__, {f.name: _plain(getattr(value, f.name)) for f in dataclasses.fields(value)})
@@ -131,6 +135,8 @@ def cached(function=None, *, like: str | None = None, types=()):
         except TypeError:
             return function(*args, **kwargs)  # let the call raise its own error
         bound.apply_defaults()
+        if "options" in bound.arguments and bound.arguments["options"] is None:
+            bound.arguments["options"] = RunOptions()  # the same run, the same key
         key = None if bound.arguments.get("callback") is not None else _key(function, bound.arguments)
         if key is None:
             return function(*args, **kwargs)

@@ -20,6 +20,7 @@ from ..core.progress import FitProgress
 from .config import FitConfig
 from .paper.nets import build_net, make_input
 from .runtime.device import use_bf16
+from .runtime.options import RunOptions
 from .stopping import PlateauStopper
 from .time_left import earliest_stop, expected_stop
 
@@ -56,15 +57,16 @@ def build(config: FitConfig, out_channels: int, height: int, width: int, device,
 
 
 def run(net, noise, loss_fn, config: FitConfig, iterations: int, heldout_error=None, evaluate=None,
-        callback=None, *, progress: FitProgress):
+        callback=None, *, progress: FitProgress, options: RunOptions):
     """Adam on ``loss_fn(net(noise))`` for at most ``iterations``; returns (kept output (1, C, H, W),
     history, iterations run, best iteration).
 
     ``loss_fn(output) -> (total, {name: term})``; ``heldout_error(output) -> float`` (None: no
     auto-stop), watched every ``config.stopping.eval_every`` iterations; ``evaluate(output) -> {name: float}``,
-    tracked there too, never optimised; ``callback(iteration, output)`` every ``config.run.callback_every``;
-    ``progress``: the caller's hook, iterated over for the iterations."""
-    paper, stopping, tricks, options = config.paper, config.stopping, config.tricks, config.run
+    tracked there too, never optimised; ``callback(iteration, output)`` every ``options.callback_every``;
+    ``progress``: the caller's hook, iterated over for the iterations; ``options``: the run's memory format
+    and callback rate (the net's precision is the config's)."""
+    paper, stopping, tricks = config.paper, config.stopping, config.tricks
     # the fused kernel updates all parameters in one call: ~10-25 % faster per iteration on CPU
     optimizer = torch.optim.Adam(net.parameters(), lr=paper.lr, fused=noise.device.type in ("cpu", "cuda"))
     if paper.schedule == "cosine":
@@ -72,7 +74,7 @@ def run(net, noise, loss_fn, config: FitConfig, iterations: int, heldout_error=N
     else:
         milestones = [m for m in paper.lr_milestones if m < iterations]
         scheduler = torch.optim.lr_scheduler.MultiStepLR(optimizer, milestones, gamma=paper.lr_gamma)
-    autocast = torch.autocast(noise.device.type, dtype=torch.bfloat16, enabled=use_bf16(options.bf16, noise.device))
+    autocast = torch.autocast(noise.device.type, dtype=torch.bfloat16, enabled=use_bf16(config.precision.bf16, noise.device))
     if options.channels_last:
         net, noise = net.to(memory_format=torch.channels_last), noise.contiguous(memory_format=torch.channels_last)
     jitter = torch.Generator(device=noise.device).manual_seed(paper.seed + 1) if tricks.reg_noise_std else None

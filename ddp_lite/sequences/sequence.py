@@ -37,6 +37,7 @@ import time
 import numpy as np
 
 from ..method.config import FitConfig
+from ..method.runtime.options import RunOptions, run_options
 from ..method.runtime.side_by_side import side_by_side_workers, torch_threads
 from ..core.progress import CommandClock
 from .runner import run_jobs
@@ -49,7 +50,8 @@ __all__ = ["run_sequence"]
 
 
 def run_sequence(scene: Scene, out, config: FitConfig | None = None, views=None, client=None, threads: int = 1,
-                 retries: int = 2, source: dict | None = None, fuse: bool = True, log=print) -> dict:
+                 retries: int = 2, source: dict | None = None, fuse: bool = True, log=print,
+                 options: RunOptions | None = None) -> dict:
     """Complete every view of ``scene`` (or ``views``, indices) with DDP rgbd+warp; write files; fuse.
 
     Args:
@@ -63,14 +65,16 @@ def run_sequence(scene: Scene, out, config: FitConfig | None = None, views=None,
             one thread, so the numbers are those of one view alone on one thread.
         threads: torch threads per fit. retries: Dask retries of a fit that raised.
         source: what to record as the input (path, format, options) in the manifest.
+        options: how each fit runs (:class:`RunOptions`: device, memory limit; no progress bar per view).
     Returns:
         {"computed": [names], "skipped": [names], "failed": {name: message}, "fused": path or None,
         "points": int, "manifest": path}.
     """
     config = FitConfig.for_profile(variant=VARIANT) if config is None else config
+    options = run_options(options)
     given = [source["path"]] if isinstance(source, dict) and source.get("path") else []
     out = check_out_folder(out, list(getattr(scene, "sources", [])) + given)  # before any work
-    jobs = plan_jobs(scene, config, views, threads)  # every input checked: nothing has run yet
+    jobs = plan_jobs(scene, config, views, threads, options)  # every input checked: nothing has run yet
     manifest = read_manifest(out)
     manifest.setdefault("views", {})
     manifest.update({"format": 1, "source": source or {"scene": scene.name}, "variant": VARIANT,
@@ -91,7 +95,7 @@ def run_sequence(scene: Scene, out, config: FitConfig | None = None, views=None,
     at_once = 1
     if client is None and int(threads) == 1 and todo:
         first = next(iter(todo.values()))
-        at_once = side_by_side_workers(config, VARIANT, first.depth.shape, len(first.neighbors), len(todo))
+        at_once = side_by_side_workers(config, options, VARIANT, first.depth.shape, len(first.neighbors), len(todo))
     log(f"{len(jobs)} views: {len(skipped)} already done, {len(todo)} to fit"
         + (f" on {len(client.scheduler_info()['workers'])} Dask workers" if client is not None and todo else "")
         + (f", {at_once} at a time in this process" if at_once > 1 else ""))

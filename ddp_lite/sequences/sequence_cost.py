@@ -15,6 +15,7 @@ from torch.utils.flop_counter import FlopCounterMode
 from ..method.config import FitConfig
 from ..method.complete import complete_depth
 from ..method.runtime.memory import estimate_peak_memory_gb
+from ..method.runtime.options import RunOptions
 from ..world.scenes import make_scene
 from .sequence_jobs import N_NEIGHBORS, VARIANT
 
@@ -32,23 +33,23 @@ def measure_fit_cost(profile="paper", size=(96, 128), iterations=(2, 8), threads
     {"cpu_seconds_per_pixel_iteration", "flops_per_pixel_iteration", "size", "threads"}.
     """
     scene = make_scene("desk", size=size, n_views=3, seed=0)
-    base = FitConfig.for_profile(profile, variant=VARIANT, progress=False, auto_stop=False, bf16=False,
-                                 max_memory_gb=None)
+    base = FitConfig.for_profile(profile, variant=VARIANT, auto_stop=False, bf16=False)
+    quiet = RunOptions(progress=False)
     neighbors = [scene[1].as_neighbor(), scene[2].as_neighbor()]
     previous = torch.get_num_threads()
     torch.set_num_threads(int(threads))
     try:
         complete_depth(scene[0].rgb, scene[0].depth, scene[0].camera, neighbors, VARIANT,
-                       base.replace(iterations=1, lr_milestones=()))  # warm-up: first-call costs out of the timing
+                       base.replace(iterations=1, lr_milestones=()), options=quiet)  # warm-up: first-call costs out of the timing
         times = []
         for n in iterations:
             start = time.perf_counter()
             complete_depth(scene[0].rgb, scene[0].depth, scene[0].camera, neighbors, VARIANT,
-                           base.replace(iterations=int(n), lr_milestones=()))
+                           base.replace(iterations=int(n), lr_milestones=()), options=quiet)
             times.append(time.perf_counter() - start)
         with FlopCounterMode(display=False) as counter:
             complete_depth(scene[0].rgb, scene[0].depth, scene[0].camera, neighbors, VARIANT,
-                           base.replace(iterations=1, lr_milestones=()))
+                           base.replace(iterations=1, lr_milestones=()), options=quiet)
     finally:
         torch.set_num_threads(previous)
     pixels = size[0] * size[1]

@@ -3,7 +3,7 @@
 ``plan_jobs`` picks each view's N = 2 neighbours (MVSNet's score, ``neighbors.select_neighbors``),
 one disparity range for the whole scene (so the fills share a scale), runs every input check
 ``complete_depth`` makes, and names each job by a *key*: a sha256 over what its result depends on
-(pixels, cameras, neighbours, fit config, disparity range). ``fit_view`` runs one job wherever it
+(pixels, cameras, neighbours, fit config and run options, disparity range). ``fit_view`` runs one job wherever it
 is called (this process or a Dask worker) and returns arrays only: depth float32 (H, W) metres,
 NaN = unknown. The variant is always ``VARIANT`` (rgbd+warp).
 """
@@ -21,6 +21,7 @@ from ..core.camera import Camera
 from ..method.paper.disparity import DisparityTransform
 from ..method.config import FitConfig
 from ..method.complete import complete_depth
+from ..method.runtime.options import RunOptions, run_options
 from ..method.runtime.side_by_side import torch_threads
 from ..method.input_checks import check_fit_inputs
 from ..world.neighbors import select_neighbors
@@ -47,26 +48,32 @@ class ViewJob:
     transform: DisparityTransform
     threads: int = 1
     key: str = field(default="")
+    options: RunOptions = field(default_factory=RunOptions)  # how it runs (its progress bar is off in fit_view)
 
 
 def _stem(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9._-]", "_", name) or "view"
 
 
-def _job_key(view, neighbors, config: FitConfig, transform: DisparityTransform) -> str:
-    """sha256 over what the result depends on: pixels, cameras, neighbours, config, disparity range."""
+def _job_key(view, neighbors, config: FitConfig, options: RunOptions, transform: DisparityTransform) -> str:
+    """sha256 over what the result depends on: pixels, cameras, neighbours, config, disparity range, and the
+    run options by their names beside the config's fields, those that change no number (device, memory
+    limit, progress bar) at fixed values."""
     digest = hashlib.sha256()
     for rgb, depth, camera in [(view.rgb, view.depth, view.camera)] + [(n.rgb, None, n.camera) for n in neighbors]:
         for array in (rgb, depth, camera.K, camera.cam_from_world):
             if array is not None:
                 digest.update(np.ascontiguousarray(array).tobytes())
-    settings = config.replace(progress=False, device=None, max_memory_gb=None).flat()
+    run = dataclasses.asdict(options.replace(progress=False, device=None, max_memory_gb=None))
+    settings = {**config.flat(), **run}
     digest.update(json.dumps([settings, dataclasses.asdict(transform), VARIANT], sort_keys=True, default=str).encode())
     return digest.hexdigest()[:16]
 
 
-def plan_jobs(scene: Scene, config: FitConfig, views=None, threads: int = 1) -> list[ViewJob]:
-    """One :class:`ViewJob` per view of ``scene`` (or per index in ``views``), inputs checked.
+def plan_jobs(scene: Scene, config: FitConfig, views=None, threads: int = 1, options: RunOptions | None = None
+              ) -> list[ViewJob]:
+    """One :class:`ViewJob` per view of ``scene`` (or per index in ``views``), inputs checked, each run with
+    ``options`` (:class:`RunOptions`; None → ``RunOptions()``).
 
     Neighbours: the N = 2 best by MVSNet's score (``select_neighbors``) among *all* views; the
     disparity range: one for the whole scene (its ``meta`` d_min/d_max, else from every view's
@@ -80,6 +87,7 @@ def plan_jobs(scene: Scene, config: FitConfig, views=None, threads: int = 1) -> 
     """
     if not isinstance(scene, Scene):
         raise TypeError(f"scene must be a ddp_lite.Scene, got {type(scene).__name__}")
+    options = run_options(options)
     if len(scene) < 2:
         raise ValueError(f"a sequence needs at least 2 views (the warp loss uses neighbours), got {len(scene)}")
     chosen = list(range(len(scene))) if views is None else list(views)
@@ -109,7 +117,7 @@ def plan_jobs(scene: Scene, config: FitConfig, views=None, threads: int = 1) -> 
             raise ValueError(f"view {i} ({view.name!r}): {error}") from None
         jobs.append(ViewJob(view.name, stems[i], i, view.rgb, view.depth, view.camera, pairs,
                             [v.name for v in neighbors], config, transform, int(threads),
-                            _job_key(view, neighbors, config, transform)))
+                            _job_key(view, neighbors, config, options, transform), options))
     return jobs
 
 
@@ -121,6 +129,6 @@ def fit_view(job: ViewJob) -> dict:
     same numbers in-process and on any worker)."""
     with torch_threads(job.threads):  # side by side in this process the caller has set them already: no change
         result = complete_depth(job.rgb, job.depth, job.camera, job.neighbors, variant=VARIANT,
-                                config=job.config.replace(progress=False), transform=job.transform)
+                                config=job.config, transform=job.transform, options=job.options.replace(progress=False))
     return {"depth": result.merged(job.depth).astype(np.float32), "ddp": result.depth.astype(np.float32),
             "iterations": int(result.iterations), "seconds": float(result.seconds)}

@@ -15,6 +15,7 @@ from ..classical.baselines import BASELINES
 from ..classical.stereo import pixel_disparity
 from ..method.config import FitConfig
 from ..method.complete import complete_depth, mixed_with_fill
+from ..method.runtime.options import RunOptions
 from ..method.runtime.side_by_side import run_side_by_side
 from ..method.profiles import get_profile
 from ..method.kit.recipes import get_recipe
@@ -83,9 +84,11 @@ def _best_fill_px(case: Case) -> tuple[str, float]:
     return best, errors[best]
 
 
-def run_additions(cases: dict[str, Case], profile=None, seeds=(0, 1, 2), variant: str = "rgbd", log=print) -> dict:
+def run_additions(cases: dict[str, Case], profile=None, seeds=(0, 1, 2), variant: str = "rgbd", log=print,
+                  options: RunOptions = RunOptions(progress=False)) -> dict:
     """Fit every step of :func:`addition_steps` on every case and seed: all the fits side by side, one
-    torch thread each, as many at once as torch has threads (``side_by_side.run_side_by_side``).
+    torch thread each, as many at once as torch has threads (``side_by_side.run_side_by_side``), each run
+    as ``options`` say (no progress bars by default).
 
     Returns ``{"steps": [names], "best_fill": {case: (name, px)}, "px": {case: {step: [px per seed]}},
     "ratio": {case: {step: [DDP px / best fill px, per seed]}}, "example": {case: {step: depth}}}``
@@ -102,10 +105,10 @@ def run_additions(cases: dict[str, Case], profile=None, seeds=(0, 1, 2), variant
     def fit(k: int):
         case_name, step, seed = jobs[k]
         case = cases[case_name]
-        config = FitConfig.for_profile(profile, variant=variant, recipe="paper", seed=seed, progress=False,
-                                       **steps[step])
+        config = FitConfig.for_profile(profile, variant=variant, recipe="paper", seed=seed, **steps[step])
         neighbors = case.neighbors if variant == "rgbd+warp" else ()
-        return complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant, config=config)
+        return complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant, config=config,
+                              options=options)
     workers = max(1, min(len(jobs), torch.get_num_threads()))  # independent fits side by side, a thread each
     fitted = dict(zip(jobs, run_side_by_side(fit, len(jobs), workers)))  # one pool: no core idles between cases
     out = {"steps": names, "best_fill": {}, "px": {}, "ratio": {}, "example": {}}

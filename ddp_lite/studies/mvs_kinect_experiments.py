@@ -19,6 +19,7 @@ import numpy as np
 from ..classical.baselines import fill
 from ..method.config import FitConfig
 from ..method.complete import complete_depth
+from ..method.runtime.options import RunOptions
 from ..method.runtime.side_by_side import run_fits
 from ..evaluation.fusion import fuse_depths, points_from_depth
 from ..evaluation.metrics import cloud_scores, psnr
@@ -41,17 +42,20 @@ def scene_neighbors(scene: Scene, n: int):
     return lambda i: [scene[j] for j in select_neighbors(scene, i, n)]
 
 
-def complete_views(views, depths, neighbors_of, profile=None, variant: str = "rgbd+warp", log=print) -> list:
+def complete_views(views, depths, neighbors_of, profile=None, variant: str = "rgbd+warp", log=print,
+                   options: RunOptions = RunOptions(progress=False)) -> list:
     """DDP (``FitConfig.for_profile``) on each of ``depths`` (H, W metres, NaN holes) of ``views``, with
     ``neighbors_of(i)`` as warp partners → list of (H, W) depths, the input kept where it was valid.
-    The views' fits are independent: they run side by side (:mod:`ddp_lite.method.runtime.side_by_side`)."""
-    config = FitConfig.for_profile(profile, variant=variant, progress=False)
+    The views' fits are independent: they run side by side (:mod:`ddp_lite.method.runtime.side_by_side`),
+    as ``options`` say (no progress bars by default)."""
+    config = FitConfig.for_profile(profile, variant=variant)
 
     def fit(i: int):
-        return complete_depth(views[i].rgb, depths[i], views[i].camera, neighbors_of(i), variant=variant, config=config)
+        return complete_depth(views[i].rgb, depths[i], views[i].camera, neighbors_of(i), variant=variant, config=config,
+                              options=options)
     jobs = [(config, variant, np.shape(depth), len(neighbors_of(i))) for i, depth in enumerate(depths)]
     out = []
-    for i, (depth, result) in enumerate(zip(depths, run_fits(fit, jobs))):
+    for i, (depth, result) in enumerate(zip(depths, run_fits(fit, jobs, options))):
         out.append(result.merged(depth))
         log(f"view {i}: {np.isnan(depth).mean():.0%} holes, {result.iterations} iterations, {result.seconds:.0f} s")
     return out
@@ -96,14 +100,14 @@ def fill_table(view, reading, gt, neighbor, ddp_depth, methods=("colorization", 
 
 
 def nyu_fill_table(path, profile=None, index: int = 0, fraction: float = 0.15, seed: int = 0, config=None,
-                   methods=("colorization", "cross-bilateral")) -> dict:
+                   methods=("colorization", "cross-bilateral"), options: RunOptions = RunOptions(progress=False)) -> dict:
     """{method: {"depth PSNR"}} (dB) on NYU v2's labelled ``.mat`` frame ``index``, at the profile's size.
 
     NYU has no second view in the labelled set and no truth in the Kinect's holes, so ``fraction`` of
     the valid raw depth is held out in blobs (``random_holes``, ``seed``) and every fill is scored there,
     against the raw reading, with the peak the raw depth's range: DDP (rgbd, ``config`` or the
     profile's), each classical fill of ``methods``, and the dataset's own fill (which saw those pixels:
-    a bound, not a competitor).
+    a bound, not a competitor). The fit runs as ``options`` say (no progress bar by default).
     """
     from ..data.datasets import load_nyu
     from ..classical.holes import random_holes
@@ -115,8 +119,8 @@ def nyu_fill_table(path, profile=None, index: int = 0, fraction: float = 0.15, s
     toolbox = resize_scene(load_nyu(path, index=index, raw=False), profile.size)[0].depth
     held_in, _ = random_holes(raw.depth, fraction=fraction, seed=seed)
     held_out = np.isfinite(raw.depth) & ~np.isfinite(held_in)
-    config = FitConfig.for_profile(profile, variant="rgbd", progress=False) if config is None else config
-    result = complete_depth(raw.rgb, held_in, raw.camera, (), variant="rgbd", config=config)
+    config = FitConfig.for_profile(profile, variant="rgbd") if config is None else config
+    result = complete_depth(raw.rgb, held_in, raw.camera, (), variant="rgbd", config=config, options=options)
     fills = {"DDP (rgbd)": result.merged(held_in), "dataset's fill": toolbox,
              **{m: fill(held_in, raw.rgb, method=m) for m in methods}}
     peak = float(np.nanmax(raw.depth) - np.nanmin(raw.depth))

@@ -35,6 +35,7 @@ from ..method.complete import blend_members, blended_result, complete_depth, mix
 from ..classical.holes import random_holes
 from ..data.middlebury import load_middlebury, load_motorcycle
 from ..method.profiles import get_profile
+from ..method.runtime.options import RunOptions
 from ..method.runtime.side_by_side import run_fits
 from ..classical.stereo import sgm_disparity, sgm_left_right_failures
 from ..core.views import Scene, View
@@ -197,7 +198,7 @@ def factor_for_profile(profile=None, shape=(500, 741)) -> int:
 
 
 def compare_fills(case: RealCase, profile=None, recipes=("paper", "kit"), variant: str = "rgbd", seed: int = 0,
-                  progress: bool = False) -> dict[str, np.ndarray]:
+                  options: RunOptions = RunOptions(progress=False)) -> dict[str, np.ndarray]:
     """Every classical fill (``baselines.BASELINES``) and DDP under each of ``recipes`` on ``case``
     → {name: (H, W) disparity in px of the working size}, the input kept where it is valid.
 
@@ -205,19 +206,19 @@ def compare_fills(case: RealCase, profile=None, recipes=("paper", "kit"), varian
     from the input depth's range, with the profile's size and budget (``rgbd+warp`` warps the right
     view). Names: the fills' keys, then ``"DDP <recipe>"``. A blend of two recipes listed before it
     (a blend of ``paper`` and ``kit``, or ``photo``: the ``kit`` fit refined) is built from the fits it reuses: the same method, fewer fits.
-    The fits run side by side (:mod:`ddp_lite.method.runtime.side_by_side`).
+    The fits run side by side (:mod:`ddp_lite.method.runtime.side_by_side`), as ``options`` say (no progress bars
+    by default).
     """
     disparity_in = case.fb / case.depth  # (H, W) px (plus doffs: a constant, it cancels in every error)
     out = {name: fill(disparity_in, case.rgb) for name, fill in BASELINES.items()}
-    configs = [FitConfig.for_profile(profile, variant=variant, recipe=recipe, seed=seed, progress=progress)
-               for recipe in recipes]
-    fitted = _plain_fits(case, variant, configs)  # (config without the fill's share, its result), side by side
+    configs = [FitConfig.for_profile(profile, variant=variant, recipe=recipe, seed=seed) for recipe in recipes]
+    fitted = _plain_fits(case, variant, configs, options)  # (config without the fill's share, its result), side by side
     for recipe, config in zip(recipes, configs):
-        out[f"DDP {recipe}"] = case.fb / _fit_reusing(case, variant, config, fitted).merged(case.depth)
+        out[f"DDP {recipe}"] = case.fb / _fit_reusing(case, variant, config, fitted, options).merged(case.depth)
     return out
 
 
-def _plain_fits(case: RealCase, variant: str, configs: list) -> list:
+def _plain_fits(case: RealCase, variant: str, configs: list, options: RunOptions) -> list:
     """The plain fits the recipes ``configs`` need (each without its fill's share and its refinement; a blend
     of two fits listed before it needs none of its own), fitted side by side → [(config, DepthResult)]."""
     planned = []
@@ -233,18 +234,20 @@ def _plain_fits(case: RealCase, variant: str, configs: list) -> list:
     neighbors = case.neighbors if variant == "rgbd+warp" else ()
 
     def fit(k: int):
-        return complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant, config=planned[k])
-    return list(zip(planned, run_fits(fit, [(c, variant, case.depth.shape, len(neighbors)) for c in planned])))
+        return complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant, config=planned[k],
+                              options=options)
+    return list(zip(planned, run_fits(fit, [(c, variant, case.depth.shape, len(neighbors)) for c in planned], options)))
 
 
-def _fit_reusing(case: RealCase, variant: str, config: FitConfig, fitted: list):
+def _fit_reusing(case: RealCase, variant: str, config: FitConfig, fitted: list, options: RunOptions):
     """``complete_depth`` of ``case`` under ``config``, from the plain fits in ``fitted`` (:func:`_plain_fits`):
     one of them, or a blend of two (a recipe with ``blend_paper`` after ``kit`` and ``paper``, same seed),
     refined when the config asks (``photo`` after ``kit``), with the config's share of the fill mixed in after."""
     share = config.combination.blend_fill
     if share is None:  # the share is chosen on depth held out of the fit: a fit of its own
         neighbors = case.neighbors if variant == "rgbd+warp" else ()
-        return complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant, config=config)
+        return complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant, config=config,
+                              options=options)
     base = config.replace(blend_fill=0.0, refine=False)
     same = [result for c, result in fitted if c == base]
     if same:

@@ -9,8 +9,8 @@ are a section of the fit's config defined beside its code and checked there: ``H
 ``CombinationConfig`` (``blend``, an ensemble's size included).
 
 Blends and ensembles combine whole fits: a blend holds out valid pixels as the fit's auto-stop does
-(``method/stopping.holdout_mask``, the one file of ``method/`` itself the kit uses), an ensemble runs
-its members side by side (``runtime/side_by_side``).
+(``method/stopping.holdout_mask``, the one file of ``method/`` itself the kit uses); ``method/complete``
+runs the fits side by side (``runtime/side_by_side``) and combines them with what is here.
 
 May import: core, classical, paper, runtime, method.
 """

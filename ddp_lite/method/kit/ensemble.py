@@ -4,20 +4,13 @@
 
 Not in the paper. One fit's hole error moves ±10 % and more with the seed (other weights, noise
 and held-out pixels); the mean keeps what the fits agree on. Members run side by side in threads
-where cores and memory allow (:func:`parallel_members`, :mod:`ddp_lite.method.runtime.side_by_side`).
+where cores and memory allow (:mod:`ddp_lite.method.runtime.side_by_side`).
 """
 from __future__ import annotations
 
 import numpy as np
 
-from ..runtime.side_by_side import side_by_side_workers
-
-__all__ = ["parallel_members", "mean_outputs"]
-
-
-def parallel_members(config, variant: str, shape, n_neighbors: int, callback) -> int:
-    """How many of ``config.combination.ensemble`` members run at once (:func:`side_by_side.side_by_side_workers`)."""
-    return side_by_side_workers(config, variant, shape, n_neighbors, int(config.combination.ensemble), callback)
+__all__ = ["mean_outputs"]
 
 
 def mean_outputs(members: list, weights=None) -> tuple[np.ndarray, np.ndarray | None]:

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from ...classical.guided_fills import NEIGHBOUR_OFFSETS, colorization_affinities
+from ...classical.guided_fills import NEIGHBOUR_OFFSETS, colorization_weights
 from ...core.checks import check_choice, check_real
 from ...core.settings import Settings
 from .hole_losses import (EDGE_GUIDES, affinity_loss, flatness_loss, flatness_region, smoothness_loss,
@@ -69,7 +69,8 @@ class HoleTerms:
                 self.flat_weights = self.smooth_weights * to_tensor(flatness_region(free, config.flatness_reach), device)
         self.affinities = self.affinity_region = self.affinity_total = None
         if config.affinity > 0 and rgb is not None:
-            self.affinities = torch.from_numpy(colorization_affinities(rgb))[None].to(device)  # (1, 8, H, W)
+            weights, _ = colorization_weights(rgb.astype(np.float64))  # rgb: the fit's, checked
+            self.affinities = torch.from_numpy(weights.astype(np.float32))[None].to(device)  # (1, 8, H, W)
             self.affinity_region = to_tensor(free, device)  # (1, 1, H, W)
             self.affinity_total = self.affinity_region.sum()
 

@@ -70,6 +70,17 @@ class DisparityTransform:
         lo, hi = np.percentile(valid, [0.5, 99.5])
         return cls(d_min=float(lo / margin), d_max=float(hi * margin), constant=constant)
 
+    def check_covers(self, depth: np.ndarray, name: str = "transform") -> None:
+        """Refuse (``ValueError`` naming ``name``) a range that does not cover the bulk of the valid ``depth``
+        (H, W) metres (its 0.5–99.5th percentiles, the range :meth:`from_depth` covers before its margin):
+        a fit could not reproduce those pixels, and every one of them would come back clipped."""
+        lo, hi = np.percentile(depth[np.isfinite(depth)], [0.5, 99.5])
+        if lo < self.d_min or hi > self.d_max:
+            outside = int(((depth < self.d_min) | (depth > self.d_max)).sum())
+            raise ValueError(f"{name}: [{self.d_min:.4g}, {self.d_max:.4g}] m does not cover the valid depth "
+                             f"(0.5–99.5th percentiles {lo:.4g}–{hi:.4g} m; {outside} pixel(s) outside would come "
+                             f"back clipped); widen it, or pass {name}=None to derive it from the depth")
+
     @classmethod
     def for_tnt_scene(cls, name: str) -> "DisparityTransform":
         """The supplement's values for a Tanks and Temples scene (e.g. ``"Ignatius"``)."""

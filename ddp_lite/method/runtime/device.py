@@ -1,18 +1,35 @@
 """Where and in what precision a fit runs: the device (CPU by default; CUDA or MPS when asked for or
-available) and bfloat16 for the net (``RunOptions.bf16``; not in the paper).
+available; ``RunOptions.device``) and bfloat16 for the net (the config's :class:`Precision`; not in the paper).
 
-    bf16 = options.bf16, or for None: the device computes bfloat16 natively (AVX-512 BF16 / AMX, CUDA)
+    bf16 = config.precision.bf16, or for None: the device computes bfloat16 natively (AVX-512 BF16 / AMX, CUDA)
 
 Only the net runs under bfloat16 autocast (:func:`ddp_lite.method.loop.run`); the losses stay in float32.
+The precision changes a fit's numbers, so it is a section of the method's config, which a recipe sets
+(``kit`` at ``class``: where the CPU has it natively); the device is a run option.
 """
 from __future__ import annotations
 
 import functools
 import os
+from dataclasses import dataclass
 
 import torch
 
-__all__ = ["use_bf16", "resolve_device"]
+from ...core.checks import check_bool
+from ...core.settings import Settings
+
+__all__ = ["Precision", "use_bf16", "resolve_device"]
+
+
+@dataclass(frozen=True)
+class Precision(Settings):
+    """The arithmetic the net runs in (1 field; the paper's: float32)."""
+
+    bf16: bool | None = False  # the network (not the losses) under bfloat16 autocast; None: where the hardware has it
+
+    def validate(self) -> None:
+        if self.bf16 is not None:  # None: decided by the hardware (use_bf16)
+            check_bool(self.bf16, "config.bf16")
 
 
 def use_bf16(bf16: bool | None, device: torch.device) -> bool:
@@ -53,20 +70,20 @@ def resolve_device(options) -> torch.device:
     ``options.device``, checked against this machine, or for None CUDA, then MPS, then the CPU."""
     if options.device is not None:
         if not isinstance(options.device, (str, torch.device)):
-            raise TypeError(f"config.device must be None or a name like 'cpu', 'cuda', 'cuda:0', 'mps', "
+            raise TypeError(f"options.device must be None or a name like 'cpu', 'cuda', 'cuda:0', 'mps', "
                             f"got {type(options.device).__name__}")
         try:
             device = torch.device(options.device)
         except RuntimeError:
-            raise ValueError(f"config.device must be None, 'cpu', 'cuda[:N]' or 'mps', got {options.device!r}") from None
+            raise ValueError(f"options.device must be None, 'cpu', 'cuda[:N]' or 'mps', got {options.device!r}") from None
         mps = getattr(torch.backends, "mps", None)
         available = {"cpu": True, "cuda": torch.cuda.is_available(),
                      "mps": mps is not None and mps.is_available()}
         if not available.get(device.type, False):
-            raise ValueError(f"config.device={options.device!r}: this machine has no usable {device.type} device; "
+            raise ValueError(f"options.device={options.device!r}: this machine has no usable {device.type} device; "
                              f"use 'cpu' or None (picks cuda/mps when present)")
         if device.type == "cuda" and device.index is not None and device.index >= torch.cuda.device_count():
-            raise ValueError(f"config.device={options.device!r}: only {torch.cuda.device_count()} CUDA device(s)")
+            raise ValueError(f"options.device={options.device!r}: only {torch.cuda.device_count()} CUDA device(s)")
         return device
     if torch.cuda.is_available():
         return torch.device("cuda")

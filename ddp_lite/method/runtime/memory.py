@@ -43,10 +43,11 @@ def estimate_peak_memory_gb(config, out_channels: int, height: int, width: int, 
     return MEMORY_BASE_GB + (activations + BYTES_PER_PARAMETER * parameters) / 2 ** 30
 
 
-def memory_limit_gb(config, device: torch.device) -> tuple[float | None, str]:
-    """(limit in GB, where it comes from); (None, ...) when the machine's size is unknown."""
-    if config.run.max_memory_gb is not None:
-        return float(config.run.max_memory_gb), "config.max_memory_gb"
+def memory_limit_gb(options, device: torch.device) -> tuple[float | None, str]:
+    """(limit in GB, where it comes from) for a run with these :class:`~ddp_lite.method.runtime.options.RunOptions`
+    on ``device``; (None, ...) when the machine's size is unknown."""
+    if options.max_memory_gb is not None:
+        return float(options.max_memory_gb), "options.max_memory_gb"
     if device.type == "cuda":
         total, what = torch.cuda.get_device_properties(device).total_memory, "GPU memory"
     else:
@@ -57,9 +58,9 @@ def memory_limit_gb(config, device: torch.device) -> tuple[float | None, str]:
     return DEFAULT_MEMORY_FRACTION * total / 2 ** 30, f"{DEFAULT_MEMORY_FRACTION:.0%} of this machine's {what}"
 
 
-def check_memory(config, out_channels: int, height: int, width: int, n_neighbors: int, device) -> None:
-    """Refuse, before the net is built, a fit whose estimated peak exceeds the limit."""
-    limit, source = memory_limit_gb(config, device)
+def check_memory(config, options, out_channels: int, height: int, width: int, n_neighbors: int, device) -> None:
+    """Refuse, before the net is built, a fit of ``config`` whose estimated peak exceeds the limit of ``options``."""
+    limit, source = memory_limit_gb(options, device)
     if limit is None:
         return
     estimate = estimate_peak_memory_gb(config, out_channels, height, width, n_neighbors)
@@ -68,4 +69,4 @@ def check_memory(config, out_channels: int, height: int, width: int, n_neighbors
             f"depth: a {height}×{width} (H×W) fit with this config needs about {estimate:.1f} GB at its peak, more than "
             f"the limit of {limit:.1f} GB ({source}). Downscale the inputs (e.g. cv2.resize, or "
             f"ddp_lite.data.resample.resize_scene for a Scene), use smaller config.channels, or a GPU; or raise the limit with "
-            f"config.max_memory_gb (CLI: --max-memory-gb) if you know it fits.")
+            f"options.max_memory_gb (CLI: --max-memory-gb) if you know it fits.")

@@ -24,15 +24,15 @@ from ..paper.variants import get_variant
 __all__ = ["side_by_side_workers", "run_side_by_side", "run_fits", "torch_threads"]
 
 
-def side_by_side_workers(config, variant: str, shape, n_neighbors: int, jobs: int, callback=None) -> int:
-    """How many of ``jobs`` fits of ``config`` (``variant``, images of ``shape`` (H, W), ``n_neighbors``
-    warp partners) run at once: on a CPU one per torch thread, as many as fit in memory side by side;
-    1 with a ``callback`` (it may draw figures, which wants the main thread) or on a GPU."""
-    device = resolve_device(config.run)
+def side_by_side_workers(config, options, variant: str, shape, n_neighbors: int, jobs: int, callback=None) -> int:
+    """How many of ``jobs`` fits of ``config`` run with ``options`` (``variant``, images of ``shape`` (H, W),
+    ``n_neighbors`` warp partners) run at once: on a CPU one per torch thread, as many as fit in memory side
+    by side; 1 with a ``callback`` (it may draw figures, which wants the main thread) or on a GPU."""
+    device = resolve_device(options)
     if device.type != "cpu" or callback is not None:
         return 1
     workers = max(1, min(int(jobs), torch.get_num_threads()))
-    limit, _ = memory_limit_gb(config, device)
+    limit, _ = memory_limit_gb(options, device)
     if limit is not None and workers > 1:
         one = estimate_peak_memory_gb(config, get_variant(variant).out_channels, *shape, n_neighbors)
         workers = min(workers, max(1, int(limit // one)))
@@ -61,9 +61,10 @@ def torch_threads(count: int):
         torch.set_num_threads(before)
 
 
-def run_fits(fit, jobs) -> list:
+def run_fits(fit, jobs, options) -> list:
     """``[fit(k) for k in range(len(jobs))]`` side by side, as many at once as every job allows
-    (:func:`side_by_side_workers`); ``jobs``: one ``(config, variant, shape (H, W), n_neighbors)`` per fit."""
-    workers = min((side_by_side_workers(config, variant, shape, n_neighbors, len(jobs))
+    (:func:`side_by_side_workers`); ``jobs``: one ``(config, variant, shape (H, W), n_neighbors)`` per fit, all
+    run with the :class:`~ddp_lite.method.runtime.options.RunOptions` ``options``."""
+    workers = min((side_by_side_workers(config, options, variant, shape, n_neighbors, len(jobs))
                    for config, variant, shape, n_neighbors in jobs), default=1)
     return run_side_by_side(fit, len(jobs), workers)
