@@ -128,7 +128,7 @@ def test_a_blend_of_the_kit_fit_the_paper_fit_and_the_fill_is_their_weighted_mea
 
 
 def test_the_photo_recipe_is_the_kit_fit_refined_then_the_kits_share_of_the_fill():
-    from ddp_lite.method.full_resolution import refine_full_resolution
+    from ddp_lite.method.full_resolution import SMOOTHNESS_MEAN, refine_full_resolution
     depth = tilted_plane(32, 40, slope=0.05)
     depth[8:20, 10:28] = np.nan
     rgb = np.random.default_rng(2).random(depth.shape + (3,)).astype(np.float32)
@@ -139,7 +139,8 @@ def test_the_photo_recipe_is_the_kit_fit_refined_then_the_kits_share_of_the_fill
     alone = complete_depth(rgb, depth, variant="rgbd", transform=result.transform,
                            config=kit_config.replace(blend_fill=0.0))  # the same fit, neither refined nor mixed
     share = kit_config.combination.blend_fill
-    sharp = result.transform.to_disparity(refine_full_resolution(depth, rgb, alone.depth))
+    sharp = np.mean([result.transform.to_disparity(refine_full_resolution(depth, rgb, alone.depth, sigma_xy=s, lam=lam))
+                     for s, lam in SMOOTHNESS_MEAN], axis=0)  # the solve over four smoothness settings, averaged
     fill = two_fills_disparity(depth, rgb, result.transform)
     assert result.history["refined"] and result.history["blend_fill"] == share
     assert np.allclose(result.disparity, (1 - share) * sharp + share * fill, atol=1e-5)

@@ -111,3 +111,37 @@ def test_bad_arrays_refused():
         refine_full_resolution(depth, None, target)
     with pytest.raises(ValueError, match="depth"):
         refine_full_resolution(np.full((H, W), np.nan), rgb, target)
+
+
+def test_the_mean_over_smoothness_is_the_disparity_mean_of_the_solves_and_keeps_the_input():
+    from ddp_lite.method.full_resolution import SMOOTHNESS_MEAN, refine_over_smoothness
+    rgb, depth, truth, target = two_planes()
+    depth[3, 5] = 1.2345678
+    before = depth.copy()
+    out = refine_over_smoothness(depth, rgb, target)
+    assert np.array_equal(depth, before, equal_nan=True)  # the caller's array untouched
+    valid = ~np.isnan(depth)
+    assert np.array_equal(out[valid], depth[valid])  # bit for bit
+    solves = [refine_full_resolution(depth, rgb, target, sigma_xy=s, lam=lam) for s, lam in SMOOTHNESS_MEAN]
+    expected = 1.0 / np.mean([1.0 / x.astype(np.float64) for x in solves], axis=0)  # the mean in disparity
+    assert np.allclose(out[~valid], expected[~valid], rtol=1e-6)
+    assert len({float(x[~valid].mean()) for x in solves}) == len(SMOOTHNESS_MEAN)  # four different solves
+    assert hole_rmse(depth, out, truth) < 0.5 * hole_rmse(depth, np.where(valid, depth, target), truth)
+
+
+def test_the_mean_over_smoothness_of_one_plane_is_that_plane():
+    from ddp_lite.method.full_resolution import refine_over_smoothness
+    depth = np.full((40, 60), 2.5, np.float32)  # a fronto-parallel plane; the fit knows it too
+    depth[10:30, 20:40] = np.nan
+    rgb = np.random.default_rng(1).random((40, 60, 3)).astype(np.float32)
+    out = refine_over_smoothness(depth, rgb, np.full((40, 60), 2.5))
+    assert np.allclose(out, 2.5, rtol=1e-5)
+
+
+@pytest.mark.parametrize("settings, match", [([], "settings"), ("abc", "settings"), ([(4.0,)], "settings"),
+                                             ([(4.0, 0.0)], "lam"), ([(-1.0, 4.0)], "sigma_xy")])
+def test_the_mean_over_smoothness_refuses_bad_settings(settings, match):
+    from ddp_lite.method.full_resolution import refine_over_smoothness
+    rgb, depth, _, target = two_planes()
+    with pytest.raises(ValueError, match=match):
+        refine_over_smoothness(depth, rgb, target, settings=settings)

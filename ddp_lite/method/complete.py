@@ -22,7 +22,7 @@ import numpy as np
 
 from .kit.blend import best_fill_share, best_weight, fill_disparity, fill_holdout, validation_ring
 from .fit_cache import cached
-from .full_resolution import refine_full_resolution
+from .full_resolution import refine_over_smoothness
 from ..core.camera import Camera
 from ..core.checks import MIN_VALID_PIXELS
 from .config import FitConfig
@@ -172,10 +172,11 @@ def refined(result: DepthResult, depth: np.ndarray, rgb: np.ndarray) -> DepthRes
     image-guided edge-aware solve of :func:`~ddp_lite.method.full_resolution.refine_full_resolution` (the
     fast bilateral solver: confidence 1 on the valid input ``depth`` (H, W) metres, NaN holes, and 0.01 on
     the fit in the holes, after the fit's own error on the valid pixels is carried into them), guided by
-    ``rgb`` (H, W, 3) in [0, 1]. The valid input comes back as given; ``history`` gets ``refined``.
+    ``rgb`` (H, W, 3) in [0, 1], averaged over four smoothness settings (``refine_over_smoothness``). The
+    valid input comes back as given; ``history`` gets ``refined``.
     A fit blurs depth edges a few pixels wide; the solve puts them on the image's colour edges."""
     transform = result.transform
-    sharp = refine_full_resolution(depth, rgb, result.depth)  # (H, W) metres
+    sharp = refine_over_smoothness(depth, rgb, result.depth)  # (H, W) metres
     disparity = np.asarray(transform.to_disparity(sharp), np.float32)
     return replace(result, disparity=disparity, depth=transform.to_depth(disparity).astype(np.float32),
                    history={**result.history, "refined": True})

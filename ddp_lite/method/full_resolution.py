@@ -24,6 +24,12 @@ residual step is what takes it below the best fill; ``fgs`` and ``guided-filter`
   x = FGS(c·t) / FGS(c), the weighted least-squares solve above by separable 1-D passes.
 - ``guided-filter``: He et al.'s guided filter with the confidence as each pixel's weight in every
   window's affine colour model (``classical.guided_fills``): local (window ``radius``).
+
+:func:`refine_over_smoothness` averages the bilateral solver's solve over four (``sigma_xy``, ``lam``)
+settings: the ``refine`` of the ``photo`` recipe at a fit's own size, where it is 1.6 % better than the
+one default solve over the real suite (three seeds). At a photo's full size the one solve is as good
+(0.95× against 0.96× the best fill on the eight cases above), at a quarter of the time, and ``complete``
+runs it.
 """
 from __future__ import annotations
 
@@ -32,7 +38,7 @@ import numpy as np
 
 from ..classical.depth_fills import check_fill_input, nearest_values
 
-__all__ = ["REFINEMENTS", "refine_full_resolution", "hole_confidence_map"]
+__all__ = ["REFINEMENTS", "SMOOTHNESS_MEAN", "refine_full_resolution", "refine_over_smoothness", "hole_confidence_map"]
 
 REFINEMENTS = ("fgs", "bilateral-solver", "guided-filter")
 
@@ -177,3 +183,40 @@ def refine_full_resolution(depth, rgb, target, method: str = "bilateral-solver",
     low, high = values.min(), values.max()  # a solve of positive weights stays within its inputs; rounding may not
     solved = np.clip(np.where(np.isfinite(solved), solved, values), low, high) * scale
     return np.where(valid, array, 1.0 / solved).astype(np.float32)
+
+
+# the bilateral solver's (sigma_xy px, lam) whose solves `refine_over_smoothness` averages: chosen on half the
+# real suite's scenes at its working size (~160×140) and confirmed on the other half (docs/real_suite.md)
+SMOOTHNESS_MEAN = ((4.0, 4.0), (4.0, 16.0), (8.0, 4.0), (8.0, 16.0))
+
+
+def refine_over_smoothness(depth, rgb, target, settings=SMOOTHNESS_MEAN) -> np.ndarray:
+    """The bilateral-solver refinement averaged, in disparity (1/Z), over several smoothness settings.
+
+    How far a hole's valid rim should be carried, and how smooth the surface between, differs from hole to
+    hole (holes cut into clean depth want a sharp, short-reach solve; a stereo matcher's holes, whose rim
+    is itself off, a smooth one), and the valid depth cannot tell which (held-out valid pixels choose the
+    sharpest setting nearly always). The mean of a few settings is steadier than any one of them.
+
+    Args:
+        depth, rgb, target: as :func:`refine_full_resolution` (metres, NaN holes; colour; the fit).
+        settings: a non-empty sequence of (sigma_xy px, lam) pairs for the bilateral solver.
+    Returns:
+        (H, W) float32 metres, equal to ``depth`` on its valid pixels.
+    Example:
+        >>> depth = np.full((40, 60), 2.0, np.float32); depth[10:30, 20:40] = np.nan
+        >>> out = refine_over_smoothness(depth, np.full((40, 60, 3), 0.5, np.float32), np.full((40, 60), 3.0))
+        >>> bool(np.all(out[~np.isnan(depth)] == 2.0)), bool(2.0 <= out[20, 30] <= 3.0)
+        (True, True)
+    """
+    pairs = list(settings) if isinstance(settings, (list, tuple)) else []
+    if not pairs or not all(isinstance(pair, (list, tuple)) and len(pair) == 2 for pair in pairs):
+        raise ValueError(f"settings must be a non-empty sequence of (sigma_xy, lam) pairs, got {settings!r}")
+    for sigma_xy, lam in pairs:
+        _check_positive(sigma_xy, "settings' sigma_xy")
+        _check_positive(lam, "settings' lam")
+    solves = [refine_full_resolution(depth, rgb, target, sigma_xy=float(sigma_xy), lam=float(lam))
+              for sigma_xy, lam in pairs]  # (H, W) metres each, the valid input kept exactly
+    disparity = np.mean([1.0 / solve.astype(np.float64) for solve in solves], axis=0)  # (H, W) 1/m
+    valid = np.all([solve == solves[0] for solve in solves], axis=0)  # where every solve returned the input
+    return np.where(valid, solves[0], 1.0 / disparity).astype(np.float32)
