@@ -243,7 +243,7 @@ def compare(rows: list[dict], others: list[dict], groups) -> None:
     pairs = [(r, other[r["case"], r["seed"]]) for r in rows if (r["case"], r["seed"]) in other]
     print(f"\npaired against the other fits ({len(pairs)} case-seeds): mean change of the hole RMSE (lower on how many)")
     print(f"{'rule':<26}" + "".join(f"{g:>16}" for g, _ in groups))
-    for key in ("fit", "kit", "refined + 0.25"):
+    for key in ("fit", "kit", "refined + 0.25", "mean of 4 solves + 0.25"):
         cells = []
         for _, keep in groups:
             change = [r[key] / o[key] - 1 for r, o in pairs if keep(r)]
