@@ -76,22 +76,30 @@ def _guided(image: np.ndarray, values: np.ndarray, confidence: np.ndarray, radiu
     return q
 
 
-def _bilateral_solver(image: np.ndarray, values: np.ndarray, confidence: np.ndarray, lam: float, sigma_xy: float,
-                      sigma_luma: float, sigma_chroma: float, initial=None):
-    """Barron & Poole's solve with confidence c on the kit's bilateral grid (``guided_fills``); conjugate
-    gradients start from the grid's mean of ``initial`` (H, W) (default: of c·t / c), which is also what a
-    part of the grid that no confident pixel reaches keeps."""
+def _bilateral_system(image: np.ndarray, lam: float, sigma_xy: float, sigma_luma: float, sigma_chroma: float):
+    """Barron & Poole's bilateral grid of ``image`` (H, W, 3) (``guided_fills``) and its smoothness term:
+    (S vertices × pixels, lam · the bistochastic grid Laplacian); one per image and setting, for every solve on it."""
     from scipy import sparse
-    from scipy.sparse.linalg import cg
 
     from ..classical.guided_fills import bilateral_grid, bistochastic
     S, blur = bilateral_grid(np.clip(image, 0.0, 1.0), sigma_xy, sigma_luma, sigma_chroma)
     _, n = bistochastic(S, blur)
-    c, t = confidence.ravel(), values.ravel()
     Dn = sparse.diags(n)
     affinity = Dn @ blur @ Dn
     laplacian = sparse.diags(np.asarray(affinity.sum(axis=1)).ravel()) - affinity
-    A = (lam * laplacian + sparse.diags(S @ c)).tocsr()
+    return S, lam * laplacian
+
+
+def _bilateral_solver(system, values: np.ndarray, confidence: np.ndarray, initial=None):
+    """The solve with confidence c on a :func:`_bilateral_system`; conjugate gradients start from the grid's
+    mean of ``initial`` (H, W) (default: of c·t / c), which is also what a part of the grid that no confident
+    pixel reaches keeps."""
+    from scipy import sparse
+    from scipy.sparse.linalg import cg
+
+    S, smoothness = system
+    c, t = confidence.ravel(), values.ravel()
+    A = (smoothness + sparse.diags(S @ c)).tocsr()
     b = S @ (c * t)
     start = b / np.maximum(S @ c, 1e-12) if initial is None else (S @ initial.ravel()) / np.asarray(S.sum(axis=1)).ravel()
     y, _ = cg(A, b, x0=start, rtol=1e-6, maxiter=500, M=sparse.diags(1.0 / np.maximum(A.diagonal(), 1e-10)))
@@ -160,21 +168,21 @@ def refine_full_resolution(depth, rgb, target, method: str = "bilateral-solver",
     scale = float(np.median(np.where(valid, measured, fitted)))  # the solvers see values near 1, whatever the unit
     measured, fitted = measured / scale, fitted / scale
 
+    system = (_bilateral_system(image, settings["lam"], settings["sigma_xy"], settings["sigma_luma"],
+                                settings["sigma_chroma"]) if method == "bilateral-solver" else None)
+
     def solve(values, confidence):
         if method == "fgs":
             guide = np.round(np.clip(image, 0, 1) * 255).astype(np.uint8)
             return _fgs(guide, values, confidence, settings["lam"], settings["sigma_color"])
         if method == "guided-filter":
             return _guided(image, values, confidence, int(settings["radius"]), settings["eps"])
-        return _bilateral_solver(image, values, confidence, settings["lam"], settings["sigma_xy"],
-                                 settings["sigma_luma"], settings["sigma_chroma"])
+        return _bilateral_solver(system, values, confidence)
 
     if residual:  # the fit's error where it is known, carried into the holes
         error = np.where(valid, measured - fitted, 0.0)
         if method == "bilateral-solver":  # as the bilateral-solver fill: no pull in the holes, from the nearest error
-            carried = _bilateral_solver(image, error, valid.astype(np.float64), settings["lam"], settings["sigma_xy"],
-                                        settings["sigma_luma"], settings["sigma_chroma"],
-                                        initial=nearest_values(error, valid))
+            carried = _bilateral_solver(system, error, valid.astype(np.float64), initial=nearest_values(error, valid))
         else:  # a normalised filter needs some weight everywhere: 0 error where no valid pixel reaches
             carried = solve(error, np.where(valid, 1.0, 1e-6))
         fitted = fitted + np.where(holes, carried, 0.0)
