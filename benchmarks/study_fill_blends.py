@@ -3,6 +3,8 @@ half of the scenes and confirmed on the other.
 
     python benchmarks/study_fill_blends.py --data DIR fit [--seeds 0 1] [--cases Art/sgbm ...]   # the fits (slow)
     python benchmarks/study_fill_blends.py --data DIR fit --channels 8 16 32 64 128 --fits DIR2   # the narrow net
+    python benchmarks/study_fill_blends.py --data DIR fit --set fill_input=1 --fits DIR3          # other settings
+    python benchmarks/study_fill_blends.py --data DIR report --fits DIR3 --core --out R3 --against R  # paired
     python benchmarks/study_fill_blends.py --data DIR report [--seeds 0 1]                        # the rules (minutes)
     python benchmarks/study_fill_blends.py --data DIR report --seeds 0 1 2 --from-rows a.jsonl b.jsonl  # their tables
 
@@ -85,9 +87,10 @@ def held_out_input(case, seed: int) -> tuple[np.ndarray, np.ndarray]:
     return np.where(heldout, np.nan, case.depth).astype(np.float32), heldout
 
 
-def fit(data, names, seeds, fits: Path, variant: str, size: str, channels: tuple | None = None) -> None:
+def fit(data, names, seeds, fits: Path, variant: str, size: str, channels: tuple | None = None,
+        settings: dict | None = None) -> None:
     """One kit fit per case and seed on the held-out input, saved to ``fits`` (``channels``: the net's
-    encoder widths, None → the profile's)."""
+    encoder widths, None → the profile's; ``settings``: other ``FitConfig`` fields, e.g. ``fill_input``)."""
     fits.mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
     for seed in seeds:
@@ -98,7 +101,7 @@ def fit(data, names, seeds, fits: Path, variant: str, size: str, channels: tuple
             case = make_suite_case(data, name, size)
             depth, heldout = held_out_input(case, seed)
             config = FitConfig.for_profile("class", variant=variant, recipe="kit", seed=seed, blend_fill=0.0,
-                                           **({"channels": channels} if channels else {}))
+                                           **({"channels": channels} if channels else {}), **(settings or {}))
             began = time.perf_counter()
             neighbors = case.neighbors if variant == "rgbd+warp" else ()
             result = complete_depth(case.rgb, depth, case.camera, neighbors, variant=variant, config=config,
@@ -114,19 +117,33 @@ def _rmse(estimate: np.ndarray, truth: np.ndarray, mask: np.ndarray) -> float:
     return float(np.sqrt(np.mean((estimate[mask] - truth[mask]) ** 2)))
 
 
-def rules(case, fit_depth: np.ndarray, heldout: np.ndarray, seed: int) -> dict[str, float]:
-    """{rule: hole RMSE in disparity px} for one case and its saved fit (module docstring)."""
+def rules(case, fit_depth: np.ndarray, heldout: np.ndarray, seed: int, core: bool = False) -> dict[str, float]:
+    """{rule: hole RMSE in disparity px} for one case and its saved fit (module docstring); ``core``: only
+    the fills, ``fit``, ``kit``, ``fixed 1.0``, ``refined + 0.25`` and ``mean of 4 solves + 0.25`` (a
+    fifth of the time, enough to compare two sets of fits)."""
     held_depth = np.where(heldout, np.nan, case.depth)
     truth_in = case.fb / case.depth  # (H, W) px disparity of the input, NaN in its holes
     fit_px = case.fb / fit_depth
-    fills_held = {n: f(case.fb / held_depth, case.rgb) for n, f in BASELINES.items()}  # (H, W) px each
-    fills_all = {n: f(truth_in, case.rgb) for n, f in BASELINES.items()}
-    mean_held = np.mean([fills_held[n] for n in FILL_MEMBERS], axis=0)
+    fills_all = {n: f(truth_in, case.rgb) for n, f in BASELINES.items()}  # (H, W) px each
     mean_all = np.mean([fills_all[n] for n in FILL_MEMBERS], axis=0)
     holes = case.scored_holes
 
     def score(px):  # the input where it is valid, px in its holes
         return case.rmse_px(case.fb / np.where(np.isfinite(case.depth), truth_in, px), holes)
+
+    if core:
+        out = {f"fill {n}": score(px) for n, px in fills_all.items()}
+        out["fit"] = score(fit_px)
+        out["kit"] = score((1 - KIT_SHARE) * fit_px + KIT_SHARE * mean_all)
+        out["fixed 1.0"] = score(mean_all)
+        refined = {k: case.fb / refine_full_resolution(case.depth, case.rgb, fit_depth, sigma_xy=k[0], lam=k[1])
+                   for k in SOLVE_MEANS["mean of 4 solves"]}
+        out["refined + 0.25"] = score((1 - KIT_SHARE) * refined[8.0, 4.0] + KIT_SHARE * mean_all)
+        out["mean of 4 solves + 0.25"] = score((1 - KIT_SHARE) * np.mean(list(refined.values()), axis=0)
+                                               + KIT_SHARE * mean_all)
+        return out
+    fills_held = {n: f(case.fb / held_depth, case.rgb) for n, f in BASELINES.items()}
+    mean_held = np.mean([fills_held[n] for n in FILL_MEMBERS], axis=0)
 
     def chosen_share(fill_held):  # the kit's own held-out choice, over shares up to the fill alone
         return best_fill_share(fit_px, fill_held, truth_in, heldout, SHARES)[0]
@@ -167,7 +184,7 @@ def rules(case, fit_depth: np.ndarray, heldout: np.ndarray, seed: int) -> dict[s
 
 
 def report(data, names, seeds, fits: Path, variant: str, size: str, out: Path, from_rows: list[Path],
-           other_fits: Path | None = None) -> None:
+           other_fits: Path | None = None, core: bool = False) -> None:
     rows = [json.loads(line) for path in from_rows for line in path.read_text().splitlines()]
     rows = [r for r in rows if r["seed"] in seeds and r["case"] in names]
     for seed in seeds if not from_rows else ():
@@ -177,7 +194,7 @@ def report(data, names, seeds, fits: Path, variant: str, size: str, out: Path, f
                 continue
             case = make_suite_case(data, name, size)
             with np.load(path) as saved:
-                scores = rules(case, saved["depth"], saved["heldout"], seed)
+                scores = rules(case, saved["depth"], saved["heldout"], seed, core)
                 seconds = float(saved["seconds"])
             rows.append(dict(case=name, seed=seed, variant=variant, size=size, half=half(name), fit_seconds=seconds,
                              **scores))
@@ -192,6 +209,7 @@ def report(data, names, seeds, fits: Path, variant: str, size: str, out: Path, f
         f"refined + {f:g}" for f in REFINED_SHARES] + [f"{f:g}, refined" for f in REFINED_SHARES] + [
         f"solve {s:g},{lam:g} + 0.25" for s, lam in SMOOTHNESS] + ["chosen solve + 0.25"] + [
         f"{name} + 0.25" for name in SOLVE_MEANS]
+    ratio_keys = [k for k in ratio_keys if all(k in r for r in rows)]  # core rows hold a few
     table6 = [f"fill {n}" for n in table6_fills()]
     for r in rows:
         r["best"] = min(r[k] for k in fills)
@@ -215,6 +233,12 @@ def report(data, names, seeds, fits: Path, variant: str, size: str, out: Path, f
             change = [r[key] / r["refined + 0.25"] - 1 for r in rows if keep(r)]
             cells.append(f"{100 * np.mean(change):+.1f}% ({sum(x < 0 for x in change)}/{len(change)})" if change else "-")
         print(f"{key:<26}" + "".join(f"{c:>16}" for c in cells))
+    if not from_rows:
+        print(f"rows to {out}")
+    if other_fits:
+        compare(rows, [json.loads(line) for line in other_fits.read_text().splitlines()], groups)
+    if "chosen share: f" not in rows[0]:
+        return
     shares = defaultdict(list)
     for r in rows:
         shares[r["case"].split("/")[1]].append(r["chosen share: f"])
@@ -231,10 +255,6 @@ def report(data, names, seeds, fits: Path, variant: str, size: str, out: Path, f
     print("solve (sigma_xy, lam) chosen on the held-out blobs, per hole kind: " + "; ".join(
         f"{kind} " + ", ".join(f"({k}) {v}" for k, v in sorted(c.items(), key=lambda kv: -kv[1])[:3])
         for kind, c in solves_chosen.items()))
-    if not from_rows:
-        print(f"rows to {out}")
-    if other_fits:
-        compare(rows, [json.loads(line) for line in other_fits.read_text().splitlines()], groups)
 
 
 def compare(rows: list[dict], others: list[dict], groups) -> None:
@@ -255,6 +275,18 @@ def compare(rows: list[dict], others: list[dict], groups) -> None:
               f"(median of {len(timed)}, as they ran)")
 
 
+def _setting(item: str) -> tuple[str, object]:
+    """``"fill_input=1"`` → ("fill_input", 1.0); a value that is not a number stays a word."""
+    field_name, sep, value = item.partition("=")
+    if not sep or not field_name:
+        raise SystemExit(f"--set: expected FIELD=VALUE, got {item!r}")
+    try:
+        number = float(value)
+    except ValueError:
+        return field_name, value
+    return field_name, int(number) if number.is_integer() and "." not in value else number
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("what", choices=("fit", "report"))
@@ -266,6 +298,10 @@ def main() -> None:
     parser.add_argument("--fits", type=Path, default=RESULTS / "fill_blend_fits")
     parser.add_argument("--channels", type=int, nargs="+",
                         help="fit: the net's encoder widths (default: the profile's; 8 16 32 64 128 is the narrow net)")
+    parser.add_argument("--set", nargs="+", default=[], metavar="FIELD=VALUE",
+                        help="fit: other FitConfig fields of the fits, e.g. fill_input=1 (numbers or words)")
+    parser.add_argument("--core", action="store_true",
+                        help="report: only the rules that compare fits (fit, kit, photo's one and four solves)")
     parser.add_argument("--out", type=Path, default=RESULTS / "fill_blends_eighth.jsonl")
     parser.add_argument("--from-rows", type=Path, nargs="+", default=[],
                         help="report: summarise these rows files (written by earlier reports) instead of scoring")
@@ -280,10 +316,10 @@ def main() -> None:
         names = [n for n in names if n in set(args.cases)]
     if args.what == "fit":
         fit(args.data, names, args.seeds, args.fits, args.variant, args.size,
-            tuple(args.channels) if args.channels else None)
+            tuple(args.channels) if args.channels else None, dict(_setting(item) for item in args.set))
     else:
         report(args.data, names, args.seeds, args.fits, args.variant, args.size, args.out, args.from_rows,
-               args.against)
+               args.against, args.core)
 
 
 if __name__ == "__main__":
