@@ -226,6 +226,18 @@ def report(data, names, seeds, fits: Path, variant: str, size: str, out: Path, f
                 chosen = [r[key] / r[against] for r in rows if keep(r)]
                 cells.append(f"{np.mean(chosen):.3f} ({sum(x < 1 for x in chosen)}/{len(chosen)})" if chosen else "-")
             print(f"{key:<26}" + "".join(f"{c:>16}" for c in cells))
+    for label, pool in (("fill", fills), ("Table 6 method", table6)):
+        print(f"\nagainst the strongest single {label} of each group (the one nearest the best fill of each case "
+              f"on the group's mean): rule's hole RMSE / that {label}'s, mean over cases (on how many below 1.0)")
+        strongest = {g: min((f for f in pool if all(f in r for r in rows)), key=lambda f: np.mean(
+            [r[f] / r["best"] for r in rows if keep(r)] or [np.inf])) for g, keep in groups}
+        print(f"{'':<26}" + "".join(f"{strongest[g][5:]:>18}" for g, _ in groups))
+        for key in ("kit", "refined + 0.25", "mean of 4 solves + 0.25"):
+            cells = []
+            for g, keep in groups:
+                chosen = [r[key] / r[strongest[g]] for r in rows if keep(r)]
+                cells.append(f"{np.mean(chosen):.3f} ({sum(x < 1 for x in chosen)}/{len(chosen)})" if chosen else "-")
+            print(f"{key:<26}" + "".join(f"{c:>18}" for c in cells))
     print(f"\npaired against `photo` (refined + 0.25): mean change of the hole RMSE (lower on how many)")
     for key in ratio_keys:
         cells = []
