@@ -172,6 +172,64 @@ def test_refine_puts_a_blurred_depth_edge_back_on_the_colour_edge():
     assert not FitConfig.for_profile("ci", variant="d", recipe="photo").combination.refine  # depth only: no colour
 
 
+def rim_of_holes(valid):
+    """(H, W) bool: the valid pixels with a hole among their four neighbours, by shifting the hole mask."""
+    hole = np.pad(~valid, 1)
+    return valid & (hole[:-2, 1:-1] | hole[2:, 1:-1] | hole[1:-1, :-2] | hole[1:-1, 2:])
+
+
+def test_a_stereo_input_is_read_without_the_rim_of_its_holes():
+    from ddp_lite.method.kit.blend import trusted_depth
+    depth = tilted_plane(20, 24, slope=0.05)
+    depth[5:12, 6:15] = np.nan
+    depth[16, 20] = np.nan  # a one-pixel hole has a rim too
+    given = depth.copy()
+    stereo = trusted_depth(depth, "stereo")
+    expected = np.isnan(depth) | rim_of_holes(np.isfinite(depth))
+    assert np.array_equal(np.isnan(stereo), expected)
+    assert np.array_equal(stereo[~expected], depth[~expected])
+    assert trusted_depth(depth) is depth and np.array_equal(depth, given, equal_nan=True)  # clean: all of it, untouched
+    small = np.ones((4, 4), np.float32)
+    small[1, 1] = np.nan  # the rim would leave fewer than 16 valid pixels: read as it is
+    assert np.array_equal(trusted_depth(small, "stereo"), small, equal_nan=True)
+    with pytest.raises(ValueError, match="source must be one of"):
+        trusted_depth(depth, "kinect")
+    with pytest.raises(ValueError, match="config.depth_source must be one of"):
+        FitConfig(depth_source="sgbm").validate()
+
+
+def test_a_stereo_photo_does_not_carry_a_wrong_rim_into_the_hole():
+    # a matcher's rim: the valid pixels around the hole hold a nearer surface's depth (1.5 m on a 2 m
+    # plane), as a stereo matcher's foreground fattening leaves them; the stereo photo reads past that rim
+    # (the solves of SMOOTHNESS_STEREO and the fill on the trusted depth) and gives the rim back as given
+    from ddp_lite.method.full_resolution import SMOOTHNESS_STEREO, refine_full_resolution
+    truth = tilted_plane(28, 36, slope=0.02) + 1.0
+    depth = truth.copy()
+    depth[8:20, 10:26] = np.nan
+    rim = rim_of_holes(np.isfinite(depth))
+    depth[rim] = 1.5
+    rgb = np.random.default_rng(4).random(depth.shape + (3,)).astype(np.float32)
+    photo = FitConfig.for_profile("ci", variant="rgbd", recipe="photo", iterations=8)
+    clean = complete_depth(rgb, depth, variant="rgbd", config=photo)
+    stereo = complete_depth(rgb, depth, variant="rgbd", config=photo.replace(depth_source="stereo"),
+                            transform=clean.transform)
+    holes = np.isnan(depth)
+
+    def hole_error(result):
+        return np.abs(1 / result.depth[holes] - 1 / truth[holes]).mean()  # 1/m
+    assert hole_error(stereo) < 0.5 * hole_error(clean)
+    assert np.allclose(stereo.depth[~holes], depth[~holes], rtol=1e-5)  # the wrong rim too, as given
+    alone = complete_depth(rgb, depth, variant="rgbd", transform=clean.transform,
+                           config=photo.replace(refine=False, blend_fill=0.0))
+    trusted = np.where(rim, np.nan, depth)
+    transform = clean.transform
+    sharp = np.mean([transform.to_disparity(refine_full_resolution(trusted, rgb, alone.depth, sigma_xy=s, lam=lam))
+                     for s, lam in SMOOTHNESS_STEREO], axis=0)
+    fill = two_fills_disparity(trusted, rgb, transform)
+    share = photo.combination.blend_fill
+    assert np.allclose(stereo.disparity[holes], ((1 - share) * sharp + share * fill)[holes], atol=1e-5)
+
+
 def fill_case(seed):
     """A tilted plane with one hole, a random colour image and a short `ci` config of the fit alone: (depth, rgb, config)."""
     depth = tilted_plane(24, 32, slope=0.05)

@@ -20,7 +20,7 @@ DEFAULTS = dict(
     warp_occlusion=False, warp_confidence=False, warp_reach=None, warp_cost='intensity', warp_texture=False,
     warp_combine='mean',
     # combination
-    ensemble=1, blend_paper=False, blend_weight=0.5, blend_fill=0.0, refine=False,
+    ensemble=1, blend_paper=False, blend_weight=0.5, blend_fill=0.0, refine=False, depth_source='clean',
     # stopping
     auto_stop=False, holdout_fraction=0.05, holdout='pixels', patience=200, plateau_decays=0, eval_every=10,
     # tricks

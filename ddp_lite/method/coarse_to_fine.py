@@ -147,6 +147,6 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
                                  best_iteration=coarse.iterations + fine.best_iteration,
                                  seconds=coarse.seconds + fine.seconds)
     if config.combination.refine:
-        result = refined(result, depth, rgb)
+        result = refined(result, depth, rgb, config.combination.depth_source)
     target = inputs.transform.to_disparity(inputs.depth)  # (H, W), NaN holes: what the held-out blobs are judged by
     return with_fill_share(result, inputs, seen, config, blobs, target)

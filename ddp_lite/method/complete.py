@@ -20,9 +20,9 @@ from dataclasses import replace
 
 import numpy as np
 
-from .kit.blend import best_fill_share, best_weight, fill_disparity, fill_holdout, validation_ring
+from .kit.blend import best_fill_share, best_weight, fill_disparity, fill_holdout, trusted_depth, validation_ring
 from .fit_cache import cached
-from .full_resolution import refine_over_smoothness
+from .full_resolution import SMOOTHNESS_MEAN, SMOOTHNESS_STEREO, refine_over_smoothness
 from ..core.camera import Camera
 from ..core.checks import MIN_VALID_PIXELS
 from .config import FitConfig
@@ -35,7 +35,7 @@ from .fit import DepthResult, check_run, run_fit
 from .kit.recipes import get_recipe
 
 __all__ = ["complete_depth", "fill_heldout", "held_out", "with_fill_share", "blend_members", "blended_result",
-           "combined_result", "refined", "mixed_with_fill"]
+           "combined_result", "refined", "input_fill", "mixed_with_fill", "SOLVE_SETTINGS"]
 
 
 @cached(like="depth", types=(DepthResult, DisparityTransform))
@@ -85,7 +85,7 @@ def complete_depth(rgb, depth, camera: Camera | None = None, neighbors=(), varia
                             len(members), workers)
     result = _combined(fits, config, ring, target)
     if config.combination.refine:
-        result = refined(result, seen.depth, seen.rgb)
+        result = refined(result, seen.depth, seen.rgb, config.combination.depth_source)
     return with_fill_share(result, inputs, seen, config, blobs, target)
 
 
@@ -153,30 +153,36 @@ def with_fill_share(result: DepthResult, inputs: FitInputs, seen: FitInputs, con
     (the input depth in normalised disparity, (H, W)) on the held-out blobs
     (:func:`~ddp_lite.method.kit.blend.best_fill_share`; ``history`` gets ``blend_fill_errors``, RMSE per share),
     or 0 where none were held out."""
-    share, errors = config.combination.blend_fill, None
+    share, errors, source = config.combination.blend_fill, None, config.combination.depth_source
     if share == 0:
         return result
     if share is None and heldout is None:
         share = 0.0
     elif share is None:
-        share, errors = best_fill_share(result.disparity, fill_disparity(seen.depth, seen.rgb, result.transform),
+        share, errors = best_fill_share(result.disparity, input_fill(seen.depth, seen.rgb, result.transform, source),
                                         target, heldout)
-    mixed = mixed_with_fill(result, inputs.depth, inputs.rgb, share)
+    mixed = mixed_with_fill(result, inputs.depth, inputs.rgb, share, source)
     if errors is not None:
         mixed.history["blend_fill_errors"] = errors
     return mixed
 
 
-def refined(result: DepthResult, depth: np.ndarray, rgb: np.ndarray) -> DepthResult:
+SOLVE_SETTINGS = {"clean": SMOOTHNESS_MEAN, "stereo": SMOOTHNESS_STEREO}  # depth_source → the solves refined averages
+
+
+def refined(result: DepthResult, depth: np.ndarray, rgb: np.ndarray, source: str = "clean") -> DepthResult:
     """``config.combination.refine``: ``result`` made sharp at its own size, its depth the target of the
     image-guided edge-aware solve of :func:`~ddp_lite.method.full_resolution.refine_full_resolution` (the
     fast bilateral solver: confidence 1 on the valid input ``depth`` (H, W) metres, NaN holes, and 0.01 on
     the fit in the holes, after the fit's own error on the valid pixels is carried into them), guided by
-    ``rgb`` (H, W, 3) in [0, 1], averaged over four smoothness settings (``refine_over_smoothness``). The
-    valid input comes back as given; ``history`` gets ``refined``.
+    ``rgb`` (H, W, 3) in [0, 1], averaged over four smoothness settings (``refine_over_smoothness``;
+    ``SOLVE_SETTINGS[source]``). A ``"stereo"`` ``source``'s rim is not read (``kit.blend.trusted_depth``).
+    The valid input comes back as given; ``history`` gets ``refined``.
     A fit blurs depth edges a few pixels wide; the solve puts them on the image's colour edges."""
     transform = result.transform
-    sharp = refine_over_smoothness(depth, rgb, result.depth)  # (H, W) metres
+    sharp = refine_over_smoothness(trusted_depth(depth, source), rgb, result.depth, SOLVE_SETTINGS[source])
+    if source != "clean":  # the rim the solve did not read, as given
+        sharp = np.where(np.isfinite(depth), depth, sharp)  # (H, W) metres
     disparity = np.asarray(transform.to_disparity(sharp), np.float32)
     return replace(result, disparity=disparity, depth=transform.to_depth(disparity).astype(np.float32),
                    history={**result.history, "refined": True})
@@ -206,13 +212,25 @@ def blend_members(config: FitConfig) -> tuple[FitConfig, FitConfig]:
     return own, own.replace(**get_recipe("paper").overrides)
 
 
-def mixed_with_fill(result: DepthResult, depth: np.ndarray, rgb: np.ndarray, share: float) -> DepthResult:
+def input_fill(depth: np.ndarray, rgb: np.ndarray, transform, source: str = "clean") -> np.ndarray:
+    """(H, W) float32: the colour-guided fill of the input ``depth`` (H, W) metres (NaN holes) that the kit
+    mixes in, in ``transform``'s normalised disparity (:func:`ddp_lite.method.kit.blend.fill_disparity`),
+    read without a ``"stereo"`` ``source``'s rim (``kit.blend.trusted_depth``); the valid input as given."""
+    fill = fill_disparity(trusted_depth(depth, source), rgb, transform)
+    if source == "clean":
+        return fill
+    return np.where(np.isfinite(depth), np.asarray(transform.to_disparity(depth), np.float32), fill)
+
+
+def mixed_with_fill(result: DepthResult, depth: np.ndarray, rgb: np.ndarray, share: float,
+                    source: str = "clean") -> DepthResult:
     """``result`` with ``share`` of the colour-guided fill of the input ``depth`` (H, W) metres (NaN holes),
     guided by ``rgb`` (H, W, 3), mixed into its disparity: (1 − share)·Z + share·Z_fill, in the result's
-    transform (:func:`ddp_lite.method.kit.blend.fill_disparity`). ``history`` gets ``blend_fill``."""
+    transform (:func:`input_fill`, which reads a ``source``'s depth as ``refined`` does). ``history`` gets
+    ``blend_fill``."""
     transform = result.transform
     disparity = result.disparity
     if share > 0:  # (share 0 leaves the fit's output as it is, bit for bit)
-        disparity = ((1.0 - share) * disparity + share * fill_disparity(depth, rgb, transform)).astype(np.float32)
+        disparity = ((1.0 - share) * disparity + share * input_fill(depth, rgb, transform, source)).astype(np.float32)
     return replace(result, disparity=disparity, depth=transform.to_depth(disparity).astype(np.float32),
                    history={**result.history, "blend_fill": share})

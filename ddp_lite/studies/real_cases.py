@@ -225,7 +225,7 @@ def _plain_fits(case: RealCase, variant: str, configs: list, options: RunOptions
     for config in configs:
         if config.combination.blend_fill is None:
             continue  # its share is chosen on depth held out of the fit: a fit of its own
-        base = config.replace(blend_fill=0.0, refine=False)
+        base = config.replace(blend_fill=0.0, refine=False, depth_source="clean")
         blend = base.combination
         if blend.blend_paper and blend.blend_weight is not None and all(m in planned for m in blend_members(base)):
             continue
@@ -248,7 +248,7 @@ def _fit_reusing(case: RealCase, variant: str, config: FitConfig, fitted: list, 
         neighbors = case.neighbors if variant == "rgbd+warp" else ()
         return complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant, config=config,
                               options=options)
-    base = config.replace(blend_fill=0.0, refine=False)
+    base = config.replace(blend_fill=0.0, refine=False, depth_source="clean")
     same = [result for c, result in fitted if c == base]
     if same:
         result = same[0]
@@ -256,8 +256,8 @@ def _fit_reusing(case: RealCase, variant: str, config: FitConfig, fitted: list, 
         done = [result for wanted in blend_members(base) for c, result in fitted if c == wanted]
         result = blended_result(done, done[0].transform, base.combination.blend_weight)
     if config.combination.refine:
-        result = refined(result, case.depth, case.rgb)
-    return mixed_with_fill(result, case.depth, case.rgb, share) if share else result
+        result = refined(result, case.depth, case.rgb, config.combination.depth_source)
+    return mixed_with_fill(result, case.depth, case.rgb, share, config.combination.depth_source) if share else result
 
 
 def _cropped(scene: Scene) -> Scene:
