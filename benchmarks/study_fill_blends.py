@@ -36,7 +36,11 @@ f·fill``):
 - ``solve s,λ + ¼``: the refinement with the bilateral solver's spatial reach ``sigma_xy`` = s px and
   smoothness ``lam`` = λ (the default is 8, 4), then ¼ of the mean fill; ``chosen solve + ¼``: the (s, λ) that
   best predicts the held-out blobs (the refinement run on the held-out input); ``mean of 4 / 9 solves + ¼``:
-  the refinements over s ∈ {4, 8} × λ ∈ {4, 16} (or all nine) averaged in disparity, then ¼ of the fill.
+  the refinements over s ∈ {4, 8} × λ ∈ {4, 16} (or all nine) averaged in disparity, then ¼ of the fill;
+- ``stereo solves + 0.25``: ``depth_source="stereo"``, for a matcher's depth: the solves and the fill
+  read the input without the 1 px rim of its holes (``kit.blend.trusted_depth``), the solves over s ∈ {8, 16}
+  × λ ∈ {4, 16} (``SMOOTHNESS_STEREO``); ``photo by source``: that rule where the input is SGBM's
+  depth, the mean of 4 where it is the ground truth with holes (blobs, occlusions, Plastic's strokes).
 
 Each rule's hole RMSE over the best fill of the case (the suite's yardstick), means per hole kind, per
 half (A: Art, Dolls, Moebius, Baby1, Baby3, Bowling2, Adirondack, Jadeplant, Pipes, Playtable;
@@ -61,8 +65,8 @@ from ddp_lite.core.files import atomic_path, write_bytes_atomic  # noqa: E402
 from ddp_lite.method.complete import complete_depth  # noqa: E402
 from ddp_lite.method.config import FitConfig  # noqa: E402
 from ddp_lite.method.runtime.options import RunOptions  # noqa: E402
-from ddp_lite.method.full_resolution import refine_full_resolution  # noqa: E402
-from ddp_lite.method.kit.blend import FILL_MEMBERS, best_fill_share, fill_holdout  # noqa: E402
+from ddp_lite.method.full_resolution import SMOOTHNESS_STEREO, refine_full_resolution, refine_over_smoothness  # noqa: E402
+from ddp_lite.method.kit.blend import FILL_MEMBERS, best_fill_share, fill_holdout, trusted_depth  # noqa: E402
 from bench_real import table6_fills  # noqa: E402
 from ddp_lite.studies.real_suite import SUITE_HOLES, make_suite_case, suite_case_names  # noqa: E402
 
@@ -73,6 +77,9 @@ KIT_SHARE = 0.25
 REFINE_CONFIDENCES = (0.01, 0.1)
 REFINED_SHARES = (0.25, 0.5, 0.7)
 SMOOTHNESS = tuple((s, lam) for s in (4.0, 8.0, 16.0) for lam in (1.0, 4.0, 16.0))  # the solve's (sigma_xy px, lam)
+STEREO_RULE = "stereo solves + 0.25"  # depth_source="stereo": the rim not read, SMOOTHNESS_STEREO
+BY_SOURCE_RULE = "photo by source"  # the stereo rule on a matcher's depth (sgbm), the mean of 4 elsewhere
+STEREO_KINDS = ("sgbm",)  # the hole kinds whose input is a stereo matcher's depth
 SOLVE_MEANS = {"mean of 4 solves": ((4.0, 4.0), (4.0, 16.0), (8.0, 4.0), (8.0, 16.0)), "mean of 9 solves": SMOOTHNESS}
 
 
@@ -131,8 +138,13 @@ def rules(case, fit_depth: np.ndarray, heldout: np.ndarray, seed: int, core: boo
     def score(px):  # the input where it is valid, px in its holes
         return case.rmse_px(case.fb / np.where(np.isfinite(case.depth), truth_in, px), holes)
 
+    trusted = trusted_depth(case.depth, "stereo")  # the input without the 1 px rim of its holes
+    stereo_fill = np.mean([BASELINES[n](case.fb / trusted, case.rgb) for n in FILL_MEMBERS], axis=0)
+    stereo = case.fb / refine_over_smoothness(trusted, case.rgb, fit_depth, SMOOTHNESS_STEREO)
+    stereo_rule = {STEREO_RULE: score((1 - KIT_SHARE) * stereo + KIT_SHARE * stereo_fill)}
     if core:
         out = {f"fill {n}": score(px) for n, px in fills_all.items()}
+        out.update(stereo_rule)
         out["fit"] = score(fit_px)
         out["kit"] = score((1 - KIT_SHARE) * fit_px + KIT_SHARE * mean_all)
         out["fixed 1.0"] = score(mean_all)
@@ -149,6 +161,7 @@ def rules(case, fit_depth: np.ndarray, heldout: np.ndarray, seed: int, core: boo
         return best_fill_share(fit_px, fill_held, truth_in, heldout, SHARES)[0]
 
     out = {f"fill {n}": score(px) for n, px in fills_all.items()}
+    out.update(stereo_rule)
     out["fit"] = score(fit_px)
     out["kit"] = score((1 - KIT_SHARE) * fit_px + KIT_SHARE * mean_all)
     for f in SHARES[1:]:
@@ -208,12 +221,15 @@ def report(data, names, seeds, fits: Path, variant: str, size: str, out: Path, f
         "chosen share", "chosen fill", "chosen fill + share"] + [f"refined c={c:g}" for c in REFINE_CONFIDENCES] + [
         f"refined + {f:g}" for f in REFINED_SHARES] + [f"{f:g}, refined" for f in REFINED_SHARES] + [
         f"solve {s:g},{lam:g} + 0.25" for s, lam in SMOOTHNESS] + ["chosen solve + 0.25"] + [
-        f"{name} + 0.25" for name in SOLVE_MEANS]
-    ratio_keys = [k for k in ratio_keys if all(k in r for r in rows)]  # core rows hold a few
+        f"{name} + 0.25" for name in SOLVE_MEANS] + [STEREO_RULE, BY_SOURCE_RULE]
     table6 = [f"fill {n}" for n in table6_fills()]
     for r in rows:
         r["best"] = min(r[k] for k in fills)
+        if STEREO_RULE in r:
+            stereo_input = r["case"].split("/")[1] in STEREO_KINDS
+            r[BY_SOURCE_RULE] = r[STEREO_RULE] if stereo_input else r["mean of 4 solves + 0.25"]
         r["best Table 6"] = min(r[k] for k in table6 if k in r)
+    ratio_keys = [k for k in ratio_keys if all(k in r for r in rows)]  # core rows hold a few
     groups = [("A", lambda r: r["half"] == "A"), ("B", lambda r: r["half"] == "B")] + [
         (kind, lambda r, k=kind: r["case"].endswith("/" + k)) for kind in SUITE_HOLES] + [("all", lambda r: True)]
     for against in ("best", "best Table 6"):
@@ -232,7 +248,7 @@ def report(data, names, seeds, fits: Path, variant: str, size: str, out: Path, f
         strongest = {g: min((f for f in pool if all(f in r for r in rows)), key=lambda f: np.mean(
             [r[f] / r["best"] for r in rows if keep(r)] or [np.inf])) for g, keep in groups}
         print(f"{'':<26}" + "".join(f"{strongest[g][5:]:>18}" for g, _ in groups))
-        for key in ("kit", "refined + 0.25", "mean of 4 solves + 0.25"):
+        for key in [k for k in ("kit", "refined + 0.25", "mean of 4 solves + 0.25", BY_SOURCE_RULE) if k in ratio_keys]:
             cells = []
             for g, keep in groups:
                 chosen = [r[key] / r[strongest[g]] for r in rows if keep(r)]
@@ -275,7 +291,8 @@ def compare(rows: list[dict], others: list[dict], groups) -> None:
     pairs = [(r, other[r["case"], r["seed"]]) for r in rows if (r["case"], r["seed"]) in other]
     print(f"\npaired against the other fits ({len(pairs)} case-seeds): mean change of the hole RMSE (lower on how many)")
     print(f"{'rule':<26}" + "".join(f"{g:>16}" for g, _ in groups))
-    for key in ("fit", "kit", "refined + 0.25", "mean of 4 solves + 0.25"):
+    for key in [k for k in ("fit", "kit", "refined + 0.25", "mean of 4 solves + 0.25", BY_SOURCE_RULE)
+                if all(k in r and k in o for r, o in pairs)]:
         cells = []
         for _, keep in groups:
             change = [r[key] / o[key] - 1 for r, o in pairs if keep(r)]

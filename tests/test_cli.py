@@ -246,6 +246,34 @@ def test_complete_keeps_valid_pixels_exactly_fills_the_holes_and_writes_a_previe
     assert np.isfinite(raw).all() and not np.array_equal(raw[valid], depth[valid])  # the net's own output
 
 
+def test_complete_with_a_stereo_depth_source_does_not_carry_a_wrong_rim_into_the_holes(tmp_path, capsys):
+    # a matcher's rim: 3 px of valid depth around the hole hold a nearer surface's depth, as SGBM's foreground
+    # fattening leaves them; at a working size a third of the photo's that is the 1 px rim the stereo source skips
+    H, W = 48, 96
+    gt = _plane(H, W)
+    depth = gt.copy()
+    depth[16:32, 36:60] = np.nan
+    hole = np.isnan(depth)
+    rim = __import__("scipy").ndimage.binary_dilation(hole, iterations=3) & ~hole
+    depth[rim] = 1.2
+    v, u = np.mgrid[0:H, 0:W]
+    cv2.imwrite(str(tmp_path / "rgb.png"), (np.stack([u / W, v / H, 0.5 + 0 * u], -1)[..., ::-1] * 255).astype(np.uint8))
+    np.save(tmp_path / "depth.npy", depth)
+    argv = ["complete", "--rgb", str(tmp_path / "rgb.png"), "--depth", str(tmp_path / "depth.npy"),
+            "--profile", "ci", "--iterations", "20", "--max-side", "32"]
+    errors = {}
+    for source in ("clean", "stereo"):
+        assert main(argv + ["--depth-source", source, "--out", str(tmp_path / f"{source}.npy")]) == 0
+        filled = np.load(tmp_path / f"{source}.npy")
+        assert np.array_equal(filled[~hole], depth[~hole])  # the wrong rim too, as given
+        errors[source] = np.abs(1 / filled[hole] - 1 / gt[hole]).mean()  # 1/m
+    assert errors["stereo"] < 0.5 * errors["clean"], errors
+    capsys.readouterr()
+    with pytest.raises(SystemExit):
+        main(argv + ["--depth-source", "kinect", "--out", str(tmp_path / "x.npy")])
+    assert "--depth-source" in capsys.readouterr().err
+
+
 def test_complete_refuses_a_gt_with_nothing_in_the_holes_before_the_fit(tmp_path, capsys, monkeypatch):
     depth, gt = _pair(tmp_path)
     np.save(tmp_path / "gt.npy", np.where(np.isfinite(depth), gt, np.nan))  # known only where the input is

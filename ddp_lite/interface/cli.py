@@ -186,6 +186,10 @@ def build_parser() -> argparse.ArgumentParser:
     complete.add_argument("--no-refine", action="store_true",
                           help="bring the fit back to full size by up-sampling alone, without sharpening it at "
                                "full size along the photo's edges (default: sharpened; --raw implies this)")
+    complete.add_argument("--depth-source", choices=("clean", "stereo"), default="clean",
+                          help="where --depth came from: 'stereo' for a stereo matcher's depth, whose holes have "
+                               "a rim it often got wrong: the fill and the sharpening do not read that rim and "
+                               "reach further (default 'clean': every valid pixel trusted)")
     complete.add_argument("--preview", default=None,
                           help="preview figure: input, filled, holes, and with --gt the error map "
                                "(default: OUT's name with .preview.png)")

@@ -104,17 +104,18 @@ class CombinationConfig(Settings):
             check_real(self.blend_fill, "config.blend_fill", 0.0, 1.0, high_open=True)  # 1 would be the fill alone
 
 
-def trusted_depth(depth: np.ndarray, source: str = "clean") -> np.ndarray:
+def trusted_depth(depth: np.ndarray, source: str = "clean", scale: float = 1.0) -> np.ndarray:
     """``depth`` (H, W) metres, NaN holes, with the valid pixels within ``RIM_DISTRUST[source]`` px of a hole
-    (4-connected steps) made holes too: what the steps after the fit read of a ``source``'s depth. A copy;
-    ``depth`` itself where nothing is distrusted, or where too little valid depth would be left.
+    (4-connected steps; × ``scale`` rounded, for an image ``scale`` times the working size) made holes too:
+    what the steps after the fit read of a ``source``'s depth. A copy; ``depth`` itself where nothing is
+    distrusted, or where too little valid depth would be left.
 
     Example:
         >>> depth = np.ones((5, 5), np.float32); depth[2, 2] = np.nan
         >>> int(np.isnan(trusted_depth(depth, "stereo")).sum()), int(np.isnan(trusted_depth(depth)).sum())
         (5, 1)
     """
-    width = RIM_DISTRUST[check_choice(source, "source", DEPTH_SOURCES)]
+    width = int(round(RIM_DISTRUST[check_choice(source, "source", DEPTH_SOURCES)] * check_real(scale, "scale", 1.0)))
     hole = ~np.isfinite(depth)
     if width == 0 or not hole.any():
         return depth
