@@ -17,6 +17,9 @@ A profile (``ci``, ``class``, ``paper``; ``DDP_PROFILE``) sets the size and the 
   size, averaged over four smoothness settings), with the kit's share of the colour-guided fill: one fit,
   0.98× the best fill of each case on the mean of the real suite's 61 cases over three seeds
   (``docs/real_suite.md``). ``ddp-lite complete`` runs one such solve at the photo's full size instead.
+  For a stereo matcher's depth, ``depth_source="stereo"`` (``FitConfig`` field; ``complete --depth-source``):
+  the solves and the fill do not read the rim of its holes, which the matcher often got wrong, and reach
+  twice as far (:mod:`ddp_lite.method.kit.blend`).
 
 Every profile runs with every recipe, so ``FitConfig.for_profile("ci", recipe="paper")`` is the
 paper's method in seconds. The quality study's other recipes are ``benchmarks/study_recipes.py``;
