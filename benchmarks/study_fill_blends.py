@@ -225,9 +225,7 @@ def report(data, names, seeds, fits: Path, variant: str, size: str, out: Path, f
     table6 = [f"fill {n}" for n in table6_fills()]
     for r in rows:
         r["best"] = min(r[k] for k in fills)
-        if STEREO_RULE in r:
-            stereo_input = r["case"].split("/")[1] in STEREO_KINDS
-            r[BY_SOURCE_RULE] = r[STEREO_RULE] if stereo_input else r["mean of 4 solves + 0.25"]
+        by_source(r)
         r["best Table 6"] = min(r[k] for k in table6 if k in r)
     ratio_keys = [k for k in ratio_keys if all(k in r for r in rows)]  # core rows hold a few
     groups = [("A", lambda r: r["half"] == "A"), ("B", lambda r: r["half"] == "B")] + [
@@ -285,8 +283,18 @@ def report(data, names, seeds, fits: Path, variant: str, size: str, out: Path, f
         for kind, c in solves_chosen.items()))
 
 
+def by_source(row: dict) -> None:
+    """Add the ``photo by source`` rule to a row that has the stereo rule: that rule where the case's input is a
+    stereo matcher's depth, the mean of 4 solves elsewhere."""
+    if STEREO_RULE in row:
+        stereo_input = row["case"].split("/")[1] in STEREO_KINDS
+        row[BY_SOURCE_RULE] = row[STEREO_RULE] if stereo_input else row["mean of 4 solves + 0.25"]
+
+
 def compare(rows: list[dict], others: list[dict], groups) -> None:
     """Paired: each rule's hole RMSE in ``rows`` against the same case and seed in ``others`` (other fits)."""
+    for row in others:
+        by_source(row)
     other = {(r["case"], r["seed"]): r for r in others}
     pairs = [(r, other[r["case"], r["seed"]]) for r in rows if (r["case"], r["seed"]) in other]
     print(f"\npaired against the other fits ({len(pairs)} case-seeds): mean change of the hole RMSE (lower on how many)")
