@@ -7,6 +7,7 @@ half of the scenes and confirmed on the other.
     python benchmarks/study_fill_blends.py --data DIR report --fits DIR3 --core --out R3 --against R  # paired
     python benchmarks/study_fill_blends.py --data DIR report [--seeds 0 1]                        # the rules (minutes)
     python benchmarks/study_fill_blends.py --data DIR report --seeds 0 1 2 --from-rows a.jsonl b.jsonl  # their tables
+    python benchmarks/study_fill_blends.py --data DIR stereo-grid --seeds 0 1 2 --out R4           # a matcher's depth
 
 The best classical fill differs from case to case (the bilateral solver on most, colorization on
 occlusions, the guided filter on Plastic's strokes), so "DDP over the best fill" compares DDP with an
@@ -59,6 +60,7 @@ from pathlib import Path
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
+from scipy import ndimage  # noqa: E402
 
 from ddp_lite.classical.baselines import BASELINES  # noqa: E402
 from ddp_lite.core.files import atomic_path, write_bytes_atomic  # noqa: E402
@@ -283,6 +285,51 @@ def report(data, names, seeds, fits: Path, variant: str, size: str, out: Path, f
         for kind, c in solves_chosen.items()))
 
 
+STEREO_GRID = {"mean of 4": None, "one (16, 16)": ((16.0, 16.0),), "stereo 4": SMOOTHNESS_STEREO}  # None: the mean
+RIMS = (0, 1, 2)  # px of the rim not read
+
+
+def stereo_grid(data, names, seeds, fits: Path, variant: str, size: str, out: Path) -> None:
+    """How a stereo matcher's depth was chosen for: on the cases whose input is SGBM's, the solves of
+    ``STEREO_GRID`` on the input without a rim of ``RIMS`` px (the fill read likewise), then ¼ of that fill;
+    each over the best fill of the case, per half. Rows to ``out``."""
+    from ddp_lite.method.full_resolution import SMOOTHNESS_MEAN
+    rows = []
+    for seed in seeds:
+        for name in names:
+            path = fits / f"{name.replace('/', '__')}__{variant}__{seed}.npz"
+            if name.split("/")[1] not in STEREO_KINDS or not path.exists():
+                continue
+            case = make_suite_case(data, name, size)
+            with np.load(path) as saved:
+                fit_depth = saved["depth"]
+            valid = np.isfinite(case.depth)
+            truth_in = case.fb / case.depth
+
+            def score(px):
+                return case.rmse_px(case.fb / np.where(valid, truth_in, px), case.scored_holes)
+            row = dict(case=name, seed=seed, half=half(name),
+                       best=min(score(f(truth_in, case.rgb)) for f in BASELINES.values()))
+            for rim in RIMS:
+                depth = np.where(ndimage.binary_dilation(~valid, iterations=rim), np.nan, case.depth) if rim else case.depth
+                fill = np.mean([BASELINES[n](case.fb / depth, case.rgb) for n in FILL_MEMBERS], axis=0)
+                for label, settings in STEREO_GRID.items():
+                    solve = case.fb / refine_over_smoothness(depth, case.rgb, fit_depth, settings or SMOOTHNESS_MEAN)
+                    row[f"rim {rim}, {label}"] = score((1 - KIT_SHARE) * solve + KIT_SHARE * fill)
+            rows.append(row)
+            print(f"{name:<22} seed {seed}", flush=True)
+    write_bytes_atomic(out, "".join(json.dumps(r) + "\n" for r in rows).encode())
+    keys = [k for k in rows[0] if k.startswith("rim ")]
+    print(f"\n{len(rows)} case-seeds of a matcher's depth; hole RMSE / the best fill's, mean (on how many below 1.0)")
+    for key in keys:
+        cells = []
+        for h in ("A", "B"):
+            ratios = [r[key] / r["best"] for r in rows if r["half"] == h]
+            cells.append(f"{np.mean(ratios):.3f} ({sum(x < 1 for x in ratios)}/{len(ratios)})")
+        print(f"{key:<26}" + "".join(f"{c:>16}" for c in cells))
+    print(f"rows to {out}")
+
+
 def by_source(row: dict) -> None:
     """Add the ``photo by source`` rule to a row that has the stereo rule: that rule where the case's input is a
     stereo matcher's depth, the mean of 4 solves elsewhere."""
@@ -326,7 +373,7 @@ def _setting(item: str) -> tuple[str, object]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("what", choices=("fit", "report"))
+    parser.add_argument("what", choices=("fit", "report", "stereo-grid"))
     parser.add_argument("--data", required=True, help="a folder of Middlebury scenes with ground truth")
     parser.add_argument("--seeds", type=int, nargs="+", default=[0])
     parser.add_argument("--cases", nargs="+", help="scene/holes names; default: the whole suite")
@@ -354,6 +401,8 @@ def main() -> None:
     if args.what == "fit":
         fit(args.data, names, args.seeds, args.fits, args.variant, args.size,
             tuple(args.channels) if args.channels else None, dict(_setting(item) for item in args.set))
+    elif args.what == "stereo-grid":
+        stereo_grid(args.data, names, args.seeds, args.fits, args.variant, args.size, args.out)
     else:
         report(args.data, names, args.seeds, args.fits, args.variant, args.size, args.out, args.from_rows,
                args.against, args.core)
