@@ -54,6 +54,7 @@ EXAMPLES = {
   ddp-lite complete --rgb rgb.png --depth depth.png --depth-scale 0.001 --out filled.npy
   ddp-lite complete --rgb rgb.png --depth depth.npy --out filled.png --gt gt.npy   # also the hole RMSE
   ddp-lite complete --rgb rgb.png --depth depth.pfm --out filled.pfm --max-side 256 --raw
+  ddp-lite complete --rgb left.png --depth sgbm.pfm --out filled.pfm --depth-source stereo  # a matcher's depth
   ddp-lite complete --rgb rgb.png --depth depth.png --depth-scale 0.001 --out filled.npy \\
                     --intrinsics 615.2,615.0,320.5,240.1                  # + filled.ply, one RGB-D frame""",
     "sequence": """examples:
