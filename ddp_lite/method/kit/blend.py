@@ -41,9 +41,9 @@ sees colour (:data:`~ddp_lite.method.kit.recipes.KIT_AT`). On the real suite's 6
 share helps the fit alone more (f = 0.8: 1.02× the best fill against 1.18× at ¼), but the fit made sharp
 first (``refine``, the ``photo`` recipe) does better at ¼ (``docs/real_suite.md``).
 
-``depth_source`` says where the input depth came from. A stereo matcher's holes have a rim it got
-wrong more often than not-quite: on the real suite's SGBM depth, 16 % of the valid pixels within 2 px of a
-hole are more than 1 px off, against 1.7 % further in, and the fit, which reproduces the valid pixels,
+``depth_source`` says where the input depth came from. A stereo matcher's holes have a rim it often
+got wrong: on the real suite's SGBM depth, 16 % of the valid pixels within 2 px of a hole are more than
+1 px off, against 1.7 % further in, and the fit, which reproduces the valid pixels,
 cannot tell. With ``"stereo"`` the steps after the fit (the fill mixed in, the ``refine`` solve) do not
 read the valid pixels within :data:`RIM_DISTRUST` px of a hole (:func:`trusted_depth`); the answer keeps
 them as given.
@@ -61,8 +61,8 @@ from scipy import ndimage
 from ...core.checks import MIN_VALID_PIXELS, check_bool, check_choice, check_int, check_real
 from ...core.settings import Settings
 
-__all__ = ["CombinationConfig", "DEPTH_SOURCES", "RIM_DISTRUST", "trusted_depth", "BLEND_WEIGHTS", "FILL_SHARES", "validation_ring", "best_weight", "ring_width",
-           "fill_disparity", "FILL_MEMBERS", "fill_holdout", "best_fill_share"]
+__all__ = ["CombinationConfig", "DEPTH_SOURCES", "RIM_DISTRUST", "trusted_depth", "BLEND_WEIGHTS", "FILL_SHARES",
+           "validation_ring", "best_weight", "ring_width", "fill_disparity", "FILL_MEMBERS", "fill_holdout", "best_fill_share"]
 
 BLEND_WEIGHTS = (0.0, 0.25, 0.5, 0.75, 1.0)  # the kit fit's weight; 0 is the paper's fit alone
 RING_SHARE = 0.5  # the share of the ring held out: the rest keeps the holes' edges where they are
