@@ -230,6 +230,26 @@ def test_a_stereo_photo_does_not_carry_a_wrong_rim_into_the_hole():
     assert np.allclose(stereo.disparity[holes], ((1 - share) * sharp + share * fill)[holes], atol=1e-5)
 
 
+def test_refine_does_not_keep_a_fit_that_ran_off_its_range_inside_a_hole():
+    # a fit that matches every valid pixel but put the hole at 20 m on a 1.5-2.5 m plane (the end of its
+    # disparity range): the solve starts from the fit clipped to the valid input's range, so the hole
+    # comes back within the valid depth's range (unclipped, it stays at the far end of the disparity range)
+    from dataclasses import replace
+    from ddp_lite.method.complete import refined
+    truth = tilted_plane(28, 36, slope=0.03) + 0.5
+    depth = truth.copy()
+    depth[8:20, 10:26] = np.nan
+    holes = np.isnan(depth)
+    rgb = np.random.default_rng(5).random(depth.shape + (3,)).astype(np.float32)
+    config = FitConfig.for_profile("ci", variant="rgbd", recipe="kit", iterations=4, blend_fill=0.0)
+    result = complete_depth(rgb, depth, variant="rgbd", config=config)
+    ran_off = replace(result, depth=np.where(holes, 20.0, truth).astype(np.float32))
+    sharp = refined(ran_off, depth, rgb).depth
+    lo, hi = np.nanmin(depth), np.nanmax(depth)
+    assert np.all((sharp[holes] >= lo - 1e-4) & (sharp[holes] <= hi + 1e-4))
+    assert np.allclose(sharp[~holes], depth[~holes], rtol=1e-5)  # as given, through the result's transform
+
+
 def fill_case(seed):
     """A tilted plane with one hole, a random colour image and a short `ci` config of the fit alone: (depth, rgb, config)."""
     depth = tilted_plane(24, 32, slope=0.05)
