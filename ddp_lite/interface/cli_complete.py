@@ -17,7 +17,7 @@ solve guided by the full-size photo, pulled to the valid input (confidence 1) an
 holes (lower confidence), so that depth edges inside the holes follow the photo's edges instead of the
 working size's blur (``--no-refine``: up-sampling alone; ``--raw`` implies it). ``--depth-source stereo``
 (a stereo matcher's depth): the fill and the solves do not read the rim of its holes (1 px at the working
-size, as many at full size as it is times larger; ``kit.blend.trusted_depth``) and the solve reaches twice as
+size, as many at full size as it is times larger; ``kit.blend.rim_width``) and the solve reaches twice as
 far (``full_resolution.FULL_SIZE_SOLVE``). The ``photo`` recipe's own
 solve (``refine``) is this one, so it runs once, at full size, not also at the working size (on six
 Middlebury scenes and Motorcycle at full size that costs: 1.05× the best fill against 0.95×). Then one line compares
@@ -248,7 +248,7 @@ def _complete(args, writers, staged, start) -> int:
     from ..core.checks import check_depth
     from ..method.paper.nets import check_input_size
     from ..method.full_resolution import FULL_SIZE_SOLVE, refine_full_resolution
-    from ..method.kit.blend import trusted_depth
+    from ..method.kit.blend import rim_width
     from ..sequences.working_size import fill_holes_at_full_size, shrink, working_shape
     profile = get_profile(args.profile)
     config = FitConfig.for_profile(profile, variant=args.variant, recipe=args.recipe, seed=args.seed,
@@ -300,10 +300,9 @@ def _complete(args, writers, staged, start) -> int:
         print(f"fit done in {result.seconds:.1f} s; sharpening the fill at {depth.shape[0]}×{depth.shape[1]} ...",
               flush=True)
         started = time.perf_counter()
-        trusted = trusted_depth(depth, args.depth_source, scale=depth.shape[1] / shape[1])  # a matcher's rim unread
-        filled = refine_full_resolution(trusted, rgb, fill_holes_at_full_size(depth, result.depth, raw=True),
-                                        **FULL_SIZE_SOLVE[args.depth_source])
-        filled = np.where(np.isfinite(depth), depth, filled).astype(np.float32)  # the valid input, its rim too, as given
+        filled = refine_full_resolution(depth, rgb, fill_holes_at_full_size(depth, result.depth, raw=True),
+                                        rim=rim_width(args.depth_source, scale=depth.shape[1] / shape[1]),
+                                        **FULL_SIZE_SOLVE[args.depth_source])  # a matcher's rim not read
         refine_seconds = time.perf_counter() - started
     else:
         filled = fill_holes_at_full_size(depth, result.depth, raw=args.raw)

@@ -37,8 +37,10 @@ import cv2
 import numpy as np
 
 from ..classical.depth_fills import check_fill_input, nearest_values
+from ..core.checks import check_int
 
-__all__ = ["REFINEMENTS", "SMOOTHNESS_MEAN", "SMOOTHNESS_STEREO", "FULL_SIZE_SOLVE", "refine_full_resolution", "refine_over_smoothness", "hole_confidence_map"]
+__all__ = ["REFINEMENTS", "SMOOTHNESS_MEAN", "SMOOTHNESS_STEREO", "FULL_SIZE_SOLVE", "hole_rim", "refine_full_resolution",
+           "refine_over_smoothness", "hole_confidence_map"]
 
 REFINEMENTS = ("fgs", "bilateral-solver", "guided-filter")
 
@@ -106,8 +108,26 @@ def _bilateral_solver(system, values: np.ndarray, confidence: np.ndarray, initia
     return (S.T @ y).reshape(values.shape)
 
 
+def hole_rim(valid: np.ndarray, width: int) -> np.ndarray:
+    """(H, W) bool: the ``valid`` pixels within ``width`` px (4-connected steps) of a hole; none where
+    ``width`` is 0, where there is no hole, or where fewer than ``MIN_VALID_PIXELS`` valid pixels would be left.
+
+    Example:
+        >>> valid = np.ones((5, 5), bool); valid[2, 2] = False
+        >>> int(hole_rim(valid, 1).sum())
+        4
+    """
+    from scipy import ndimage
+
+    from ..core.checks import MIN_VALID_PIXELS
+    if width == 0 or valid.all():
+        return np.zeros_like(valid)
+    rim = ndimage.binary_dilation(~valid, iterations=width) & valid
+    return rim if (valid & ~rim).sum() >= MIN_VALID_PIXELS else np.zeros_like(valid)
+
+
 def refine_full_resolution(depth, rgb, target, method: str = "bilateral-solver", hole_confidence: float = 0.01,
-                           residual: bool = True, **params) -> np.ndarray:
+                           residual: bool = True, rim: int = 0, **params) -> np.ndarray:
     """The holes of ``depth`` filled by an edge-aware solve toward ``target`` → (H, W) float32 metres.
 
     Args:
@@ -121,6 +141,8 @@ def refine_full_resolution(depth, rgb, target, method: str = "bilateral-solver",
         residual: first correct the target by its own error on the valid pixels (input − fit, in
             disparity), carried into the holes by the same edge-aware solve: where the fit is off at a
             hole's rim (a blurred edge, a biased surface), it is off the same way inside.
+        rim: px of valid pixels around each hole the solve does not read (:func:`hole_rim`; a stereo
+            matcher's rim, often wrong); they are returned as given, like every valid pixel.
         params: the solver's own settings (``fgs``: ``lam``, ``sigma_color`` on a 0–255 scale;
             ``bilateral-solver``: ``lam``, ``sigma_xy`` px, ``sigma_luma``, ``sigma_chroma``;
             ``guided-filter``: ``radius`` px, ``eps``).
@@ -137,6 +159,7 @@ def refine_full_resolution(depth, rgb, target, method: str = "bilateral-solver",
     if method not in REFINEMENTS:
         raise ValueError(f"method must be one of {REFINEMENTS}, got {method!r}")
     hole_confidence = _check_positive(hole_confidence, "hole_confidence")
+    check_int(rim, "rim", minimum=0)
     if hole_confidence > 1:
         raise ValueError(f"hole_confidence must be in (0, 1] (the valid input's confidence is 1), got {hole_confidence!r}")
     unknown = set(params) - set(_DEFAULTS[method])
@@ -156,9 +179,11 @@ def refine_full_resolution(depth, rgb, target, method: str = "bilateral-solver",
         raise ValueError(f"target must be a numeric (H, W) depth like depth {array.shape}, got "
                          f"{target.dtype} {target.shape}")
     target = target.astype(np.float64)
-    holes = ~valid
-    if not holes.any():
+    if valid.all():
         return array.astype(np.float32)
+    kept = valid  # what comes back as given; the solve reads it less the rim
+    valid = valid & ~hole_rim(valid, int(rim))
+    holes = ~valid
     read = np.ones_like(holes) if residual else holes
     if not np.all(np.isfinite(target[read]) & (target[read] > 0)):
         raise ValueError("target must be finite and > 0 (metres) in every " + ("pixel" if residual else "hole of depth")
@@ -190,7 +215,7 @@ def refine_full_resolution(depth, rgb, target, method: str = "bilateral-solver",
     solved = solve(values, hole_confidence_map(valid, hole_confidence))
     low, high = values.min(), values.max()  # a solve of positive weights stays within its inputs; rounding may not
     solved = np.clip(np.where(np.isfinite(solved), solved, values), low, high) * scale
-    return np.where(valid, array, 1.0 / solved).astype(np.float32)
+    return np.where(kept, array, 1.0 / solved).astype(np.float32)
 
 
 # the bilateral solver's (sigma_xy px, lam) whose solves `refine_over_smoothness` averages: chosen on half the
@@ -205,7 +230,7 @@ SMOOTHNESS_STEREO = ((8.0, 4.0), (8.0, 16.0), (16.0, 4.0), (16.0, 16.0))
 FULL_SIZE_SOLVE = {"clean": {}, "stereo": {"sigma_xy": 16.0}}
 
 
-def refine_over_smoothness(depth, rgb, target, settings=SMOOTHNESS_MEAN) -> np.ndarray:
+def refine_over_smoothness(depth, rgb, target, settings=SMOOTHNESS_MEAN, rim: int = 0) -> np.ndarray:
     """The bilateral-solver refinement averaged, in disparity (1/Z), over several smoothness settings.
 
     How far a hole's valid rim should be carried, and how smooth the surface between, differs from hole to
@@ -216,6 +241,7 @@ def refine_over_smoothness(depth, rgb, target, settings=SMOOTHNESS_MEAN) -> np.n
     Args:
         depth, rgb, target: as :func:`refine_full_resolution` (metres, NaN holes; colour; the fit).
         settings: a non-empty sequence of (sigma_xy px, lam) pairs for the bilateral solver.
+        rim: as :func:`refine_full_resolution`: px of valid rim the solves do not read.
     Returns:
         (H, W) float32 metres, equal to ``depth`` on its valid pixels.
     Example:
@@ -230,7 +256,7 @@ def refine_over_smoothness(depth, rgb, target, settings=SMOOTHNESS_MEAN) -> np.n
     for sigma_xy, lam in pairs:
         _check_positive(sigma_xy, "settings' sigma_xy")
         _check_positive(lam, "settings' lam")
-    solves = [refine_full_resolution(depth, rgb, target, sigma_xy=float(sigma_xy), lam=float(lam))
+    solves = [refine_full_resolution(depth, rgb, target, sigma_xy=float(sigma_xy), lam=float(lam), rim=rim)
               for sigma_xy, lam in pairs]  # (H, W) metres each, the valid input kept exactly
     disparity = np.mean([1.0 / solve.astype(np.float64) for solve in solves], axis=0)  # (H, W) 1/m
     valid = np.all([solve == solves[0] for solve in solves], axis=0)  # where every solve returned the input

@@ -58,10 +58,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
-from ...core.checks import MIN_VALID_PIXELS, check_bool, check_choice, check_int, check_real
+from ...core.checks import check_bool, check_choice, check_int, check_real
 from ...core.settings import Settings
 
-__all__ = ["CombinationConfig", "DEPTH_SOURCES", "RIM_DISTRUST", "trusted_depth", "BLEND_WEIGHTS", "FILL_SHARES",
+__all__ = ["CombinationConfig", "DEPTH_SOURCES", "RIM_DISTRUST", "rim_width", "trusted_depth", "BLEND_WEIGHTS", "FILL_SHARES",
            "validation_ring", "best_weight", "ring_width", "fill_disparity", "FILL_MEMBERS", "fill_holdout", "best_fill_share"]
 
 BLEND_WEIGHTS = (0.0, 0.25, 0.5, 0.75, 1.0)  # the kit fit's weight; 0 is the paper's fit alone
@@ -104,25 +104,26 @@ class CombinationConfig(Settings):
             check_real(self.blend_fill, "config.blend_fill", 0.0, 1.0, high_open=True)  # 1 would be the fill alone
 
 
+def rim_width(source: str = "clean", scale: float = 1.0) -> int:
+    """The px of valid rim around each hole that the steps after the fit do not read of a ``source``'s depth:
+    ``RIM_DISTRUST[source]``, × ``scale`` rounded for an image ``scale`` times the working size."""
+    return int(round(RIM_DISTRUST[check_choice(source, "source", DEPTH_SOURCES)] * check_real(scale, "scale", 1.0)))
+
+
 def trusted_depth(depth: np.ndarray, source: str = "clean", scale: float = 1.0) -> np.ndarray:
-    """``depth`` (H, W) metres, NaN holes, with the valid pixels within ``RIM_DISTRUST[source]`` px of a hole
-    (4-connected steps; × ``scale`` rounded, for an image ``scale`` times the working size) made holes too:
-    what the steps after the fit read of a ``source``'s depth. A copy; ``depth`` itself where nothing is
-    distrusted, or where too little valid depth would be left.
+    """``depth`` (H, W) metres, NaN holes, with the valid pixels within :func:`rim_width` px of a hole
+    (4-connected steps; ``full_resolution.hole_rim``) made holes too: what the steps after the fit read of a
+    ``source``'s depth. A copy; ``depth`` itself where nothing is distrusted, or where too little valid depth
+    would be left.
 
     Example:
         >>> depth = np.ones((5, 5), np.float32); depth[2, 2] = np.nan
         >>> int(np.isnan(trusted_depth(depth, "stereo")).sum()), int(np.isnan(trusted_depth(depth)).sum())
         (5, 1)
     """
-    width = int(round(RIM_DISTRUST[check_choice(source, "source", DEPTH_SOURCES)] * check_real(scale, "scale", 1.0)))
-    hole = ~np.isfinite(depth)
-    if width == 0 or not hole.any():
-        return depth
-    rim = ndimage.binary_dilation(hole, iterations=width)
-    if (~rim).sum() < MIN_VALID_PIXELS:
-        return depth
-    return np.where(rim, np.nan, depth).astype(depth.dtype)
+    from ..full_resolution import hole_rim
+    rim = hole_rim(np.isfinite(depth), rim_width(source, scale))
+    return np.where(rim, np.nan, depth).astype(depth.dtype) if rim.any() else depth
 
 
 def ring_width(shape) -> int:
