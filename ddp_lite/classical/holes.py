@@ -18,9 +18,9 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
-from ..core.checks import check_depth, check_int
+from ..core.checks import MIN_VALID_PIXELS, check_depth, check_int
 
-__all__ = ["random_holes", "stroke_holes", "edge_band_holes", "kinect_noise"]
+__all__ = ["random_holes", "stroke_holes", "edge_band_holes", "kinect_noise", "hole_rim"]
 
 
 def _check_depth(depth) -> np.ndarray:
@@ -146,3 +146,18 @@ def kinect_noise(depth, seed: int = 0, sigma_coef: float = 1.5e-3, focal_px: flo
         out[shadow & (rng.random(clean.shape) < edge_dropout)] = np.nan
     out = out.astype(np.float32)
     return out, np.isfinite(out)
+
+
+def hole_rim(valid: np.ndarray, width: int) -> np.ndarray:
+    """(H, W) bool: the ``valid`` pixels within ``width`` px (4-connected steps) of a hole; none where
+    ``width`` is 0, where there is no hole, or where fewer than ``MIN_VALID_PIXELS`` valid pixels would be left.
+
+    Example:
+        >>> valid = np.ones((5, 5), bool); valid[2, 2] = False
+        >>> int(hole_rim(valid, 1).sum())
+        4
+    """
+    if width == 0 or valid.all():
+        return np.zeros_like(valid)
+    rim = ndimage.binary_dilation(~valid, iterations=width) & valid
+    return rim if (valid & ~rim).sum() >= MIN_VALID_PIXELS else np.zeros_like(valid)

@@ -37,9 +37,10 @@ import cv2
 import numpy as np
 
 from ..classical.depth_fills import check_fill_input, nearest_values
+from ..classical.holes import hole_rim
 from ..core.checks import check_int
 
-__all__ = ["REFINEMENTS", "SMOOTHNESS_MEAN", "SMOOTHNESS_STEREO", "FULL_SIZE_SOLVE", "hole_rim", "refine_full_resolution",
+__all__ = ["REFINEMENTS", "SMOOTHNESS_MEAN", "SMOOTHNESS_STEREO", "FULL_SIZE_SOLVE", "refine_full_resolution",
            "refine_over_smoothness", "hole_confidence_map"]
 
 REFINEMENTS = ("fgs", "bilateral-solver", "guided-filter")
@@ -108,24 +109,6 @@ def _bilateral_solver(system, values: np.ndarray, confidence: np.ndarray, initia
     return (S.T @ y).reshape(values.shape)
 
 
-def hole_rim(valid: np.ndarray, width: int) -> np.ndarray:
-    """(H, W) bool: the ``valid`` pixels within ``width`` px (4-connected steps) of a hole; none where
-    ``width`` is 0, where there is no hole, or where fewer than ``MIN_VALID_PIXELS`` valid pixels would be left.
-
-    Example:
-        >>> valid = np.ones((5, 5), bool); valid[2, 2] = False
-        >>> int(hole_rim(valid, 1).sum())
-        4
-    """
-    from scipy import ndimage
-
-    from ..core.checks import MIN_VALID_PIXELS
-    if width == 0 or valid.all():
-        return np.zeros_like(valid)
-    rim = ndimage.binary_dilation(~valid, iterations=width) & valid
-    return rim if (valid & ~rim).sum() >= MIN_VALID_PIXELS else np.zeros_like(valid)
-
-
 def refine_full_resolution(depth, rgb, target, method: str = "bilateral-solver", hole_confidence: float = 0.01,
                            residual: bool = True, rim: int = 0, **params) -> np.ndarray:
     """The holes of ``depth`` filled by an edge-aware solve toward ``target`` → (H, W) float32 metres.
@@ -141,7 +124,7 @@ def refine_full_resolution(depth, rgb, target, method: str = "bilateral-solver",
         residual: first correct the target by its own error on the valid pixels (input − fit, in
             disparity), carried into the holes by the same edge-aware solve: where the fit is off at a
             hole's rim (a blurred edge, a biased surface), it is off the same way inside.
-        rim: px of valid pixels around each hole the solve does not read (:func:`hole_rim`; a stereo
+        rim: px of valid pixels around each hole the solve does not read (``classical.holes.hole_rim``; a stereo
             matcher's rim, often wrong); they are returned as given, like every valid pixel.
         params: the solver's own settings (``fgs``: ``lam``, ``sigma_color`` on a 0–255 scale;
             ``bilateral-solver``: ``lam``, ``sigma_xy`` px, ``sigma_luma``, ``sigma_chroma``;

@@ -112,7 +112,7 @@ def rim_width(source: str = "clean", scale: float = 1.0) -> int:
 
 def trusted_depth(depth: np.ndarray, source: str = "clean", scale: float = 1.0) -> np.ndarray:
     """``depth`` (H, W) metres, NaN holes, with the valid pixels within :func:`rim_width` px of a hole
-    (4-connected steps; ``full_resolution.hole_rim``) made holes too: what the steps after the fit read of a
+    (4-connected steps; ``classical.holes.hole_rim``) made holes too: what the steps after the fit read of a
     ``source``'s depth. A copy; ``depth`` itself where nothing is distrusted, or where too little valid depth
     would be left.
 
@@ -121,7 +121,7 @@ def trusted_depth(depth: np.ndarray, source: str = "clean", scale: float = 1.0) 
         >>> int(np.isnan(trusted_depth(depth, "stereo")).sum()), int(np.isnan(trusted_depth(depth)).sum())
         (5, 1)
     """
-    from ..full_resolution import hole_rim
+    from ...classical.holes import hole_rim
     rim = hole_rim(np.isfinite(depth), rim_width(source, scale))
     return np.where(rim, np.nan, depth).astype(depth.dtype) if rim.any() else depth
 
