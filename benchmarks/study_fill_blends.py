@@ -4,6 +4,7 @@ half of the scenes and confirmed on the other.
     python benchmarks/study_fill_blends.py --data DIR fit [--seeds 0 1] [--cases Art/sgbm ...]   # the fits (slow)
     python benchmarks/study_fill_blends.py --data DIR fit --channels 8 16 32 64 128 --fits DIR2   # the narrow net
     python benchmarks/study_fill_blends.py --data DIR fit --set fill_input=1 --fits DIR3          # other settings
+    python benchmarks/study_fill_blends.py --data DIR fit --set warp_confidence=true --fits DIR4   # (true/false)
     python benchmarks/study_fill_blends.py --data DIR report --fits DIR3 --core --out R3 --against R  # paired
     python benchmarks/study_fill_blends.py --data DIR report [--seeds 0 1]                        # the rules (minutes)
     python benchmarks/study_fill_blends.py --data DIR report --seeds 0 1 2 --from-rows a.jsonl b.jsonl  # their tables
@@ -360,10 +361,13 @@ def compare(rows: list[dict], others: list[dict], groups) -> None:
 
 
 def _setting(item: str) -> tuple[str, object]:
-    """``"fill_input=1"`` → ("fill_input", 1.0); a value that is not a number stays a word."""
+    """``"fill_input=1"`` → ("fill_input", 1); ``"warp_confidence=true"`` → ("warp_confidence", True); a value
+    that is neither a number nor true/false stays a word."""
     field_name, sep, value = item.partition("=")
     if not sep or not field_name:
         raise SystemExit(f"--set: expected FIELD=VALUE, got {item!r}")
+    if value.lower() in ("true", "false"):
+        return field_name, value.lower() == "true"
     try:
         number = float(value)
     except ValueError:
