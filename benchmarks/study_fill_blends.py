@@ -9,6 +9,8 @@ half of the scenes and confirmed on the other.
     python benchmarks/study_fill_blends.py --data DIR report [--seeds 0 1]                        # the rules (minutes)
     python benchmarks/study_fill_blends.py --data DIR report --seeds 0 1 2 --from-rows a.jsonl b.jsonl  # their tables
     python benchmarks/study_fill_blends.py --data DIR stereo-grid --seeds 0 1 2 --out R4           # a matcher's depth
+    python benchmarks/study_fill_blends.py --data DIR answer-rules --seeds 0 1 2 --out R5          # other answers
+    python benchmarks/study_fill_blends.py --data DIR warp-scenes --from-rows R R_rgbd             # the warp term, per scene
 
 The best classical fill differs from case to case (the bilateral solver on most, colorization on
 occlusions, the guided filter on Plastic's strokes), so "DDP over the best fill" compares DDP with an
@@ -331,6 +333,113 @@ def stereo_grid(data, names, seeds, fits: Path, variant: str, size: str, out: Pa
     print(f"rows to {out}")
 
 
+ANSWER_RULES = ("photo by source", "rim share 0.75, 1 px", "median of fit, solve, colorization",
+                "mean of the seeds' solves + 0.25")
+
+
+def answer_rules(data, names, seeds, fits: Path, variant: str, size: str, out: Path) -> None:
+    """What else the answer could be made of, from the saved fits, against ``photo`` by source (S: its solves,
+    F: its fill, both reading the input as its source says; the answer (1 − f)·S + f·F, f = ¼):
+
+    - ``rim share 0.75, 1 px``: f per pixel, 0.25 + 0.5·exp(−(d − 1) / 1 px), d the distance (px) into the
+      hole from the nearest valid pixel read: more of the fill beside the rim, where it interpolates;
+    - ``median of fit, solve, colorization``: per pixel, the median of the fit, S and the colorization fill;
+    - ``mean of the seeds' solves + 0.25``: S averaged over the fits of every seed (an ensemble of fits).
+
+    Per case and seed, hole RMSE over the best fill of the case; rows to ``out``."""
+    rows, solves = [], defaultdict(list)
+    for name in names:
+        case = make_suite_case(data, name, size)
+        source = "stereo" if name.split("/")[1] in STEREO_KINDS else "clean"
+        trusted = trusted_depth(case.depth, source)
+        truth_in = case.fb / case.depth
+        fills = {n: f(case.fb / trusted, case.rgb) for n, f in BASELINES.items()}  # (H, W) px each
+        fill = np.mean([fills[n] for n in FILL_MEMBERS], axis=0)
+        best = min(case.rmse_px(case.fb / np.where(np.isfinite(case.depth), truth_in, f(truth_in, case.rgb)))
+                   for f in BASELINES.values())
+        into_hole = ndimage.distance_transform_edt(~np.isfinite(trusted))  # (H, W) px
+
+        def score(px):
+            return case.rmse_px(case.fb / np.where(np.isfinite(case.depth), truth_in, px))
+        for seed in seeds:
+            path = fits / f"{name.replace('/', '__')}__{variant}__{seed}.npz"
+            if not path.exists():
+                continue
+            with np.load(path) as saved:
+                fit_depth = saved["depth"]
+            solve = case.fb / refine_over_smoothness(trusted, case.rgb, fit_depth,
+                                                     SMOOTHNESS_STEREO if source == "stereo" else SOLVE_MEANS["mean of 4 solves"])
+            solves[name].append(solve)
+            share = KIT_SHARE + 0.5 * np.exp(-(into_hole - 1.0))
+            rows.append({"case": name, "seed": seed, "half": half(name), "best": best,
+                         ANSWER_RULES[0]: score((1 - KIT_SHARE) * solve + KIT_SHARE * fill),
+                         ANSWER_RULES[1]: score((1 - share) * solve + share * fill),
+                         ANSWER_RULES[2]: score(np.median([case.fb / fit_depth, solve, fills["colorization"]], axis=0))})
+        ensemble = (1 - KIT_SHARE) * np.mean(solves[name], axis=0) + KIT_SHARE * fill if solves[name] else None
+        for row in rows:
+            if row["case"] == name and len(solves[name]) == len(seeds) > 1:
+                row[ANSWER_RULES[3]] = score(ensemble)
+        print(f"{name:<22} {len(solves[name])} seeds", flush=True)
+    write_bytes_atomic(out, "".join(json.dumps(r) + "\n" for r in rows).encode())
+    groups = [("A", lambda r: r["half"] == "A"), ("B", lambda r: r["half"] == "B")] + [
+        (kind, lambda r, k=kind: r["case"].endswith("/" + k)) for kind in SUITE_HOLES] + [("all", lambda r: True)]
+    print(f"\n{len(rows)} case-seeds; hole RMSE / the best fill's, mean (on how many below 1.0); "
+          "then paired against photo by source (lower on how many)")
+    print(f"{'rule':<36}" + "".join(f"{g:>16}" for g, _ in groups))
+    for key in ANSWER_RULES:
+        for label, value in (("", lambda r: r[key] / r["best"]), ("  paired", lambda r: r[key] / r[ANSWER_RULES[0]] - 1)):
+            cells = []
+            for _, keep in groups:
+                x = [value(r) for r in rows if keep(r) and key in r]
+                cells.append("-" if not x else f"{np.mean(x):.3f} ({sum(v < 1 for v in x)})" if not label else
+                             f"{100 * np.mean(x):+.1f}% ({sum(v < 0 for v in x)})")
+            print(f"{(label or key):<36}" + "".join(f"{c:>16}" for c in cells))
+    print(f"rows to {out}")
+
+
+ONE_VIEW = ("Adirondack", "ArtL", "Jadeplant", "Piano", "Pipes", "Playroom", "Playtable", "Motorcycle")  # right view only
+
+
+def warp_scenes(warp_rows: Path, rgbd_rows: Path, residual: Path) -> None:
+    """Where the warp term helps ``photo`` by source and where it does not, per scene, beside how far the warp
+    term's own photometric minimum lies from the truth inside that case's holes (the share of hole pixels
+    more than 2 px off and the median, for the mean of the rail's two neighbours or the 2014 pair's right
+    view: ``study_warp_residual.py``'s ``residual`` file). Paired rows of the same case and seed from
+    ``report --core`` of rgbd+warp fits (``warp_rows``) and of rgbd fits (``rgbd_rows``)."""
+    def load(path):
+        rows = {}
+        for r in map(json.loads, path.read_text().splitlines()):
+            by_source(r)
+            rows[r["case"], r["seed"]] = r
+        return rows
+    warp, rgbd = load(warp_rows), load(rgbd_rows)
+    far = {}
+    for line in residual.read_text().splitlines():
+        parts = line.split()
+        if len(parts) > 2 and (parts[1:4] == ["mean", "of", "2"] or parts[1].endswith("-right")):
+            far[parts[0]] = (float(line.split("median")[1].split()[0]), float(line.rsplit("> 2 px", 1)[1]))
+    pairs = [(key, rgbd[key][BY_SOURCE_RULE] / warp[key][BY_SOURCE_RULE] - 1, rgbd[key]["fit"] / warp[key]["fit"] - 1)
+             for key in sorted(rgbd) if key in warp]
+    print(f"{len(pairs)} case-seeds; the warp term's gain: rgbd's hole RMSE / rgbd+warp's − 1 (> 0: the term helps)")
+    print(f"{'holes':<10} {'neighbours':<17} {'n':>3} {'photo by source':>16} {'(median)':>9} {'fit alone':>10} "
+          f"{'minimum > 2 px off':>19} {'median off':>11}")
+    for kind in SUITE_HOLES:
+        for label, one_view in (("the right view", True), ("view0 and view2", False)):
+            chosen = [(k, g, f) for k, g, f in pairs if k[0].endswith("/" + kind) and (k[0].split("/")[0] in ONE_VIEW) == one_view]
+            if not chosen:
+                continue
+            off = [far[k[0]] for k, _, _ in chosen if k[0] in far]
+            print(f"{kind:<10} {label:<17} {len(chosen):>3} {100 * np.mean([g for _, g, _ in chosen]):>+15.1f}% "
+                  f"{100 * np.median([g for _, g, _ in chosen]):>+8.1f}% "
+                  f"{100 * np.mean([f for _, _, f in chosen]):>+9.1f}% "
+                  + (f"{np.mean([o[1] for o in off]):>19.2f} {np.mean([o[0] for o in off]):>8.2f} px" if off else ""))
+    print("\nper case (gain of photo by source, of the fit alone; the minimum's share > 2 px off, its median)")
+    for (name, seed), gain, fit_gain in sorted(pairs, key=lambda p: (p[0][0].split("/")[1], p[0][0])):
+        off = far.get(name)
+        print(f"{name:<22} seed {seed}  {100 * gain:+6.1f}%  {100 * fit_gain:+6.1f}%"
+              + (f"  {off[1]:.2f}  {off[0]:.2f} px" if off else ""))
+
+
 def by_source(row: dict) -> None:
     """Add the ``photo by source`` rule to a row that has the stereo rule: that rule where the case's input is a
     stereo matcher's depth, the mean of 4 solves elsewhere."""
@@ -377,7 +486,7 @@ def _setting(item: str) -> tuple[str, object]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("what", choices=("fit", "report", "stereo-grid"))
+    parser.add_argument("what", choices=("fit", "report", "stereo-grid", "answer-rules", "warp-scenes"))
     parser.add_argument("--data", required=True, help="a folder of Middlebury scenes with ground truth")
     parser.add_argument("--seeds", type=int, nargs="+", default=[0])
     parser.add_argument("--cases", nargs="+", help="scene/holes names; default: the whole suite")
@@ -405,6 +514,12 @@ def main() -> None:
     if args.what == "fit":
         fit(args.data, names, args.seeds, args.fits, args.variant, args.size,
             tuple(args.channels) if args.channels else None, dict(_setting(item) for item in args.set))
+    elif args.what == "warp-scenes":
+        if len(args.from_rows) != 2:
+            raise SystemExit("warp-scenes: --from-rows WARP_ROWS RGBD_ROWS (two files)")
+        warp_scenes(*args.from_rows, RESULTS / "warp_residual_real_suite_eighth.txt")
+    elif args.what == "answer-rules":
+        answer_rules(args.data, names, args.seeds, args.fits, args.variant, args.size, args.out)
     elif args.what == "stereo-grid":
         stereo_grid(args.data, names, args.seeds, args.fits, args.variant, args.size, args.out)
     else:
