@@ -25,7 +25,8 @@ SGM runs at 3× the working size below 96 rows and keeps each block's centre (as
 Every classical fill works on disparity in pixels (d = f·B/Z, where linear is exact on planes).
 DDP's transform is the default one a user gets (from the input depth). A recipe is a set of
 ``FitConfig`` overrides on top of the profile's config; ``name:key=value,key=value`` adds one
-on the command line. Scores: hole RMSE in disparity pixels (sky and unknown truth excluded);
+on the command line. A real case's fits are told where its depth came from (``RealCase.depth_source``:
+``"stereo"`` for SGBM's depth) unless the recipe sets ``depth_source`` itself. Scores: hole RMSE in disparity pixels (sky and unknown truth excluded);
 "ratio" = DDP / the best classical fill of that case; mean and worst over the cases, per seed
 and for the mean over seeds. Rows go to ``--out`` as JSON lines (one per fit), so lanes can run
 in parallel (one thread each) and ``--report`` prints the tables. Asserts nothing.
@@ -211,7 +212,8 @@ def run(args) -> None:
                 for seed in args.seeds:
                     if (name, recipe, variant, seed, size) in done:
                         continue
-                    config = FitConfig.for_profile(profile, variant=variant, **{"seed": seed, **overrides})
+                    source = {"depth_source": case.depth_source} if hasattr(case, "depth_source") else {}
+                    config = FitConfig.for_profile(profile, variant=variant, **{"seed": seed, **source, **overrides})
                     neighbors = case.neighbors if variant == "rgbd+warp" else ()
                     start = time.perf_counter()
                     result = complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant,

@@ -66,6 +66,7 @@ def test_real_cases_score_only_known_truth_and_keep_their_size(holes):
     assert not np.isfinite(case.gt[case.scored_holes]).sum() < case.scored_holes.sum()  # all scored truth known
     assert 0.05 < case.scored_holes.mean() < 0.35
     assert case.rmse_px(case.gt) == 0.0
+    assert case.depth_source == ("stereo" if holes == "sgbm" else "clean")  # SGBM's depth, or the truth with holes
 
 
 def test_sgbm_input_is_stereo_depth_close_to_the_truth_where_it_answered():
@@ -169,3 +170,24 @@ def test_compare_fills_builds_photo_from_the_kit_and_paper_fits_and_matches_phot
     for recipe, px in alone.items():  # each recipe as complete_depth computes it on its own
         assert np.allclose(out[f"DDP {recipe}"], px, rtol=1e-5, atol=1e-5), recipe
     assert not np.allclose(out["DDP photo"], out["DDP kit"], atol=1e-3)
+
+
+def test_compare_fills_tells_the_fit_a_stereo_matchers_depth():
+    # the SGBM case's kit DDP is what complete_depth gives when told the depth is a matcher's (its fill read
+    # without the rim of the holes), not what it gives for clean depth
+    import dataclasses
+
+    from ddp_lite.studies import real_cases
+    from ddp_lite.method.config import FitConfig
+    from ddp_lite.method.profiles import get_profile
+
+    case = make_real_case("sgbm", factor=8)
+    profile = dataclasses.replace(get_profile("ci"), iterations=6)
+    out = real_cases.compare_fills(case, profile, recipes=("kit",))
+
+    def alone(source):
+        config = FitConfig.for_profile(profile, variant="rgbd", recipe="kit", depth_source=source)
+        return case.fb / real_cases.complete_depth(case.rgb, case.depth, case.camera, (), variant="rgbd",
+                                                   config=config).merged(case.depth)
+    assert np.allclose(out["DDP kit"], alone("stereo"), rtol=1e-5, atol=1e-5)
+    assert not np.allclose(out["DDP kit"], alone("clean"), atol=1e-3)

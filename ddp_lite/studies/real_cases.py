@@ -51,9 +51,12 @@ _CROP_MULTIPLE = 4  # rows and columns cropped to a multiple of 4 (Motorcycle: 7
 @dataclass
 class RealCase(Case):
     """A :class:`~ddp_lite.evaluation.experiments.Case` on a real image: ``gt`` has NaN where the truth is unknown,
-    ``fb`` = f·B (px · m) at the working size, so disparity (px) = fb / depth − doffs."""
+    ``fb`` = f·B (px · m) at the working size, so disparity (px) = fb / depth − doffs. ``depth_source``: where the
+    input depth came from, as a caller would declare it to ``FitConfig(depth_source=...)``: ``"stereo"`` for
+    SGBM's depth, ``"clean"`` for the truth with holes cut."""
 
     fb: float = 1.0
+    depth_source: str = "clean"
 
     @property
     def scored_holes(self) -> np.ndarray:
@@ -177,7 +180,8 @@ def make_real_case(holes: str = "sgbm", factor: int = 4, scene=None, hole_mask=N
         depth = np.where(blocks, np.nan, gt).astype(np.float32)
     fb = float(view.camera.focal * scene.meta["baseline"])
     neighbors = list(scene.views[1:]) or [scene.right[0]]
-    return RealCase(f"{name}/{holes}", view.rgb, depth, gt, view.camera, neighbors, None, scene, 0, None, fb=fb)
+    return RealCase(f"{name}/{holes}", view.rgb, depth, gt, view.camera, neighbors, None, scene, 0, None, fb=fb,
+                    depth_source="stereo" if holes == "sgbm" and hole_mask is None else "clean")
 
 
 def _stereo_pair(scene: Scene) -> Scene:
@@ -204,14 +208,15 @@ def compare_fills(case: RealCase, profile=None, recipes=("paper", "kit"), varian
 
     The classical fills fill the disparity map (d = f·B/Z); DDP fits its own normalised disparity,
     from the input depth's range, with the profile's size and budget (``rgbd+warp`` warps the right
-    view). Names: the fills' keys, then ``"DDP <recipe>"``. A blend of two recipes listed before it
+    view), told the case's ``depth_source``. Names: the fills' keys, then ``"DDP <recipe>"``. A blend of two recipes listed before it
     (a blend of ``paper`` and ``kit``, or ``photo``: the ``kit`` fit refined) is built from the fits it reuses: the same method, fewer fits.
     The fits run side by side (:mod:`ddp_lite.method.runtime.side_by_side`), as ``options`` say (no progress bars
     by default).
     """
     disparity_in = case.fb / case.depth  # (H, W) px (plus doffs: a constant, it cancels in every error)
     out = {name: fill(disparity_in, case.rgb) for name, fill in BASELINES.items()}
-    configs = [FitConfig.for_profile(profile, variant=variant, recipe=recipe, seed=seed) for recipe in recipes]
+    configs = [FitConfig.for_profile(profile, variant=variant, recipe=recipe, seed=seed, depth_source=case.depth_source)
+               for recipe in recipes]
     fitted = _plain_fits(case, variant, configs, options)  # (config without the fill's share, its result), side by side
     for recipe, config in zip(recipes, configs):
         out[f"DDP {recipe}"] = case.fb / _fit_reusing(case, variant, config, fitted, options).merged(case.depth)
