@@ -11,6 +11,7 @@ half of the scenes and confirmed on the other.
     python benchmarks/study_fill_blends.py --data DIR stereo-grid --seeds 0 1 2 --out R4           # a matcher's depth
     python benchmarks/study_fill_blends.py --data DIR answer-rules --seeds 0 1 2 --out R5          # other answers
     python benchmarks/study_fill_blends.py --data DIR warp-scenes --from-rows R R_rgbd             # the warp term, per scene
+    python benchmarks/study_fill_blends.py --data DIR per-case --from-rows R R_rgbd                # the per-scene table
 
 The best classical fill differs from case to case (the bilateral solver on most, colorization on
 occlusions, the guided filter on Plastic's strokes), so "DDP over the best fill" compares DDP with an
@@ -440,6 +441,45 @@ def warp_scenes(warp_rows: Path, rgbd_rows: Path, residual: Path) -> None:
               + (f"  {off[1]:.2f}  {off[0]:.2f} px" if off else ""))
 
 
+def per_case(warp_rows: Path, rgbd_rows: Path) -> None:
+    """The per-scene table: per case, its best fill and best Table 6 method (px), and ``kit`` and ``photo`` by
+    source with and without the warp term over each (mean over the seeds both variants have); then the
+    means per hole kind. Rows of ``report --core`` for rgbd+warp fits (``warp_rows``) and rgbd fits."""
+    table6 = [f"fill {n}" for n in table6_fills()]
+    variants = {}
+    for label, path in (("rgbd+warp", warp_rows), ("rgbd", rgbd_rows)):
+        rows = [json.loads(line) for line in path.read_text().splitlines()]
+        for r in rows:
+            by_source(r)
+        variants[label] = {(r["case"], r["seed"]): r for r in rows}
+    keys = sorted(set(variants["rgbd+warp"]) & set(variants["rgbd"]))
+    cases = sorted({case for case, _ in keys}, key=lambda c: (c.split("/")[1], c))
+    columns = [(v, rule) for rule in ("kit", BY_SOURCE_RULE) for v in ("rgbd", "rgbd+warp")]
+    print(f"{len(keys)} case-seeds: hole RMSE (disparity px) of the best fill and the best Table 6 method, and each "
+          "DDP rule's over them, best fill (best Table 6), mean over the seeds")
+    print(f"{'case':<22} {'seeds':<6} {'best fill (px)':<28} {'best Table 6 (px)':<22}"
+          + "".join(f"{rule.replace('photo by source', 'photo')}/{v:<10}" .rjust(22) for v, rule in columns))
+    means = defaultdict(lambda: defaultdict(list))
+    for case in cases:
+        seeds = [seed for c, seed in keys if c == case]
+        first = variants["rgbd"][case, seeds[0]]
+        fills = {k: first[k] for k in first if k.startswith("fill ")}
+        best, best6 = min(fills, key=fills.get), min((k for k in table6 if k in fills), key=fills.get)
+        cells = []
+        for v, rule in columns:
+            rows = [variants[v][case, seed] for seed in seeds]
+            over = np.mean([r[rule] / r[best] for r in rows]), np.mean([r[rule] / r[best6] for r in rows])
+            means[v, rule][case.split("/")[1]].append(over)
+            means[v, rule]["all"].append(over)
+            cells.append(f"{over[0]:.2f} ({over[1]:.2f})".rjust(22))
+        print(f"{case:<22} {','.join(map(str, seeds)):<6} {best[5:] + f' {fills[best]:.3f}':<28} "
+              f"{best6[5:] + f' {fills[best6]:.3f}':<22}" + "".join(cells))
+    for kind in list(SUITE_HOLES) + ["all"]:
+        cells = [f"{np.mean([o[0] for o in means[c][kind]]):.2f} ({np.mean([o[1] for o in means[c][kind]]):.2f})".rjust(22)
+                 for c in columns]
+        print(f"{'mean: ' + kind + f' (n={len(means[columns[0]][kind])})':<80}" + "".join(cells))
+
+
 def by_source(row: dict) -> None:
     """Add the ``photo by source`` rule to a row that has the stereo rule: that rule where the case's input is a
     stereo matcher's depth, the mean of 4 solves elsewhere."""
@@ -486,7 +526,7 @@ def _setting(item: str) -> tuple[str, object]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("what", choices=("fit", "report", "stereo-grid", "answer-rules", "warp-scenes"))
+    parser.add_argument("what", choices=("fit", "report", "stereo-grid", "answer-rules", "warp-scenes", "per-case"))
     parser.add_argument("--data", required=True, help="a folder of Middlebury scenes with ground truth")
     parser.add_argument("--seeds", type=int, nargs="+", default=[0])
     parser.add_argument("--cases", nargs="+", help="scene/holes names; default: the whole suite")
@@ -514,10 +554,13 @@ def main() -> None:
     if args.what == "fit":
         fit(args.data, names, args.seeds, args.fits, args.variant, args.size,
             tuple(args.channels) if args.channels else None, dict(_setting(item) for item in args.set))
-    elif args.what == "warp-scenes":
+    elif args.what in ("warp-scenes", "per-case"):
         if len(args.from_rows) != 2:
-            raise SystemExit("warp-scenes: --from-rows WARP_ROWS RGBD_ROWS (two files)")
-        warp_scenes(*args.from_rows, RESULTS / "warp_residual_real_suite_eighth.txt")
+            raise SystemExit(f"{args.what}: --from-rows WARP_ROWS RGBD_ROWS (two files)")
+        if args.what == "per-case":
+            per_case(*args.from_rows)
+        else:
+            warp_scenes(*args.from_rows, RESULTS / "warp_residual_real_suite_eighth.txt")
     elif args.what == "answer-rules":
         answer_rules(args.data, names, args.seeds, args.fits, args.variant, args.size, args.out)
     elif args.what == "stereo-grid":
