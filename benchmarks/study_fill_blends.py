@@ -434,6 +434,11 @@ def warp_scenes(warp_rows: Path, rgbd_rows: Path, residual: Path) -> None:
                   f"{100 * np.median([g for _, g, _ in chosen]):>+8.1f}% "
                   f"{100 * np.mean([f for _, _, f in chosen]):>+9.1f}% "
                   + (f"{np.mean([o[1] for o in off]):>19.2f} {np.mean([o[0] for o in off]):>8.2f} px" if off else ""))
+    for kind in SUITE_HOLES:
+        known = [(far[k[0]][1], g) for k, g, _ in pairs if k[0].endswith("/" + kind) and k[0] in far]
+        if len(known) > 2:
+            print(f"{kind}: correlation of the minimum's share > 2 px off with photo's gain, over case-seeds: "
+                  f"{np.corrcoef(np.array(known).T)[0, 1]:+.2f}")
     print("\nper case (gain of photo by source, of the fit alone; the minimum's share > 2 px off, its median)")
     for (name, seed), gain, fit_gain in sorted(pairs, key=lambda p: (p[0][0].split("/")[1], p[0][0])):
         off = far.get(name)
