@@ -26,8 +26,8 @@ Every classical fill works on disparity in pixels (d = f·B/Z, where linear is e
 DDP's transform is the default one a user gets (from the input depth). A recipe is a set of
 ``FitConfig`` overrides on top of the profile's config; ``name:key=value,key=value`` adds one
 on the command line. A real case's fits are told where its depth came from (``RealCase.depth_source``:
-``"stereo"`` for SGBM's depth) unless the recipe sets ``depth_source`` itself. Scores: hole RMSE in disparity pixels (sky and unknown truth excluded);
-"ratio" = DDP / the best classical fill of that case; mean and worst over the cases, per seed
+``"stereo"`` for SGBM's depth) unless the recipe sets ``depth_source`` itself. Scores: hole RMSE in
+disparity pixels (sky and unknown truth excluded); "ratio" = DDP / the best classical fill of that case; mean and worst over the cases, per seed
 and for the mean over seeds. Rows go to ``--out`` as JSON lines (one per fit), so lanes can run
 in parallel (one thread each) and ``--report`` prints the tables. Asserts nothing.
 """

@@ -351,7 +351,7 @@ def answer_rules(data, names, seeds, fits: Path, variant: str, size: str, out: P
     rows, solves = [], defaultdict(list)
     for name in names:
         case = make_suite_case(data, name, size)
-        source = "stereo" if name.split("/")[1] in STEREO_KINDS else "clean"
+        source = case.depth_source  # "stereo" for SGBM's depth
         trusted = trusted_depth(case.depth, source)
         truth_in = case.fb / case.depth
         fills = {n: f(case.fb / trusted, case.rgb) for n, f in BASELINES.items()}  # (H, W) px each

@@ -208,8 +208,8 @@ def compare_fills(case: RealCase, profile=None, recipes=("paper", "kit"), varian
 
     The classical fills fill the disparity map (d = f·B/Z); DDP fits its own normalised disparity,
     from the input depth's range, with the profile's size and budget (``rgbd+warp`` warps the right
-    view), told the case's ``depth_source``. Names: the fills' keys, then ``"DDP <recipe>"``. A blend of two recipes listed before it
-    (a blend of ``paper`` and ``kit``, or ``photo``: the ``kit`` fit refined) is built from the fits it reuses: the same method, fewer fits.
+    view), told the case's ``depth_source``. Names: the fills' keys, then ``"DDP <recipe>"``. A blend of two
+    recipes listed before it (a blend of ``paper`` and ``kit``, or ``photo``: the ``kit`` fit refined) is built from the fits it reuses: the same method, fewer fits.
     The fits run side by side (:mod:`ddp_lite.method.runtime.side_by_side`), as ``options`` say (no progress bars
     by default).
     """
