@@ -12,7 +12,9 @@ pixels, f·B/Z):
   motorcycle/sgbm    the same photo with SGBM's own holes and SGBM's depth elsewhere
                      (``real_cases.make_real_case("sgbm", factor=1)``, 500×740);
   <scene>/blobs      Middlebury 2005/2006 scenes at HalfSize read from ``--data`` (``2006-Plastic/`` ...),
-                     view1 and its truth, blob holes as above.
+                     view1 and its truth, blob holes as above;
+  plastic/depthcomp  ``--scenes Plastic/depthcomp``: Plastic at HalfSize with the paper's own Table 6 holes
+                     (DepthComp's ``plastic-disp-hole.png`` under ``--data``, pooled from FullSize by 2×2 blocks).
 
 The fit runs as ``complete`` runs it (``working_size.shrink``, ``complete_depth``, rgbd, the ``kit``
 recipe). ``--cache DIR`` keeps each fit's working-size depth (an .npz per case, profile, seed and ISA), so
@@ -35,6 +37,7 @@ import argparse  # noqa: E402
 import json  # noqa: E402
 import multiprocessing  # noqa: E402
 import time  # noqa: E402
+from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
@@ -76,13 +79,25 @@ def make_cases(data: str | None, scenes, sgbm: bool = True) -> list:
         from ddp_lite.studies.real_cases import make_real_case
         real = make_real_case("sgbm", factor=1)
         cases.append(Case("motorcycle/sgbm", real.rgb, real.depth, real.gt, real.fb))
-    for name in scenes if data else ():
+    for entry in scenes if data else ():
+        name, _, holes = entry.partition("/")
         matches = [f for f in sorted(os.listdir(data)) if f.split("-", 1)[-1] == name]
         if not matches:
             raise SystemExit(f"--data {data!r} has no folder for scene {name!r} (e.g. 2006-{name})")
+        if holes not in ("", "blobs", "depthcomp"):
+            raise SystemExit(f"--scenes: {entry!r}: the holes must be blobs (the default) or depthcomp")
         rail = load_rail_scene(os.path.join(data, matches[0]))
         gt = rail[0].depth
-        cases.append(Case(f"{name.lower()}/blobs", rail[0].rgb, blob_holes(gt), gt,
+        if holes == "depthcomp":
+            from ddp_lite.data.samples import read_depthcomp_holes
+            from ddp_lite.studies.real_suite import DEPTHCOMP_FILE
+            files = sorted(Path(data).rglob(DEPTHCOMP_FILE))
+            if name != "Plastic" or not files:
+                raise SystemExit(f"--scenes: DepthComp's holes exist for Plastic only, in {DEPTHCOMP_FILE} under --data")
+            depth = np.where(read_depthcomp_holes(files[0], gt.shape), np.nan, gt).astype(np.float32)
+        else:
+            depth = blob_holes(gt)
+        cases.append(Case(f"{name.lower()}/{holes or 'blobs'}", rail[0].rgb, depth, gt,
                           rail[0].camera.focal * rail.meta["baseline"]))
     return cases
 
@@ -143,7 +158,7 @@ def main() -> None:
     add_profile_args(parser)
     parser.add_argument("--isa", default="native", help="native or avx2 (benchmarks/isa.py)")
     parser.add_argument("--data", help="a folder of Middlebury 2005/2006 scenes (2006-Plastic/ ...)")
-    parser.add_argument("--scenes", nargs="+", default=list(SCENES[:3]), help="scene names under --data")
+    parser.add_argument("--scenes", nargs="+", default=list(SCENES[:3]), help="scene names under --data (Plastic/depthcomp: the paper's own holes)")
     parser.add_argument("--no-sgbm", action="store_true", help="skip Motorcycle's SGBM holes")
     parser.add_argument("--seeds", type=int, nargs="+", default=[0], help="the fit's seeds")
     parser.add_argument("--cache", help="keep (and reuse) each fit's working-size depth in this folder")

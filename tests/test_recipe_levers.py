@@ -420,3 +420,33 @@ def test_image_input_feeds_the_colour_image_to_variants_that_see_it_and_not_to_d
     assert torch.allclose(input_rgbd[:, 2:], expected, atol=1e-6)
     assert torch.equal(input_rgbd[:, :2], input_d)
     assert input_d.shape == (1, 2, 12, 16)  # depth-only sees no colour, not even as input
+
+
+def test_start_at_makes_the_first_depth_output_the_given_disparity_and_leaves_the_colour_channels():
+    from ddp_lite.method.kit.net_inputs import start_at
+    torch.manual_seed(3)
+    net, x = UNet(2, 4, channels=(4, 8)), torch.rand(1, 2, 10, 14)
+    before = net(x).detach()
+    start = torch.from_numpy(np.random.default_rng(0).uniform(0.05, 0.95, (1, 1, 10, 14)).astype(np.float32))
+    start_at(net, x, start)
+    after = net(x).detach()
+    assert torch.allclose(after[:, :1], start, atol=1e-5)
+    assert torch.allclose(after[:, 1:], before[:, 1:], atol=1e-6)
+    with pytest.raises(TypeError, match="config.fill_start"):
+        FitConfig(fill_start=1).validate()
+
+
+def test_fill_start_begins_the_fit_at_the_colorization_fill_of_the_input():
+    from ddp_lite.classical.guided_fills import fill_colorization
+    depth = tilted_plane(12, 16)
+    depth[4:8, 5:11] = np.nan
+    rgb = np.random.default_rng(1).random((12, 16, 3)).astype(np.float32)
+    transform = DisparityTransform.from_depth(depth)
+    # the reference: colorization of the input's disparity (shifted positive, as the fills take metres)
+    reference = transform.to_depth(fill_colorization(transform.to_disparity(depth) + 1.0, rgb) - 1.0)
+    holes = np.isnan(depth)
+    for fill_start in (False, True):
+        config = FitConfig(**{**TINY, "lr": 1e-9}, iterations=1, auto_stop=False, fill_start=fill_start)
+        result = complete_depth(rgb, depth.copy(), variant="rgbd", config=config, transform=transform)
+        error = np.abs(result.depth[holes] - reference[holes]).max()
+        assert (error < 1e-3) == fill_start, (fill_start, error)

@@ -24,7 +24,7 @@ from ..core.progress import FitBar
 from .config import FitConfig
 from .input_checks import FitInputs, check_fit_inputs
 from .kit.hole_terms import HoleTerms
-from .kit.net_inputs import fill_channel, image_channels
+from .kit.net_inputs import fill_channel, image_channels, start_at
 from .kit.warp_terms import kit_warp_arguments
 from .paper.disparity import DisparityTransform
 from .paper.total_loss import PaperLoss
@@ -146,13 +146,17 @@ def run_fit(inputs: FitInputs, config: FitConfig, options: RunOptions, *, callba
     inputs_of_net = config.net_inputs
     if inputs_of_net.image_input > 0 and rgb_t is not None:
         image = image_channels(rgb_t, inputs_of_net.image_input, inputs_of_net.image_blur)  # (1, 3, H, W)
-    if inputs_of_net.fill_input > 0:  # from the fitted pixels only: the held-out ones stay unseen
-        fill = fill_channel(transform.to_disparity(np.where(valid & ~heldout, depth, np.nan)),
-                            rgb if spec.uses_rgb else None, inputs_of_net.fill_input)
-        fill = to_tensor(fill, device)  # (1, 1, H, W)
-        image = fill if image is None else torch.cat([image, fill], dim=1)
+    fill = None  # a classical fill of the fitted pixels only: the held-out ones stay unseen
+    if inputs_of_net.fill_input > 0 or inputs_of_net.fill_start:
+        fill = to_tensor(fill_channel(transform.to_disparity(np.where(valid & ~heldout, depth, np.nan)),
+                                      rgb if spec.uses_rgb else None), device)  # (1, 1, H, W) in [0, 1]
+    if inputs_of_net.fill_input > 0:
+        extra = inputs_of_net.fill_input * fill
+        image = extra if image is None else torch.cat([image, extra], dim=1)
     net, noise = loop.build(config, spec.out_channels, H, W, device, init.state if init is not None else None,
                             noise, image)
+    if inputs_of_net.fill_start:
+        start_at(net, noise, fill)
     start = time.perf_counter()
     progress = FitBar(iterations, f"DDP {variant}", options.progress)
     output, history, ran, best = loop.run(net, noise, loss_fn, config, iterations, heldout_error, evaluate,

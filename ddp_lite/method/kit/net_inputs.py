@@ -2,7 +2,7 @@
 noise (``net_input``), and extra channels joined to it by the fit (off in the ``paper`` recipe): the
 view's colour image, blurred (``image_input``, :func:`image_channels`), and a classical fill of the
 input disparity (``fill_input``, :func:`fill_channel`). The net takes them as extra input channels; it
-does not know what they are.
+does not know what they are. ``fill_start`` starts the net's output at that fill instead (:func:`start_at`).
 """
 from __future__ import annotations
 
@@ -19,22 +19,26 @@ from ...core.settings import Settings
 from ..paper.losses import blur_valid, gaussian_kernel_1d  # SSIM's separable Gaussian, reused for the image input
 from ..paper.nets import NET_INPUTS
 
-__all__ = ["NetInputConfig", "image_channels", "fill_channel"]
+__all__ = ["NetInputConfig", "image_channels", "fill_channel", "start_at"]
 
 
 @dataclass(frozen=True)
 class NetInputConfig(Settings):
-    """What the net is fed besides the paper's noise (4 fields; the defaults are the paper's input)."""
+    """What the net is fed besides the paper's noise, and where its output starts (5 fields; the defaults
+    are the paper's)."""
 
     net_input: str = "noise"  # "noise" (the paper) or "meshgrid" (x, y in the first two channels; nets.make_input)
     image_input: float = 0.0  # > 0: the colour image × this joins the net input (variants with colour)
     image_blur: float = 1.0  # σ in px of the Gaussian blur on that image (0: none)
     fill_input: float = 0.0  # > 0: a classical fill of the input disparity × this joins the net input
+    fill_start: bool = False  # the net's first output is that fill: it fits what the fill gets wrong (start_at)
 
     def validate(self) -> None:
         check_choice(self.net_input, "config.net_input", NET_INPUTS)
         for name in ("image_input", "image_blur", "fill_input"):
             check_real(getattr(self, name), f"config.{name}", 0.0)
+        if not isinstance(self.fill_start, (bool, np.bool_)):
+            raise TypeError(f"config.fill_start must be True or False, got {self.fill_start!r}")
 
 
 def image_channels(image: torch.Tensor, scale: float = 1.0, blur: float = 1.0) -> torch.Tensor:
@@ -74,3 +78,29 @@ def fill_channel(disparity: np.ndarray, rgb: np.ndarray | None, scale: float = 1
     shifted = disparity + 1.0  # the fills take positive values (they are written for metres); 0 is a valid disparity
     filled = fill_colorization(shifted, rgb) if rgb is not None else fill_linear(shifted)
     return (scale * (filled - 1.0)).astype(np.float32)
+
+
+def start_at(net, net_input: torch.Tensor, disparity: torch.Tensor) -> None:
+    """Make ``net``'s first output on ``net_input`` (1, C, H, W) equal ``disparity`` (1, 1, H, W) in [0, 1]
+    (its first channel; the others are left as they are), by a fixed offset before its sigmoid
+    (``net.start_offset``, (1, C_out, H, W)): logit(disparity) − the net's first logits. Clipped to
+    [1e-4, 1 − 1e-4] before the logit.
+
+    The fit then starts where a classical fill is, and the deep prior shapes what it changes: the
+    offset is fixed, so what the net learns is the correction, smooth the way its output would be.
+
+    Example:
+        >>> from ddp_lite.method.paper.nets import UNet
+        >>> net, x = UNet(2, 4, channels=(4, 8)), torch.rand(1, 2, 6, 8)
+        >>> start_at(net, x, torch.full((1, 1, 6, 8), 0.3))
+        >>> depth_channel = net(x)[0, 0]
+        >>> round(float(depth_channel.min()), 4), round(float(depth_channel.max()), 4)
+        (0.3, 0.3)
+    """
+    net.start_offset = None
+    with torch.no_grad():
+        first = net(net_input).clamp(1e-6, 1 - 1e-6)  # (1, C_out, H, W)
+        offset = torch.zeros_like(first)
+        target = disparity.to(first).clamp(1e-4, 1 - 1e-4)
+        offset[:, :1] = torch.logit(target) - torch.logit(first[:, :1])
+    net.start_offset = offset

@@ -78,9 +78,12 @@ def _conv(c_in: int, c_out: int, kernel: int = 3, stride: int = 1, pad: str = "r
 
 
 class _PadCrop(nn.Module):
-    """Pads (B, C, H, W) to a multiple of ``factor`` before the body and crops after."""
+    """Pads (B, C, H, W) to a multiple of ``factor`` before the body and crops after. ``start_offset``
+    (None, or (1, C_out, H, W), fixed) is added before the sigmoid: the kit's start at a classical fill
+    (:func:`ddp_lite.method.kit.net_inputs.start_at`); the paper's nets have none."""
 
     factor = 1
+    start_offset = None
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         H, W = x.shape[-2:]
@@ -88,7 +91,10 @@ class _PadCrop(nn.Module):
         if pad_h or pad_w:
             mode = "reflect" if pad_h < H and pad_w < W else "replicate"
             x = F.pad(x, (0, pad_w, 0, pad_h), mode=mode)
-        return torch.sigmoid(self.body(x))[..., :H, :W]
+        logits = self.body(x)[..., :H, :W]  # (B, C_out, H, W)
+        if self.start_offset is not None:
+            logits = logits + self.start_offset
+        return torch.sigmoid(logits)
 
 
 class UNet(_PadCrop):
