@@ -12,7 +12,7 @@ DEFAULTS = dict(
     schedule='step', iterations=None, lr_milestones=(12000, 15000), lr_gamma=0.01, lambda_z=0.8, lambda_i=0.5,
     lambda_w=0.5, gammas=None, disparity_margin=1.25, seed=0,
     # net_inputs
-    net_input='noise', image_input=0.0, image_blur=1.0, fill_input=0.0,
+    net_input='noise', image_input=0.0, image_blur=1.0, fill_input=0.0, fill_start=False,
     # holes
     smoothness=0.0, smoothness_edge=10.0, edge_guide='grey', flatness=0.0, affinity=0.0, flatness_reach=None,
     step_reach=None,
