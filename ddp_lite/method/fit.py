@@ -156,7 +156,7 @@ def run_fit(inputs: FitInputs, config: FitConfig, options: RunOptions, *, callba
     net, noise = loop.build(config, spec.out_channels, H, W, device, init.state if init is not None else None,
                             noise, image)
     if inputs_of_net.fill_start:
-        start_at(net, noise, fill)
+        start_at(net, fill)
     start = time.perf_counter()
     progress = FitBar(iterations, f"DDP {variant}", options.progress)
     output, history, ran, best = loop.run(net, noise, loss_fn, config, iterations, heldout_error, evaluate,

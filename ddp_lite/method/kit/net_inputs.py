@@ -80,27 +80,28 @@ def fill_channel(disparity: np.ndarray, rgb: np.ndarray | None, scale: float = 1
     return (scale * (filled - 1.0)).astype(np.float32)
 
 
-def start_at(net, net_input: torch.Tensor, disparity: torch.Tensor) -> None:
-    """Make ``net``'s first output on ``net_input`` (1, C, H, W) equal ``disparity`` (1, 1, H, W) in [0, 1]
-    (its first channel; the others are left as they are), by a fixed offset before its sigmoid
-    (``net.start_offset``, (1, C_out, H, W)): logit(disparity) − the net's first logits. Clipped to
-    [1e-4, 1 − 1e-4] before the logit.
+def start_at(net, disparity: torch.Tensor) -> None:
+    """Make ``net``'s first output channel start at ``disparity`` (1, 1, H, W) in [0, 1] and learn a
+    correction to it: that channel's weights and bias in the net's 1×1 ``head`` are zeroed, so its
+    logits start at 0 everywhere, and logit(disparity) (clipped to [1e-4, 1 − 1e-4]) is added before the
+    sigmoid as a fixed offset (``net.start_offset``, (1, C_out, H, W), 0 on the other channels, which
+    keep their random start).
 
     The fit then starts where a classical fill is, and the deep prior shapes what it changes: the
-    offset is fixed, so what the net learns is the correction, smooth the way its output would be.
+    correction is what the net's output is, smooth the way that output would be, and 0 where the
+    losses do not move it.
 
     Example:
         >>> from ddp_lite.method.paper.nets import UNet
         >>> net, x = UNet(2, 4, channels=(4, 8)), torch.rand(1, 2, 6, 8)
-        >>> start_at(net, x, torch.full((1, 1, 6, 8), 0.3))
+        >>> start_at(net, torch.full((1, 1, 6, 8), 0.3))
         >>> depth_channel = net(x)[0, 0]
         >>> round(float(depth_channel.min()), 4), round(float(depth_channel.max()), 4)
         (0.3, 0.3)
     """
-    net.start_offset = None
     with torch.no_grad():
-        first = net(net_input).clamp(1e-6, 1 - 1e-6)  # (1, C_out, H, W)
-        offset = torch.zeros_like(first)
-        target = disparity.to(first).clamp(1e-4, 1 - 1e-4)
-        offset[:, :1] = torch.logit(target) - torch.logit(first[:, :1])
+        net.head.weight[:1].zero_()
+        net.head.bias[:1].zero_()
+    offset = torch.zeros(1, net.head.out_channels, *disparity.shape[-2:], device=disparity.device)
+    offset[:, :1] = torch.logit(disparity.float().clamp(1e-4, 1 - 1e-4))
     net.start_offset = offset
