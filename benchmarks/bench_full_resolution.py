@@ -4,6 +4,7 @@ every classical fill of ``baselines.BASELINES`` computed at that full size.
 
     python benchmarks/bench_full_resolution.py --data DIR --isa avx2 --out benchmarks/results/full_resolution.jsonl
     python benchmarks/bench_full_resolution.py --data DIR --cache /tmp/fits --fits-only     # the fits alone, cached
+    python benchmarks/bench_full_resolution.py --data DIR --scenes Plastic/depthcomp --no-sgbm --seeds 0 1 2
 
 Cases (each at full size, scored in the holes where the truth is known, RMSE of disparity in the image's own
 pixels, f·B/Z):
@@ -79,6 +80,8 @@ def make_cases(data: str | None, scenes, sgbm: bool = True) -> list:
         from ddp_lite.studies.real_cases import make_real_case
         real = make_real_case("sgbm", factor=1)
         cases.append(Case("motorcycle/sgbm", real.rgb, real.depth, real.gt, real.fb))
+    from ddp_lite.data.samples import read_depthcomp_holes
+    from ddp_lite.studies.real_suite import DEPTHCOMP_FILE
     for entry in scenes if data else ():
         name, _, holes = entry.partition("/")
         matches = [f for f in sorted(os.listdir(data)) if f.split("-", 1)[-1] == name]
@@ -86,15 +89,13 @@ def make_cases(data: str | None, scenes, sgbm: bool = True) -> list:
             raise SystemExit(f"--data {data!r} has no folder for scene {name!r} (e.g. 2006-{name})")
         if holes not in ("", "blobs", "depthcomp"):
             raise SystemExit(f"--scenes: {entry!r}: the holes must be blobs (the default) or depthcomp")
+        hole_files = sorted(Path(data).rglob(DEPTHCOMP_FILE)) if holes == "depthcomp" else []
+        if holes == "depthcomp" and (name != "Plastic" or not hole_files):
+            raise SystemExit(f"--scenes: DepthComp's holes exist for Plastic only, in {DEPTHCOMP_FILE} under --data")
         rail = load_rail_scene(os.path.join(data, matches[0]))
         gt = rail[0].depth
         if holes == "depthcomp":
-            from ddp_lite.data.samples import read_depthcomp_holes
-            from ddp_lite.studies.real_suite import DEPTHCOMP_FILE
-            files = sorted(Path(data).rglob(DEPTHCOMP_FILE))
-            if name != "Plastic" or not files:
-                raise SystemExit(f"--scenes: DepthComp's holes exist for Plastic only, in {DEPTHCOMP_FILE} under --data")
-            depth = np.where(read_depthcomp_holes(files[0], gt.shape), np.nan, gt).astype(np.float32)
+            depth = np.where(read_depthcomp_holes(hole_files[0], gt.shape), np.nan, gt).astype(np.float32)
         else:
             depth = blob_holes(gt)
         cases.append(Case(f"{name.lower()}/{holes or 'blobs'}", rail[0].rgb, depth, gt,
@@ -158,7 +159,8 @@ def main() -> None:
     add_profile_args(parser)
     parser.add_argument("--isa", default="native", help="native or avx2 (benchmarks/isa.py)")
     parser.add_argument("--data", help="a folder of Middlebury 2005/2006 scenes (2006-Plastic/ ...)")
-    parser.add_argument("--scenes", nargs="+", default=list(SCENES[:3]), help="scene names under --data (Plastic/depthcomp: the paper's own holes)")
+    parser.add_argument("--scenes", nargs="+", default=list(SCENES[:3]),
+                        help="scene names under --data (Plastic/depthcomp: the paper's own holes)")
     parser.add_argument("--no-sgbm", action="store_true", help="skip Motorcycle's SGBM holes")
     parser.add_argument("--seeds", type=int, nargs="+", default=[0], help="the fit's seeds")
     parser.add_argument("--cache", help="keep (and reuse) each fit's working-size depth in this folder")
