@@ -143,7 +143,7 @@ def test_a_scene_without_a_right_view_or_a_bad_factor_is_refused():
             make_real_case("blobs-1", factor=bad)
 
 
-def test_compare_fills_builds_photo_from_the_kit_and_paper_fits_and_matches_photo_run_alone(monkeypatch):
+def test_compare_fills_fits_each_distinct_method_once_and_matches_each_recipe_run_alone(monkeypatch):
     import dataclasses
 
     import torch
@@ -157,16 +157,18 @@ def test_compare_fills_builds_photo_from_the_kit_and_paper_fits_and_matches_phot
     fits, real = [], real_cases.complete_depth
     monkeypatch.setattr(real_cases, "complete_depth", lambda *a, **k: fits.append(k["config"]) or real(*a, **k))
     threads = torch.get_num_threads()
-    torch.set_num_threads(1)  # photo's two fits then run one after the other, as compare_fills runs them
+    torch.set_num_threads(1)  # the fits then run one after the other, as compare_fills runs them
     try:
-        out = real_cases.compare_fills(case, profile, recipes=("paper", "kit", "photo"))
+        out = real_cases.compare_fills(case, profile, recipes=("paper", "kit", "photo", "kit"))
         alone = {recipe: case.fb / real(case.rgb, case.depth, case.camera, (), variant="rgbd",
                                           config=FitConfig.for_profile(profile, variant="rgbd",
                                                                        recipe=recipe)).merged(case.depth)
                  for recipe in ("kit", "photo")}
     finally:
         torch.set_num_threads(threads)
-    assert len(fits) == 2 and all(config.combination.blend_fill == 0 for config in fits)  # kit's and paper's, no third
+    # paper's, kit's and photo's (which fits without the kit's hole terms); kit listed twice is fitted once
+    assert len(fits) == 3 and all(config.combination.blend_fill == 0 for config in fits)
+    assert [config.holes.smoothness > 0 for config in fits] == [False, True, False]
     for recipe, px in alone.items():  # each recipe as complete_depth computes it on its own
         assert np.allclose(out[f"DDP {recipe}"], px, rtol=1e-5, atol=1e-5), recipe
     assert not np.allclose(out["DDP photo"], out["DDP kit"], atol=1e-3)
