@@ -209,7 +209,9 @@ def compare_fills(case: RealCase, profile=None, recipes=("paper", "kit"), varian
     The classical fills fill the disparity map (d = f·B/Z); DDP fits its own normalised disparity,
     from the input depth's range, with the profile's size and budget (``rgbd+warp`` warps the right
     view), told the case's ``depth_source``. Names: the fills' keys, then ``"DDP <recipe>"``. A blend of two
-    recipes listed before it (a blend of ``paper`` and ``kit``, or ``photo``: the ``kit`` fit refined) is built from the fits it reuses: the same method, fewer fits.
+    recipes listed before it (of ``paper`` and ``kit``), or a recipe whose fit is one listed before it with
+    only the refinement or the fill's share changed, is built from the fits it reuses: the same method, fewer
+    fits (``photo`` fits without the kit's hole terms: a fit of its own).
     The fits run side by side (:mod:`ddp_lite.method.runtime.side_by_side`), as ``options`` say (no progress bars
     by default).
     """

@@ -14,7 +14,7 @@ import torch.nn.functional as F
 
 from ...classical.depth_fills import fill_linear
 from ...classical.guided_fills import fill_colorization
-from ...core.checks import check_choice, check_real
+from ...core.checks import check_bool, check_choice, check_real
 from ...core.settings import Settings
 from ..paper.losses import blur_valid, gaussian_kernel_1d  # SSIM's separable Gaussian, reused for the image input
 from ..paper.nets import NET_INPUTS
@@ -37,8 +37,7 @@ class NetInputConfig(Settings):
         check_choice(self.net_input, "config.net_input", NET_INPUTS)
         for name in ("image_input", "image_blur", "fill_input"):
             check_real(getattr(self, name), f"config.{name}", 0.0)
-        if not isinstance(self.fill_start, (bool, np.bool_)):
-            raise TypeError(f"config.fill_start must be True or False, got {self.fill_start!r}")
+        check_bool(self.fill_start, "config.fill_start")
 
 
 def image_channels(image: torch.Tensor, scale: float = 1.0, blur: float = 1.0) -> torch.Tensor:
