@@ -5,6 +5,7 @@ every classical fill of ``baselines.BASELINES`` computed at that full size.
     python benchmarks/bench_full_resolution.py --data DIR --isa avx2 --out benchmarks/results/full_resolution.jsonl
     python benchmarks/bench_full_resolution.py --data DIR --cache /tmp/fits --fits-only     # the fits alone, cached
     python benchmarks/bench_full_resolution.py --data DIR --scenes Plastic/depthcomp --no-sgbm --seeds 0 1 2
+    python benchmarks/bench_full_resolution.py --data DIR --scenes Plastic Baby1 Bowling1 Art Books Dolls --isa avx2 --recipe photo
 
 Cases (each at full size, scored in the holes where the truth is known, RMSE of disparity in the image's own
 pixels, f·B/Z):
@@ -17,11 +18,12 @@ pixels, f·B/Z):
   plastic/depthcomp  ``--scenes Plastic/depthcomp``: Plastic at HalfSize with the paper's own Table 6 holes
                      (DepthComp's ``plastic-disp-hole.png`` under ``--data``, pooled from FullSize by 2×2 blocks).
 
-The fit runs as ``complete`` runs it (``working_size.shrink``, ``complete_depth``, rgbd, the ``kit``
-recipe). ``--cache DIR`` keeps each fit's working-size depth (an .npz per case, profile, seed and ISA), so
-that the refinement and the fills can be measured again without fitting. A classical fill that takes more
-than ``--fill-limit`` seconds (60) on a case runs in a child process and is stopped and reported as
-skipped. Timings are printed with the CPU's vector flags; nothing here reads a fixed data path.
+The fit runs as ``complete`` runs it (``working_size.shrink``, ``complete_depth``, rgbd, ``--recipe``: the
+``kit`` recipe by default; ``photo`` fits without the kit's hole terms, and its own solve runs once, at full
+size, as in ``complete``). ``--cache DIR`` keeps each fit's working-size depth (an .npz per case, profile, recipe,
+seed and ISA), so that the refinement and the fills can be measured again without fitting. A classical fill
+that takes more than ``--fill-limit`` seconds (60) on a case runs in a child process and is stopped and
+reported as skipped. Timings are printed with the CPU's vector flags; nothing here reads a fixed data path.
 """
 from __future__ import annotations
 
@@ -103,7 +105,7 @@ def make_cases(data: str | None, scenes, sgbm: bool = True) -> list:
     return cases
 
 
-def fit_small(case: Case, profile, seed: int, cache: str | None, isa: str):
+def fit_small(case: Case, profile, seed: int, cache: str | None, isa: str, recipe: str = "kit"):
     """DDP at the working size as ``complete`` fits it → (working-size completed depth, fit seconds, shape)."""
     from ddp_lite.method.complete import complete_depth
     from ddp_lite.method.config import FitConfig
@@ -113,12 +115,14 @@ def fit_small(case: Case, profile, seed: int, cache: str | None, isa: str):
     path = None
     if cache:
         os.makedirs(cache, exist_ok=True)
-        path = os.path.join(cache, f"{case.name.replace('/', '_')}_{profile.name}_s{seed}_{isa}.npz")
+        tag = "" if recipe == "kit" else f"_{recipe}"  # the kit's fits keep the names they were cached under
+        path = os.path.join(cache, f"{case.name.replace('/', '_')}_{profile.name}{tag}_s{seed}_{isa}.npz")
         if os.path.exists(path):
             stored = np.load(path)
             return stored["depth"], float(stored["seconds"]), shape
     small_rgb, small_depth = shrink(case.rgb, case.depth, shape)
-    config = FitConfig.for_profile(profile, variant="rgbd", recipe="kit", seed=seed)
+    # the recipe's own solve (photo) runs at full size in evaluate, as complete runs it: not also here
+    config = FitConfig.for_profile(profile, variant="rgbd", recipe=recipe, seed=seed).replace(refine=False)
     start = time.perf_counter()
     result = complete_depth(small_rgb, small_depth, variant="rgbd", config=config, options=RunOptions(progress=False))
     seconds = time.perf_counter() - start
@@ -163,6 +167,7 @@ def main() -> None:
                         help="scene names under --data (Plastic/depthcomp: the paper's own holes)")
     parser.add_argument("--no-sgbm", action="store_true", help="skip Motorcycle's SGBM holes")
     parser.add_argument("--seeds", type=int, nargs="+", default=[0], help="the fit's seeds")
+    parser.add_argument("--recipe", choices=("kit", "photo", "paper"), default="kit", help="the fit's recipe")
     parser.add_argument("--cache", help="keep (and reuse) each fit's working-size depth in this folder")
     parser.add_argument("--fits-only", action="store_true", help="only run (and cache) the fits")
     parser.add_argument("--fill-limit", type=float, default=60.0, help="seconds a classical fill may take")
@@ -174,7 +179,7 @@ def main() -> None:
     cases = make_cases(args.data, args.scenes, sgbm=not args.no_sgbm)
     for case in cases:
         for seed in args.seeds:
-            small, seconds, shape = fit_small(case, profile, seed, args.cache, args.isa)
+            small, seconds, shape = fit_small(case, profile, seed, args.cache, args.isa, args.recipe)
             print(f"{case.name} seed {seed}: fit at {shape[0]}×{shape[1]} {seconds:.1f} s", flush=True)
     if args.fits_only:
         return
@@ -183,10 +188,10 @@ def main() -> None:
     for case in cases:
         fills = {name: cached_fill(name, case, args.fill_limit, args.cache) for name in FILL_NAMES}
         for seed in args.seeds:
-            small, seconds, shape = fit_small(case, profile, seed, args.cache, args.isa)
+            small, seconds, shape = fit_small(case, profile, seed, args.cache, args.isa, args.recipe)
             row = evaluate(case, small, sweep, fills)
-            row.update(case=case.name, seed=seed, profile=profile.name, isa=args.isa, threads=args.threads,
-                       shape=list(case.depth.shape), working=list(shape), fit_seconds=seconds,
+            row.update(case=case.name, seed=seed, profile=profile.name, recipe=args.recipe, isa=args.isa,
+                       threads=args.threads, shape=list(case.depth.shape), working=list(shape), fit_seconds=seconds,
                        holes=float((~np.isfinite(case.depth)).mean()), scored=int(case.scored.sum()))
             row["fills"] = {name: (None if out is None else case.rmse_px(out)) for name, (out, _) in fills.items()}
             row["fill_seconds"] = {name: s for name, (_, s) in fills.items()}
@@ -197,7 +202,7 @@ def main() -> None:
                 with open(args.out, "a") as out:
                     out.write(json.dumps(row) + "\n")
             report(row)
-    print(f"\nhole RMSE at full size (disparity px), '{profile.name}', kit recipe, rgbd; seconds taken with "
+    print(f"\nhole RMSE at full size (disparity px), '{profile.name}', {args.recipe} recipe, rgbd; seconds taken with "
           f"{args.threads} torch thread(s), ISA {args.isa} (see the CPU line)")
     print(f"{'case':<18}{'seed':>5}{'full-res':>10}{'upsampled':>11}  {'best fill':<26}{'ratio':>7}{'refine s':>10}{'fit s':>8}")
     for r in rows:

@@ -23,8 +23,8 @@ PROFILE_SIZES = "size and budget: ci (seconds), class (minutes on a laptop CPU),
 RECIPE_NAMES = ("kit", "paper", "photo")  # ddp_lite.method.kit.recipes.RECIPES, without importing the method here
 RECIPE_HELP = ("the method: kit = the paper's losses plus the kit's hole terms and net inputs, and (variants with "
                "colour) a share of a colour-guided fill; paper = the paper's method alone; photo = for real "
-               "photographs, the kit fit made sharp by an image-guided bilateral solve, with the kit's share of the fill "
-               "(complete runs that solve at the photo's full size with either) "
+               "photographs, the kit's fit without its hole terms, made sharp by an image-guided bilateral "
+               "solve, with the kit's share of the fill (complete runs that solve at the photo's full size with either) "
                "(default: $DDP_RECIPE, else kit)")
 # ddp_lite.method.runtime.device.resolve_device's order for no --device
 DEVICE_HELP = "cpu, cuda[:N] or mps (default: cuda when present, else mps when present, else cpu)"
