@@ -12,6 +12,7 @@ half of the scenes and confirmed on the other.
     python benchmarks/study_fill_blends.py --data DIR answer-rules --seeds 0 1 2 --out R5          # other answers
     python benchmarks/study_fill_blends.py --data DIR warp-scenes --from-rows R R_rgbd             # the warp term, per scene
     python benchmarks/study_fill_blends.py --data DIR per-case --from-rows R R_rgbd                # the per-scene table
+    python benchmarks/study_fill_blends.py --data DIR per-case --from-rows R R_rgbd P P_rgbd       # ... photo's own fits
 
 The best classical fill differs from case to case (the bilateral solver on most, colorization on
 occlusions, the guided filter on Plastic's strokes), so "DDP over the best fill" compares DDP with an
@@ -446,43 +447,56 @@ def warp_scenes(warp_rows: Path, rgbd_rows: Path, residual: Path) -> None:
               + (f"  {off[1]:.2f}  {off[0]:.2f} px" if off else ""))
 
 
-def per_case(warp_rows: Path, rgbd_rows: Path) -> None:
-    """The per-scene table: per case, its best fill and best Table 6 method (px), and ``kit`` and ``photo`` by
-    source with and without the warp term over each (mean over the seeds both variants have); then the
-    means per hole kind. Rows of ``report --core`` for rgbd+warp fits (``warp_rows``) and rgbd fits."""
-    table6 = [f"fill {n}" for n in table6_fills()]
+def _variant_rows(warp_rows: Path, rgbd_rows: Path) -> dict:
+    """{"rgbd+warp": {(case, seed): row}, "rgbd": ...} from two rows files of ``report --core``, each row with the
+    ``photo by source`` rule added."""
     variants = {}
     for label, path in (("rgbd+warp", warp_rows), ("rgbd", rgbd_rows)):
         rows = [json.loads(line) for line in path.read_text().splitlines()]
         for r in rows:
             by_source(r)
         variants[label] = {(r["case"], r["seed"]): r for r in rows}
-    keys = sorted(set(variants["rgbd+warp"]) & set(variants["rgbd"]))
-    cases = sorted({case for case, _ in keys}, key=lambda c: (c.split("/")[1], c))
-    columns = [(v, rule) for rule in ("kit", BY_SOURCE_RULE) for v in ("rgbd", "rgbd+warp")]
-    print(f"{len(keys)} case-seeds: hole RMSE (disparity px) of the best fill and the best Table 6 method, and each "
-          "DDP rule's over them, best fill (best Table 6), mean over the seeds")
-    print(f"{'case':<22} {'seeds':<6} {'best fill (px)':<28} {'best Table 6 (px)':<22}"
-          + "".join(f"{rule.replace('photo by source', 'photo')}/{v:<10}" .rjust(22) for v, rule in columns))
+    return variants
+
+
+def per_case(warp_rows: Path, rgbd_rows: Path, photo_rows: tuple[Path, Path] | None = None) -> None:
+    """The per-scene table: per case, its best fill and best Table 6 method (px), and ``kit`` and ``photo`` by
+    source with and without the warp term over each (mean over the seeds both variants have); then the
+    means per hole kind. Rows of ``report --core`` for rgbd+warp fits (``warp_rows``) and rgbd fits of the ``kit``
+    recipe; ``photo_rows``: the same two for the ``photo`` recipe's own fits (without the kit's hole terms), whose
+    ``photo`` columns then replace those read from the ``kit`` fits (means over the seeds both of them have)."""
+    table6 = [f"fill {n}" for n in table6_fills()]
+    sources = {"kit": _variant_rows(warp_rows, rgbd_rows)}
+    sources["photo"] = _variant_rows(*photo_rows) if photo_rows else sources["kit"]
+    keys = {name: sorted(set(v["rgbd+warp"]) & set(v["rgbd"])) for name, v in sources.items()}
+    cases = sorted({case for case, _ in keys["kit"]} & {case for case, _ in keys["photo"]},
+                   key=lambda c: (c.split("/")[1], c))
+    columns = [(recipe, v, rule) for recipe, rule in (("kit", "kit"), ("photo", BY_SOURCE_RULE))
+               for v in ("rgbd", "rgbd+warp")]
+    seeds_of = {name: sorted({seed for _, seed in keys[name]}) for name in sources}
+    print(f"{len(cases)} cases: hole RMSE (disparity px) of the best fill and the best Table 6 method, and each "
+          "DDP rule's over them, best fill (best Table 6), mean over the seeds both variants have (kit: seeds "
+          f"{seeds_of['kit']}; photo: seeds {seeds_of['photo']}" + (", its own fits" if photo_rows else "") + ")")
+    print(f"{'case':<22} {'best fill (px)':<28} {'best Table 6 (px)':<22}"
+          + "".join(f"{recipe}/{v:<10}".rjust(22) for recipe, v, _ in columns))
     means = defaultdict(lambda: defaultdict(list))
     for case in cases:
-        seeds = [seed for c, seed in keys if c == case]
-        first = variants["rgbd"][case, seeds[0]]
+        first = sources["kit"]["rgbd"][next(k for k in keys["kit"] if k[0] == case)]
         fills = {k: first[k] for k in first if k.startswith("fill ")}
         best, best6 = min(fills, key=fills.get), min((k for k in table6 if k in fills), key=fills.get)
         cells = []
-        for v, rule in columns:
-            rows = [variants[v][case, seed] for seed in seeds]
+        for recipe, v, rule in columns:
+            rows = [sources[recipe][v][key] for key in keys[recipe] if key[0] == case]
             over = np.mean([r[rule] / r[best] for r in rows]), np.mean([r[rule] / r[best6] for r in rows])
-            means[v, rule][case.split("/")[1]].append(over)
-            means[v, rule]["all"].append(over)
+            means[recipe, v][case.split("/")[1]].append(over)
+            means[recipe, v]["all"].append(over)
             cells.append(f"{over[0]:.2f} ({over[1]:.2f})".rjust(22))
-        print(f"{case:<22} {','.join(map(str, seeds)):<6} {best[5:] + f' {fills[best]:.3f}':<28} "
+        print(f"{case:<22} {best[5:] + f' {fills[best]:.3f}':<28} "
               f"{best6[5:] + f' {fills[best6]:.3f}':<22}" + "".join(cells))
     for kind in list(SUITE_HOLES) + ["all"]:
-        cells = [f"{np.mean([o[0] for o in means[c][kind]]):.2f} ({np.mean([o[1] for o in means[c][kind]]):.2f})".rjust(22)
-                 for c in columns]
-        print(f"{'mean: ' + kind + f' (n={len(means[columns[0]][kind])})':<80}" + "".join(cells))
+        cells = [f"{np.mean([o[0] for o in means[c[:2]][kind]]):.2f} "
+                 f"({np.mean([o[1] for o in means[c[:2]][kind]]):.2f})".rjust(22) for c in columns]
+        print(f"{'mean: ' + kind + f' (n={len(means[columns[0][:2]][kind])})':<74}" + "".join(cells))
 
 
 def by_source(row: dict) -> None:
@@ -560,10 +574,12 @@ def main() -> None:
         fit(args.data, names, args.seeds, args.fits, args.variant, args.size,
             tuple(args.channels) if args.channels else None, dict(_setting(item) for item in args.set))
     elif args.what in ("warp-scenes", "per-case"):
-        if len(args.from_rows) != 2:
-            raise SystemExit(f"{args.what}: --from-rows WARP_ROWS RGBD_ROWS (two files)")
+        if len(args.from_rows) != 2 and not (args.what == "per-case" and len(args.from_rows) == 4):
+            raise SystemExit(f"{args.what}: --from-rows WARP_ROWS RGBD_ROWS (two files"
+                             + ("; per-case: then the photo recipe's own two, optionally)" if args.what == "per-case"
+                                else ")"))
         if args.what == "per-case":
-            per_case(*args.from_rows)
+            per_case(*args.from_rows[:2], tuple(args.from_rows[2:]) or None)
         else:
             warp_scenes(*args.from_rows, RESULTS / "warp_residual_real_suite_eighth.txt")
     elif args.what == "answer-rules":
