@@ -627,6 +627,8 @@ def test_recipe_flag_runs_the_named_method_as_ddp_recipe_does(tmp_path, monkeypa
     flag, kit, env = (np.load(tmp_path / f"{name}.npy") for name in ("flag", "kit", "env"))
     np.testing.assert_array_equal(flag, env)
     assert not np.allclose(flag, kit)
+    said = [line for line in capsys.readouterr().out.splitlines() if "fitting at" in line]
+    assert [line.split("recipe ")[-1] for line in said] == ["'paper'", "'kit'", "'paper'"], said  # the one it ran
     with pytest.raises(SystemExit):
         main(argv + ["--recipe", "papper", "--out", str(tmp_path / "bad.npy")])
     assert "--recipe" in capsys.readouterr().err

@@ -250,8 +250,9 @@ def _complete(args, writers, staged, start) -> int:
     from ..method.full_resolution import FULL_SIZE_SOLVE, refine_full_resolution
     from ..method.kit.blend import rim_width
     from ..sequences.working_size import fill_holes_at_full_size, shrink, working_shape
-    profile = get_profile(args.profile)
-    config = FitConfig.for_profile(profile, variant=args.variant, recipe=args.recipe, seed=args.seed,
+    from ..method.kit.recipes import get_recipe
+    profile, recipe = get_profile(args.profile), get_recipe(args.recipe)  # --recipe, else DDP_RECIPE, else kit
+    config = FitConfig.for_profile(profile, variant=args.variant, recipe=recipe, seed=args.seed,
                                    depth_source=args.depth_source,
                                    **({"iterations": args.iterations} if args.iterations else {}),
                                    **({"blend_fill": 0.0} if args.raw else {}))  # the net's alone: no fill's share
@@ -288,7 +289,7 @@ def _complete(args, writers, staged, start) -> int:
     if refine or args.raw:  # the recipe's solve (photo) runs at the photo's full size instead: twice costs
         config = config.replace(refine=False)
     print(f"{depth.shape[0]}×{depth.shape[1]} (H×W), {holes.mean():.1%} holes; fitting at "
-          f"{shape[0]}×{shape[1]} (--max-side {max_side}), profile '{profile.name}'"
+          f"{shape[0]}×{shape[1]} (--max-side {max_side}), profile '{profile.name}', recipe '{recipe.name}'"
           + (f", then sharpened at {depth.shape[0]}×{depth.shape[1]} along the photo's edges (off: --no-refine)"
              if refine else ""), flush=True)
     classical = _classical_fills(depth, rgb, gt)

@@ -16,7 +16,7 @@ A profile (``ci``, ``class``, ``paper``; ``DDP_PROFILE``) sets the size and the 
   made sharp by an image-guided edge-aware solve toward it (``refine``: the fast bilateral solver of
   :mod:`ddp_lite.method.full_resolution` at the fit's own size, averaged over four smoothness settings),
   with the kit's share of the colour-guided fill: one fit, 0.92× the best fill of each case on the mean
-  of the real suite's 61 cases over seeds 0-1, SGBM's depth declared a stereo matcher's
+  of the real suite's 61 cases over seeds 0-2, SGBM's depth declared a stereo matcher's
   (``docs/real_suite.md``). ``ddp-lite complete`` runs one such solve at the photo's full size instead.
   For a stereo matcher's depth, ``depth_source="stereo"`` (``FitConfig`` field; ``complete --depth-source``):
   the solves and the fill do not read the rim of its holes, which the matcher often got wrong, and reach
@@ -89,7 +89,7 @@ KIT_AT = {
 }
 
 # on real scenes the kit's hole terms, chosen on rendered ones, hold the fit flatter than the scenes are: without
-# them photo's answer is 1.9 % better over 61 cases × seeds 0-1 (lower on 84 of 122; chosen on half A among off,
+# them photo's answer is 2.0 % better over 61 cases × seeds 0-2 (lower on 123 of 183; chosen on half A among off,
 # curvature off and half weight, confirmed on half B), though a border hole may now run away (docs/real_suite.md)
 PHOTO_HOLE_TERMS = dict(smoothness=0.0, flatness=0.0)
 
