@@ -473,11 +473,10 @@ def per_case(warp_rows: Path, rgbd_rows: Path, photo_rows: tuple[Path, Path] | N
                    key=lambda c: (c.split("/")[1], c))
     columns = [(recipe, v, rule) for recipe, rule in (("kit", "kit"), ("photo", BY_SOURCE_RULE))
                for v in ("rgbd", "rgbd+warp")]
-    seeds_of = {name: sorted({seed for _, seed in keys[name]}) for name in sources}
     print(f"{len(cases)} cases: hole RMSE (disparity px) of the best fill and the best Table 6 method, and each "
-          "DDP rule's over them, best fill (best Table 6), mean over the seeds both variants have (kit: seeds "
-          f"{seeds_of['kit']}; photo: seeds {seeds_of['photo']}" + (", its own fits" if photo_rows else "") + ")")
-    print(f"{'case':<22} {'best fill (px)':<28} {'best Table 6 (px)':<22}"
+          "DDP rule's over them, best fill (best Table 6), mean over the seeds both variants have (kit's, then "
+          "photo's" + (" own fits" if photo_rows else "") + ")")
+    print(f"{'case':<22} {'seeds':<12} {'best fill (px)':<28} {'best Table 6 (px)':<22}"
           + "".join(f"{recipe}/{v:<10}".rjust(22) for recipe, v, _ in columns))
     means = defaultdict(lambda: defaultdict(list))
     for case in cases:
@@ -491,12 +490,13 @@ def per_case(warp_rows: Path, rgbd_rows: Path, photo_rows: tuple[Path, Path] | N
             means[recipe, v][case.split("/")[1]].append(over)
             means[recipe, v]["all"].append(over)
             cells.append(f"{over[0]:.2f} ({over[1]:.2f})".rjust(22))
-        print(f"{case:<22} {best[5:] + f' {fills[best]:.3f}':<28} "
+        seeds = "/".join(",".join(str(seed) for c, seed in keys[name] if c == case) for name in sources)
+        print(f"{case:<22} {seeds:<12} {best[5:] + f' {fills[best]:.3f}':<28} "
               f"{best6[5:] + f' {fills[best6]:.3f}':<22}" + "".join(cells))
     for kind in list(SUITE_HOLES) + ["all"]:
         cells = [f"{np.mean([o[0] for o in means[c[:2]][kind]]):.2f} "
                  f"({np.mean([o[1] for o in means[c[:2]][kind]]):.2f})".rjust(22) for c in columns]
-        print(f"{'mean: ' + kind + f' (n={len(means[columns[0][:2]][kind])})':<74}" + "".join(cells))
+        print(f"{'mean: ' + kind + f' (n={len(means[columns[0][:2]][kind])})':<87}" + "".join(cells))
 
 
 def by_source(row: dict) -> None:
