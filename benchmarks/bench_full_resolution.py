@@ -167,7 +167,8 @@ def main() -> None:
                         help="scene names under --data (Plastic/depthcomp: the paper's own holes)")
     parser.add_argument("--no-sgbm", action="store_true", help="skip Motorcycle's SGBM holes")
     parser.add_argument("--seeds", type=int, nargs="+", default=[0], help="the fit's seeds")
-    parser.add_argument("--recipe", choices=("kit", "photo", "paper"), default="kit", help="the fit's recipe")
+    from ddp_lite.method.kit.recipes import RECIPES
+    parser.add_argument("--recipe", choices=tuple(RECIPES), default="kit", help="the fit's recipe")
     parser.add_argument("--cache", help="keep (and reuse) each fit's working-size depth in this folder")
     parser.add_argument("--fits-only", action="store_true", help="only run (and cache) the fits")
     parser.add_argument("--fill-limit", type=float, default=60.0, help="seconds a classical fill may take")
