@@ -6,6 +6,7 @@ every classical fill of ``baselines.BASELINES`` computed at that full size.
     python benchmarks/bench_full_resolution.py --data DIR --cache /tmp/fits --fits-only     # the fits alone, cached
     python benchmarks/bench_full_resolution.py --data DIR --scenes Plastic/depthcomp --no-sgbm --seeds 0 1 2
     python benchmarks/bench_full_resolution.py --data DIR --scenes Plastic Baby1 Bowling1 Art Books Dolls --isa avx2 --recipe photo
+    python benchmarks/bench_full_resolution.py --data DIR --scenes ... --cache DIR --smoothness   # means of solves
 
 Cases (each at full size, scored in the holes where the truth is known, RMSE of disparity in the image's own
 pixels, f·B/Z):
@@ -173,6 +174,8 @@ def main() -> None:
     parser.add_argument("--fits-only", action="store_true", help="only run (and cache) the fits")
     parser.add_argument("--fill-limit", type=float, default=60.0, help="seconds a classical fill may take")
     parser.add_argument("--sweep", action="store_true", help="try every refinement setting of SWEEP")
+    parser.add_argument("--smoothness", action="store_true",
+                        help="also the refinement averaged over the solves of each SMOOTHNESS_SWEEP setting")
     parser.add_argument("--out", help="append one JSON line per case and seed here")
     args = parser.parse_args()
     profile = profile_from_args(args)
@@ -184,7 +187,8 @@ def main() -> None:
             print(f"{case.name} seed {seed}: fit at {shape[0]}×{shape[1]} {seconds:.1f} s", flush=True)
     if args.fits_only:
         return
-    sweep = {"default": {}, **(SWEEP if args.sweep else {})}
+    sweep = {"default": {}, **(SWEEP if args.sweep else {}),
+             **({k: {"settings": v} for k, v in SMOOTHNESS_SWEEP.items()} if args.smoothness else {})}
     rows = []
     for case in cases:
         fills = {name: cached_fill(name, case, args.fill_limit, args.cache) for name in FILL_NAMES}
@@ -217,9 +221,9 @@ def main() -> None:
             ratios = [r["mixed"][key] / r["fills"][r["best_fill"]] for r in rows]
             print(f"{key:<28}" + "".join(f"{r['mixed'][key]:>8.3f}" for r in rows) + f"   ratio {np.mean(ratios):.3f} "
                   f"(below 1 on {sum(x < 1 for x in ratios)} of {len(ratios)})")
-    if args.sweep:
+    if args.sweep or args.smoothness:
         print("\nsweep: hole RMSE (px) per case, and the mean of each setting's ratio to the best fill")
-        for key in SWEEP:
+        for key in [k for k in sweep if k != "default"]:
             ratios = [r["refined"][key] / r["fills"][r["best_fill"]] for r in rows]
             print(f"{key:<48}" + "".join(f"{r['refined'][key]:>8.3f}" for r in rows) + f"   ratio {np.mean(ratios):.3f}")
 
@@ -239,6 +243,17 @@ for _residual in (False, True):
                                                              residual=_residual)
     SWEEP[f"gf r=8 c=0.03 residual={_residual}"] = dict(method="guided-filter", radius=8, hole_confidence=0.03,
                                                         residual=_residual)
+
+# the refinement as `photo` runs it at its working size: the mean (in disparity) of the bilateral solver's solves
+# over (sigma_xy px, lam) settings; at full size the image is 3.5-4x the working size, so the reach is scaled too
+SMOOTHNESS_SWEEP = {
+    "one (8, 16)": ((8.0, 16.0),),
+    "one (16, 4)": ((16.0, 4.0),),
+    "mean (4|8 x 4|16)": ((4.0, 4.0), (4.0, 16.0), (8.0, 4.0), (8.0, 16.0)),
+    "mean (8|16 x 4|16)": ((8.0, 4.0), (8.0, 16.0), (16.0, 4.0), (16.0, 16.0)),
+    "mean (16|32 x 4|16)": ((16.0, 4.0), (16.0, 16.0), (32.0, 4.0), (32.0, 16.0)),
+    "mean (8|16|32 x 4|16)": ((8.0, 4.0), (8.0, 16.0), (16.0, 4.0), (16.0, 16.0), (32.0, 4.0), (32.0, 16.0)),
+}
 
 
 def cached_fill(name: str, case: Case, limit: float, cache: str | None):
@@ -260,14 +275,17 @@ def evaluate(case: Case, small, sweep: dict, fills: dict | None = None) -> dict:
     and the default refinement mixed, in disparity, with a share of a full-size fill of ``fills`` ({name:
     (depth or None, seconds)}): the bilateral solver alone, and its mean with colorization (the fill the
     ``kit`` recipe mixes in at the working size) → ``row["mixed"]["<fill> <share>"]``."""
-    from ddp_lite.method.full_resolution import refine_full_resolution
+    from ddp_lite.method.full_resolution import refine_full_resolution, refine_over_smoothness
     from ddp_lite.sequences.working_size import fill_holes_at_full_size
     upsampled = fill_holes_at_full_size(case.depth, small)
     target = fill_holes_at_full_size(case.depth, small, raw=True)
     row = {"DDP-upsampled": case.rmse_px(upsampled), "refined": {}, "refine_seconds": {}}
     for key, kwargs in sweep.items():
         start = time.perf_counter()
-        refined = refine_full_resolution(case.depth, case.rgb, target, **kwargs)
+        if "settings" in kwargs:  # several solves averaged
+            refined = refine_over_smoothness(case.depth, case.rgb, target, kwargs["settings"])
+        else:
+            refined = refine_full_resolution(case.depth, case.rgb, target, **kwargs)
         row["refine_seconds"][key] = time.perf_counter() - start
         assert np.array_equal(refined[~case.scored & np.isfinite(case.depth)],
                               case.depth[~case.scored & np.isfinite(case.depth)])
