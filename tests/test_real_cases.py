@@ -193,3 +193,37 @@ def test_compare_fills_tells_the_fit_a_stereo_matchers_depth():
                                                    config=config).merged(case.depth)
     assert np.allclose(out["DDP kit"], alone("stereo"), rtol=1e-5, atol=1e-5)
     assert not np.allclose(out["DDP kit"], alone("clean"), atol=1e-3)
+
+
+def test_compare_fills_on_pools_the_fits_of_several_cases_and_gives_each_case_its_own():
+    # two cases of different sizes and depth sources in one pool: each case's recipes fitted once, on its own
+    # input (the fit's input shapes say which), and each case's answer what complete_depth gives it alone
+    import dataclasses
+
+    import torch
+
+    from ddp_lite.studies import real_cases
+    from ddp_lite.method.config import FitConfig
+    from ddp_lite.method.profiles import get_profile
+
+    cases = [make_real_case("blobs-1", factor=8), make_real_case("sgbm", factor=16)]
+    profile = dataclasses.replace(get_profile("ci"), iterations=6)
+    shapes, real = [], real_cases.complete_depth
+    monkeypatch = pytest.MonkeyPatch()
+    monkeypatch.setattr(real_cases, "complete_depth", lambda *a, **k: shapes.append(a[1].shape) or real(*a, **k))
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        outs = real_cases.compare_fills_on(cases, profile, recipes=("kit", "photo"))
+        monkeypatch.undo()
+        alone = [case.fb / real(case.rgb, case.depth, case.camera, (), variant="rgbd", config=FitConfig.for_profile(
+            profile, variant="rgbd", recipe="kit", depth_source=case.depth_source)).merged(case.depth) for case in cases]
+    finally:
+        torch.set_num_threads(threads)  # the fits above ran on one thread each, as the pool runs them
+        monkeypatch.undo()
+    assert sorted(shapes) == sorted([cases[0].depth.shape] * 2 + [cases[1].depth.shape] * 2)
+    assert len(outs) == 2
+    for case, out, px in zip(cases, outs, alone):
+        assert set(out) >= {"DDP kit", "DDP photo", "linear"} and out["linear"].shape == case.depth.shape
+        assert np.allclose(out["DDP kit"], px, rtol=1e-5, atol=1e-5), case.depth_source
+    assert cases[0].depth.shape != cases[1].depth.shape

@@ -41,7 +41,7 @@ from ..classical.stereo import sgm_disparity, sgm_left_right_failures
 from ..core.views import Scene, View
 
 __all__ = ["REAL_HOLES", "REAL_FACTORS", "make_real_case", "pool_scene", "RealCase", "factor_for_profile",
-           "compare_fills"]
+           "compare_fills", "compare_fills_on"]
 
 REAL_HOLES = ("blobs-1", "blobs-2", "blobs-3", "sgbm", "occlusion")
 REAL_FACTORS = {8: "62x92", 4: "125x185", 2: "250x370", 1: "500x740"}  # Motorcycle's pooled sizes
@@ -215,19 +215,29 @@ def compare_fills(case: RealCase, profile=None, recipes=("paper", "kit"), varian
     The fits run side by side (:mod:`ddp_lite.method.runtime.side_by_side`), as ``options`` say (no progress bars
     by default).
     """
-    disparity_in = case.fb / case.depth  # (H, W) px (plus doffs: a constant, it cancels in every error)
-    out = {name: fill(disparity_in, case.rgb) for name, fill in BASELINES.items()}
-    configs = [FitConfig.for_profile(profile, variant=variant, recipe=recipe, seed=seed, depth_source=case.depth_source)
-               for recipe in recipes]
-    fitted = _plain_fits(case, variant, configs, options)  # (config without the fill's share, its result), side by side
-    for recipe, config in zip(recipes, configs):
-        out[f"DDP {recipe}"] = case.fb / _fit_reusing(case, variant, config, fitted, options).merged(case.depth)
-    return out
+    return compare_fills_on([case], profile, recipes, variant, seed, options)[0]
 
 
-def _plain_fits(case: RealCase, variant: str, configs: list, options: RunOptions) -> list:
-    """The plain fits the recipes ``configs`` need (each without its fill's share and its refinement; a blend
-    of two fits listed before it needs none of its own), fitted side by side → [(config, DepthResult)]."""
+def compare_fills_on(cases: list, profile=None, recipes=("paper", "kit"), variant: str = "rgbd", seed: int = 0,
+                     options: RunOptions = RunOptions(progress=False)) -> list[dict[str, np.ndarray]]:
+    """:func:`compare_fills` of each of ``cases``, the fits of every case side by side in one pool (case by
+    case, three fits on two cores leave one idle for the third) → one {name: (H, W) px} per case."""
+    configs = [[FitConfig.for_profile(profile, variant=variant, recipe=recipe, seed=seed,
+                                      depth_source=case.depth_source) for recipe in recipes] for case in cases]
+    fitted = _plain_fits_on(list(zip(cases, configs)), variant, options)  # per case: (config, result) pairs
+    outs = []
+    for case, case_configs, case_fitted in zip(cases, configs, fitted):
+        disparity_in = case.fb / case.depth  # (H, W) px (plus doffs: a constant, it cancels in every error)
+        out = {name: fill(disparity_in, case.rgb) for name, fill in BASELINES.items()}
+        for recipe, config in zip(recipes, case_configs):
+            out[f"DDP {recipe}"] = case.fb / _fit_reusing(case, variant, config, case_fitted, options).merged(case.depth)
+        outs.append(out)
+    return outs
+
+
+def _planned(configs: list) -> list:
+    """The plain fits the recipes ``configs`` need: each without its fill's share and its refinement; a blend
+    of two fits listed before it needs none of its own, nor a recipe whose share is chosen on held-out depth."""
     planned = []
     for config in configs:
         if config.combination.blend_fill is None:
@@ -238,12 +248,33 @@ def _plain_fits(case: RealCase, variant: str, configs: list, options: RunOptions
             continue
         if base not in planned:
             planned.append(base)
-    neighbors = case.neighbors if variant == "rgbd+warp" else ()
+    return planned
+
+
+def _plain_fits(case: RealCase, variant: str, configs: list, options: RunOptions) -> list:
+    """The plain fits (:func:`_planned`) of the recipes ``configs`` on ``case``, side by side → [(config, DepthResult)]."""
+    return _plain_fits_on([(case, configs)], variant, options)[0]
+
+
+def _plain_fits_on(items: list, variant: str, options: RunOptions) -> list:
+    """:func:`_plain_fits` of each ``(case, configs)`` in ``items``, all their fits in one side-by-side pool
+    → one [(config, DepthResult)] per item."""
+    jobs = [(case, config) for case, configs in items for config in _planned(configs)]
+
+    def neighbors(case):
+        return case.neighbors if variant == "rgbd+warp" else ()
 
     def fit(k: int):
-        return complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant, config=planned[k],
+        case, config = jobs[k]
+        return complete_depth(case.rgb, case.depth, case.camera, neighbors(case), variant=variant, config=config,
                               options=options)
-    return list(zip(planned, run_fits(fit, [(c, variant, case.depth.shape, len(neighbors)) for c in planned], options)))
+    results = run_fits(fit, [(config, variant, case.depth.shape, len(neighbors(case))) for case, config in jobs],
+                       options)
+    grouped = [[] for _ in items]
+    owner = [i for i, (_, configs) in enumerate(items) for _ in _planned(configs)]
+    for i, (_, config), result in zip(owner, jobs, results):
+        grouped[i].append((config, result))
+    return grouped
 
 
 def _fit_reusing(case: RealCase, variant: str, config: FitConfig, fitted: list, options: RunOptions):

@@ -19,7 +19,7 @@ from ..classical.baselines import PAPER_TABLE6_RMSE as BASELINE_PAPER_RMSE
 from ..classical.holes import stroke_holes
 from ..data.middlebury_rail import load_rail_scene
 from ..data.samples import depthcomp_holes, read_depthcomp_holes, sample_scene
-from .real_cases import RealCase, compare_fills, factor_for_profile, make_real_case
+from .real_cases import RealCase, compare_fills_on, factor_for_profile, make_real_case
 
 __all__ = ["TABLE6_SCENES", "PAPER_TABLE6_RMSE", "PAPER_ROWS", "table6_case", "table6", "paper_ratios", "our_ratios"]
 
@@ -58,9 +58,9 @@ def table6(profile=None, recipes=("paper", "kit", "photo"), seed: int = 0) -> tu
     ``(rmse, outputs)``: {scene: {method: hole RMSE in working-size disparity px}} and
     {scene: (case, truth (H, W) px, {method: (H, W) px})}."""
     rmse, outputs = {}, {}
-    for scene in TABLE6_SCENES:
-        case = table6_case(scene, profile, seed)
-        estimates = compare_fills(case, profile, recipes=recipes, seed=seed)
+    cases = [table6_case(scene, profile, seed) for scene in TABLE6_SCENES]
+    every = compare_fills_on(cases, profile, recipes=recipes, seed=seed)  # every scene's fits in one side-by-side pool
+    for scene, case, estimates in zip(TABLE6_SCENES, cases, every):
         truth = case.fb / case.gt
         rmse[scene] = {name: case.rmse_px(case.fb / d) for name, d in estimates.items()}
         outputs[scene] = (case, truth, estimates)
