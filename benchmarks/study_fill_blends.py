@@ -494,9 +494,9 @@ def per_case(warp_rows: Path, rgbd_rows: Path, photo_rows: tuple[Path, Path] | N
         print(f"{case:<22} {seeds:<12} {best[5:] + f' {fills[best]:.3f}':<28} "
               f"{best6[5:] + f' {fills[best6]:.3f}':<22}" + "".join(cells))
     for kind in list(SUITE_HOLES) + ["all"]:
-        cells = [f"{np.mean([o[0] for o in means[c[:2]][kind]]):.2f} "
-                 f"({np.mean([o[1] for o in means[c[:2]][kind]]):.2f})".rjust(22) for c in columns]
-        print(f"{'mean: ' + kind + f' (n={len(means[columns[0][:2]][kind])})':<87}" + "".join(cells))
+        overs = [means[recipe, v][kind] for recipe, v, _ in columns]  # per column: (over best, over Table 6) per case
+        cells = [f"{np.mean([o[0] for o in over]):.2f} ({np.mean([o[1] for o in over]):.2f})".rjust(22) for over in overs]
+        print(f"{'mean: ' + kind + f' (n={len(overs[0])})':<87}" + "".join(cells))
 
 
 def by_source(row: dict) -> None:

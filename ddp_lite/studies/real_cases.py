@@ -259,21 +259,20 @@ def _plain_fits(case: RealCase, variant: str, configs: list, options: RunOptions
 def _plain_fits_on(items: list, variant: str, options: RunOptions) -> list:
     """:func:`_plain_fits` of each ``(case, configs)`` in ``items``, all their fits in one side-by-side pool
     → one [(config, DepthResult)] per item."""
-    jobs = [(case, config) for case, configs in items for config in _planned(configs)]
+    jobs = [(item, case, config) for item, (case, configs) in enumerate(items) for config in _planned(configs)]
 
     def neighbors(case):
         return case.neighbors if variant == "rgbd+warp" else ()
 
     def fit(k: int):
-        case, config = jobs[k]
+        _, case, config = jobs[k]
         return complete_depth(case.rgb, case.depth, case.camera, neighbors(case), variant=variant, config=config,
                               options=options)
-    results = run_fits(fit, [(config, variant, case.depth.shape, len(neighbors(case))) for case, config in jobs],
+    results = run_fits(fit, [(config, variant, case.depth.shape, len(neighbors(case))) for _, case, config in jobs],
                        options)
     grouped = [[] for _ in items]
-    owner = [i for i, (_, configs) in enumerate(items) for _ in _planned(configs)]
-    for i, (_, config), result in zip(owner, jobs, results):
-        grouped[i].append((config, result))
+    for (item, _, config), result in zip(jobs, results):
+        grouped[item].append((config, result))
     return grouped
 
 
