@@ -184,11 +184,22 @@ def _write_preview(path: str, depth: np.ndarray, filled: np.ndarray, summary: st
     if scores is not None:
         gt, rmse = scores
         show_errors([axes[3]], {"": filled}, gt, mask=holes & np.isfinite(gt), label="|DDP − truth| (m)")
-        lines = [f"{name} {value:.4g}" for name, value in rmse.items()]
-        axes[3].set_title("hole RMSE (m): " + ", ".join(lines[:2]) + "\n" + ", ".join(lines[2:]), fontsize=9)
-    fig.suptitle(summary, fontsize=10)
+        axes[3].set_title(_error_title(rmse), fontsize=9)
     fig.tight_layout()
+    # the summary sits just above the tallest panel title: tight_layout centres the fixed-aspect panels in
+    # their rows, so a suptitle at the figure's top would leave a blank band the height of that slack
+    fig.draw_without_rendering()
+    top = max(ax.title.get_window_extent().y1 for ax in axes) / fig.bbox.height
+    fig.suptitle(summary, fontsize=10, y=top + 0.01, va="bottom")
     save_figure(fig, path)
+
+
+def _error_title(rmse: dict) -> str:
+    """The error panel's title: every method's hole RMSE in metres, as the console line prints them
+    (``{value:.4g}``, the same names), three to a line."""
+    entries = [f"{name} {value:.4g}" for name, value in rmse.items()]
+    rows = [", ".join(entries[i:i + 3]) for i in range(0, len(entries), 3)]
+    return "hole RMSE (m): " + ",\n".join(rows)
 
 
 COLOUR_FILLS = ("colorization", "guided-filter", "bilateral-solver", "cross-bilateral")
@@ -214,7 +225,7 @@ def _classical_fills(depth, rgb, gt) -> dict:
 
 def _comparison(depth, filled, gt, classical: dict) -> tuple[str, dict]:
     """The line that puts DDP's fill beside the classical ones (:func:`_classical_fills`) at full size, and
-    the hole RMSE (m) of DDP, linear, Navier-Stokes and the best colour-guided fill ({} without ``gt``)."""
+    the hole RMSE (m) of every method that line names, DDP first ({} without ``gt``)."""
     holes = ~np.isfinite(depth)
     if gt is None:
         difference = float(np.mean(np.abs(filled[holes] - classical["linear"][holes])))
@@ -224,10 +235,9 @@ def _comparison(depth, filled, gt, classical: dict) -> tuple[str, dict]:
     fills = {"DDP": filled, **classical}
     rmse = {name: float(np.sqrt(np.mean((f[scored] - gt[scored]) ** 2))) for name, f in fills.items()}
     best = min(COLOUR_FILLS, key=rmse.get)
-    shown = {"DDP": rmse["DDP"], "linear": rmse["linear"], "navier-stokes": rmse["navier-stokes"], best: rmse[best]}
     return (f"hole RMSE at full size ({scored.sum()} pixels with ground truth): "
             + ", ".join(f"{name} {value:.4g} m" for name, value in rmse.items())
-            + f" (best colour-guided fill: {best})"), shown
+            + f" (best colour-guided fill: {best})"), rmse
 
 
 def complete_command(args) -> int:
