@@ -1,6 +1,6 @@
 """The quality study's recipes besides the kit's own (``bench_quality.py --recipes NAME``): name → ``FitConfig``
 overrides on top of a profile's ``kit`` config, each with the one line of why it was tried. What each one
-measured: docs/benchmark_history.md and docs/quality_study.md; the kit's recipes: ``ddp_lite.method.kit.recipes``.
+measured: docs/studies/benchmark_history.md and docs/studies/quality_study.md; the kit's recipes: ``ddp_lite.method.kit.recipes``.
 """
 from __future__ import annotations
 

@@ -22,7 +22,7 @@ far (``full_resolution.FULL_SIZE_SOLVE``). The ``photo`` recipe's own
 solve (``refine``) is this one, so it runs once, at full size, not also at the working size (on six
 Middlebury scenes and Motorcycle at full size that costs: 1.05× the best fill against 0.95×), and ``complete``
 keeps the ``kit`` recipe by default: without its hole terms, as ``photo`` fits on the real suite, the full-size
-fill there was 1.6 % worse over three seeds (0.98× the best fill against 0.96×; ``docs/real_suite.md``); the
+fill there was 1.6 % worse over three seeds (0.98× the best fill against 0.96×; ``docs/studies/real_suite.md``); the
 first line names the recipe that runs. Then one line compares
 the fill with a classical one computed here at full size (linear interpolation; their mean absolute
 difference in the holes), or, with ``--gt``, prints the hole RMSE of DDP, linear, Navier-Stokes and the

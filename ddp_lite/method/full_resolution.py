@@ -202,7 +202,7 @@ def refine_full_resolution(depth, rgb, target, method: str = "bilateral-solver",
 
 
 # the bilateral solver's (sigma_xy px, lam) whose solves `refine_over_smoothness` averages: chosen on half the
-# real suite's scenes at its working size (~160×140) and confirmed on the other half (docs/real_suite.md)
+# real suite's scenes at its working size (~160×140) and confirmed on the other half (docs/studies/real_suite.md)
 SMOOTHNESS_MEAN = ((4.0, 4.0), (4.0, 16.0), (8.0, 4.0), (8.0, 16.0))
 # ... for a stereo matcher's depth, whose holes lie where the image gave the matcher too little to go on
 # (textureless, occluded) and whose rim is often off: twice the reach (chosen and confirmed likewise)

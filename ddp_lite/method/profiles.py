@@ -10,7 +10,7 @@ auto-stop, views per scene, seeds. What a fit optimises is the recipe (:mod:`ddp
 The paper's rate fills nothing in 1000 iterations at our small sizes, so ``ci`` and ``class`` use
 1e-2: ``ci`` cuts it ×0.3 at iterations 90 and 128 of a fixed 150; ``class`` cuts it at the first
 plateau of a held-out error and stops at the second (:class:`~ddp_lite.method.stopping.PlateauStopper`).
-How these settings were chosen: ``docs/tuning_history.md``.
+How these settings were chosen: ``docs/studies/tuning_history.md``.
 """
 from __future__ import annotations
 
@@ -20,7 +20,7 @@ from ..core.checks import env_choice, named_choice
 from .kit.recipes import describe_method, get_recipe
 from .paper.variants import get_variant
 
-__all__ = ["Profile", "PROFILES", "get_profile", "current_profile_name"]
+__all__ = ["Profile", "PROFILES", "get_profile", "current_profile_name", "profile_table", "update_profile_table"]
 
 ENV_VAR = "DDP_PROFILE"
 DEFAULT = "class"
@@ -100,3 +100,56 @@ def get_profile(name: str | Profile | None = None) -> Profile:
     if isinstance(name, Profile):
         return name
     return named_choice(name, PROFILES, "profile", current_profile_name)
+
+
+MEANT_FOR = {"ci": "nbval in CI: seconds per notebook", "class": "a laptop CPU: minutes per notebook",
+             "paper": "a GPU"}
+TABLE_START = ("<!-- profile table: written by ddp_lite.method.profiles.profile_table; "
+               "refresh: python -m ddp_lite.method.profiles README.md -->")
+TABLE_END = "<!-- end of the profile table -->"
+
+
+def profile_table() -> str:
+    """The README's Markdown table of the profiles, written from :data:`PROFILES` so that it cannot drift
+    from what a fit runs: size, net, a depth fit's iterations and learning rate, and an image fit's
+    (notebook 01's Deep Image Prior fits, ``image_iterations``, always a fixed count)."""
+    rows = ["| profile | size | net | iterations of a depth fit | learning rate | image fits (notebook 01) | meant for |",
+            "|---|---|---|---|---|---|---|"]
+    for name, p in PROFILES.items():
+        iterations = (f"{'≤ ' if p.auto_stop else ''}{p.iterations}"
+                      + (f" (depth-only {p.iterations_depth_only})" if p.iterations_depth_only != p.iterations else "")
+                      + (", stops by itself" if p.auto_stop else ", fixed"))
+        if p.lr_milestones:
+            schedule = f"{p.lr:g}, ×{p.lr_gamma:g} at {' and '.join(map(str, p.lr_milestones))}"
+        elif p.plateau_decays:
+            schedule = f"{p.lr:g}, ×{p.lr_gamma:g} at the held-out error's first plateau"
+        else:
+            schedule = f"{p.lr:g}"
+        label = f"`{name}`" + (" (default)" if name == DEFAULT else "")
+        rows.append(f"| {label} | {p.size[0]}×{p.size[1]} | UNet {p.channels[0]}–{p.channels[-1]} | {iterations} "
+                    f"| {schedule} | {p.image_iterations}, fixed | {MEANT_FOR[name]} |")
+    return "\n".join(rows)
+
+
+def update_profile_table(readme) -> bool:
+    """Rewrite the profile table between ``TABLE_START`` and ``TABLE_END`` in ``readme`` (atomically);
+    True if it changed."""
+    from pathlib import Path
+
+    from ..core.files import write_bytes_atomic
+    text = Path(readme).read_text(encoding="utf-8")
+    if TABLE_START not in text or TABLE_END not in text:
+        raise ValueError(f"readme {str(readme)!r} has no profile table markers ({TABLE_START} ... {TABLE_END})")
+    head, rest = text.split(TABLE_START, 1)
+    _, tail = rest.split(TABLE_END, 1)
+    new = f"{head}{TABLE_START}\n{profile_table()}\n{TABLE_END}{tail}"
+    if new != text:
+        write_bytes_atomic(readme, new.encode("utf-8"))
+    return new != text
+
+
+if __name__ == "__main__":  # python -m ddp_lite.method.profiles README.md: refresh the profile table
+    import sys
+    if len(sys.argv) != 2:
+        sys.exit("usage: python -m ddp_lite.method.profiles README.md")
+    print(f"{sys.argv[1]}: profile table {'updated' if update_profile_table(sys.argv[1]) else 'already up to date'}")

@@ -3,7 +3,7 @@ and the settings of every combination (``refine`` too). Not in the paper.
 
 The two recipes err in different places. On rendered scenes the kit's hole terms and inputs fill
 large holes far better; on the real photograph's occlusions the paper's plain loss is ahead, and
-on its blob holes the two fits' mean beats both (``docs/real_data.md``). ``blend_weight`` w gives
+on its blob holes the two fits' mean beats both (``docs/studies/real_data.md``). ``blend_weight`` w gives
 
     Z = w·Z_kit + (1 − w)·Z_paper            (w = 0.5 when blended)
 
@@ -35,11 +35,11 @@ and the share that best predicts them wins:
 The result mixes f* of the fill of the *whole* input into that fit. f stays at most ½, so the result
 is mostly the network's. The blobs, unlike a ring around the holes, cost the fit almost nothing, but
 measured, the choice does not tell the photograph from the rendered scenes: the held-out valid depth
-prefers the fill on both, so it only buys a larger share with its cost (``docs/real_data.md``). It
+prefers the fill on both, so it only buys a larger share with its cost (``docs/studies/real_data.md``). It
 stays a study lever (recipe ``fill-chosen``); the ``kit`` recipe takes a fixed share where the variant
 sees colour (:data:`~ddp_lite.method.kit.recipes.KIT_AT`). On the real suite's 61 cases a larger fixed
 share helps the fit alone more (f = 0.8: 1.02× the best fill against 1.18× at ¼), but the fit made sharp
-first (``refine``, the ``photo`` recipe) does better at ¼ (``docs/real_suite.md``).
+first (``refine``, the ``photo`` recipe) does better at ¼ (``docs/studies/real_suite.md``).
 
 ``depth_source`` says where the input depth came from. A stereo matcher's holes have a rim it often
 got wrong: on the real suite's SGBM depth, 16 % of the valid pixels within 2 px of a hole are more than
@@ -70,7 +70,7 @@ FILL_SHARES = (0.0, 0.1, 0.2, 0.3, 0.4, 0.5)  # the fill's shares blend_fill=Non
 FILL_HOLDOUT = 0.05  # the share of the valid pixels held out to choose it
 # the classical fills averaged into the one mixed in: on the real pair the bilateral solver is the best fill
 # in three of five cases and colorization in two, and their mean lets the share grow without costing the
-# rendered scenes (docs/real_data.md)
+# rendered scenes (docs/studies/real_data.md)
 FILL_MEMBERS = ("colorization", "bilateral-solver")
 # where the input depth came from → the px of valid rim around each hole the steps after the fit do not read
 RIM_DISTRUST = {"clean": 0, "stereo": 1}

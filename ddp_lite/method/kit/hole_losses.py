@@ -19,7 +19,7 @@ on the disparity Z in the *free* pixels (holes and held-out pixels), each relaxe
 
 On in the ``kit`` recipe at ``ci`` and ``class`` (:data:`ddp_lite.method.kit.recipes.KIT_AT` says why), but
 the affinity term, tried and off by default; the ``paper`` recipe has none. Why these weights and what
-they bought on the quality suite: ``docs/tuning_history.md``.
+they bought on the quality suite: ``docs/studies/tuning_history.md``.
 """
 from __future__ import annotations
 

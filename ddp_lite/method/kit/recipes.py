@@ -17,7 +17,7 @@ A profile (``ci``, ``class``, ``paper``; ``DDP_PROFILE``) sets the size and the 
   :mod:`ddp_lite.method.full_resolution` at the fit's own size, averaged over four smoothness settings),
   with the kit's share of the colour-guided fill: one fit, 0.92× the best fill of each case on the mean
   of the real suite's 61 cases over seeds 0-2, SGBM's depth declared a stereo matcher's
-  (``docs/real_suite.md``). ``ddp-lite complete`` runs one such solve at the photo's full size instead.
+  (``docs/studies/real_suite.md``). ``ddp-lite complete`` runs one such solve at the photo's full size instead.
   For a stereo matcher's depth, ``depth_source="stereo"`` (``FitConfig`` field; ``complete --depth-source``):
   the solves and the fill do not read the rim of its holes, which the matcher often got wrong, and reach
   twice as far (:mod:`ddp_lite.method.kit.blend`).
@@ -25,7 +25,7 @@ A profile (``ci``, ``class``, ``paper``; ``DDP_PROFILE``) sets the size and the 
 Every profile runs with every recipe, so ``FitConfig.for_profile("ci", recipe="paper")`` is the
 paper's method in seconds. The quality study's other recipes are ``benchmarks/study_recipes.py``;
 what each addition bought on the quality suite (``benchmarks/bench_quality.py``) is
-``docs/quality_study.md``.
+``docs/studies/quality_study.md``.
 """
 from __future__ import annotations
 
@@ -63,7 +63,7 @@ class Recipe:
 
 
 # The kit's additions, per profile (FitConfig fields), each with why; what each bought on the quality suite,
-# step by step: docs/quality_study.md.
+# step by step: docs/studies/quality_study.md.
 KIT_AT = {
     "ci": dict(
         smoothness=1.0,  # curvature in the holes: a hole far from valid pixels does not bend
@@ -90,7 +90,7 @@ KIT_AT = {
 
 # on real scenes the kit's hole terms, chosen on rendered ones, hold the fit flatter than the scenes are: without
 # them photo's answer is 2.0 % better over 61 cases × seeds 0-2 (lower on 123 of 183; chosen on half A among off,
-# curvature off and half weight, confirmed on half B), though a border hole may now run away (docs/real_suite.md)
+# curvature off and half weight, confirmed on half B), though a border hole may now run away (docs/studies/real_suite.md)
 PHOTO_HOLE_TERMS = dict(smoothness=0.0, flatness=0.0)
 
 RECIPES = {
@@ -104,7 +104,7 @@ RECIPES = {
                     "the paper's losses (Eq. 2-5) from its 16-channel noise input, nothing added", base="kit"),
     # for real photographs: a fit blurs depth edges over a few pixels and a colour-guided solve puts them on
     # the photo's edges; chosen on half the real suite's scenes among fill shares and solves, confirmed on the
-    # other half (docs/real_suite.md)
+    # other half (docs/studies/real_suite.md)
     "photo": Recipe("photo", dict(refine=True),
                     "for real photographs: the kit's fit without its hole terms, made sharp by an image-guided "
                     "bilateral solve, with the kit's share of a colour-guided fill; one fit", base="kit",

@@ -5,7 +5,7 @@ neighbour matches the reference colour best. Where that match is ambiguous (flat
 texture) or wrong (the neighbour does not see the pixel, a window across a depth edge), the pull
 goes to a wrong depth. On the real Motorcycle pair at 125×185 the minimum of the term's own cost
 lies within 2 px of the truth for 89–94 % of the pixels of random blob holes, but for only 39 % of
-the pixels where SGBM failed (docs/real_data.md, "Where the warp term can be trusted").
+the pixels where SGBM failed (docs/studies/real_data.md, "Where the warp term can be trusted").
 
 The test asks the images alone, once per fit, before the loop (it does not depend on the fit's
 depth): a plane sweep of the term's own per-pixel cost (:func:`photometric_cost`, through the same

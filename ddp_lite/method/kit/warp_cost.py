@@ -3,7 +3,7 @@
 The paper's L_warp compares intensities, ``λw (1 − SSIM) + (1 − λw) L1`` on colour (Eq. 5). Where the
 two views differ by more than the depth explains (exposure, shading, specular light, a pooled image's
 blur) or where the colour is flat, the intensity cost's minimum can sit at a wrong depth: on the real
-Motorcycle pair it does for most pixels of the SGBM holes (docs/real_data.md, "Where the warp term can
+Motorcycle pair it does for most pixels of the SGBM holes (docs/studies/real_data.md, "Where the warp term can
 be trusted"). Three other costs are offered by ``WarpConfig.warp_cost``:
 
 - ``"census"``: a soft census (ternary) transform, as in UnFlow's ternary loss (Meister et al., AAAI
@@ -29,7 +29,7 @@ along the epipolar direction ``s = |∇G · e|`` (:func:`epipolar_directions`), 
 (flat colour near 0, any clear edge near 1, so strong edges, where occlusions also lie, do not
 dominate), then divided by its image mean, so the term keeps the paper's overall size.
 
-Tried on the real pair and on rendered scenes, none of them kept (docs/real_data.md, "Other photometric
+Tried on the real pair and on rendered scenes, none of them kept (docs/studies/real_data.md, "Other photometric
 costs for the warp term").
 
 ``WarpConfig.warp_combine = "min"`` needs each neighbour's cost per pixel (:meth:`WarpCost.pixel_costs`):
