@@ -18,6 +18,7 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 from _common import add_profile_args, profile_from_args  # noqa: E402
 
 from ddp_lite.evaluation.experiments import TABLE2_CONFIGS, ablation, format_mean_spread  # noqa: E402
+from ddp_lite.method.kit.recipes import get_recipe  # noqa: E402
 
 
 def main() -> None:
@@ -31,7 +32,7 @@ def main() -> None:
     profile = profile_from_args(args)
     seeds = args.seeds if args.seeds is not None else list(profile.seeds)
     cases = [(scene, seed) for scene in args.scenes for seed in seeds]
-    print(profile.describe())
+    print(profile.describe(get_recipe()))  # the size and budget, and what DDP_RECIPE's recipe runs
     start = time.perf_counter()
     runs, _ = ablation(cases, TABLE2_CONFIGS, profile, holes=args.holes, tau=args.tau)
     print()

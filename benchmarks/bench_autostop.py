@@ -33,6 +33,7 @@ from ddp_lite.method.complete import complete_depth  # noqa: E402
 from ddp_lite.evaluation.experiments import make_case  # noqa: E402
 from ddp_lite.method.stopping import PlateauStopper  # noqa: E402
 from ddp_lite.method.paper.variants import VARIANTS, get_variant  # noqa: E402
+from ddp_lite.method.kit.recipes import get_recipe  # noqa: E402
 from _common import add_profile_args, profile_from_args  # noqa: E402
 
 SCENES = ("house", "desk", "room", "street")
@@ -60,7 +61,7 @@ def main() -> None:
     parser.add_argument("--constant-lr", action="store_true", help="never cut the lr (DIP's recipe)")
     args = parser.parse_args()
     profile = profile_from_args(args)
-    print(f"torch {torch.__version__}, {torch.get_num_threads()} thread(s); {profile.describe()}")
+    print(f"torch {torch.__version__}, {torch.get_num_threads()} thread(s); {profile.describe(get_recipe())}")
     rows = []
     for scene in args.scenes:
         case = make_case(scene, profile, holes="edge")

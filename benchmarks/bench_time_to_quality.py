@@ -38,6 +38,7 @@ from ddp_lite.method.complete import complete_depth  # noqa: E402
 from ddp_lite.evaluation.experiments import make_case  # noqa: E402
 from ddp_lite.method.coarse_to_fine import complete_depth_coarse_to_fine  # noqa: E402
 from ddp_lite.method.runtime.options import RunOptions  # noqa: E402
+from ddp_lite.method.kit.recipes import get_recipe  # noqa: E402
 from _common import add_profile_args, profile_from_args  # noqa: E402
 
 SCENES = ("house", "desk", "room", "street")
@@ -117,7 +118,7 @@ def main() -> None:
     profile = profile_from_args(args)
     budget = args.budget or 2 * profile.iterations
     tol = 1 + args.tolerance
-    print(f"torch {torch.__version__}, {torch.get_num_threads()} thread(s); {profile.describe()}; "
+    print(f"torch {torch.__version__}, {torch.get_num_threads()} thread(s); {profile.describe(get_recipe())}\n"
           f"fit seed {args.seed}; fixed budget {budget} it; target = {tol:.2f} × best; hole RMSE ×100", flush=True)
     configs = recipes(profile, budget, args.seed)
     cases = {scene: make_case(scene, profile, holes="edge") for scene in args.scenes}

@@ -75,7 +75,7 @@ def test_every_relative_link_reaches_a_file_and_a_heading(page):
 def test_every_docs_path_named_in_the_tree_exists():
     named = []
     for path in _tracked(".py", ".ipynb", ".md", ".txt", ".toml", ".sh", "Makefile"):
-        for name in re.findall(r"\bdocs/[\w./-]*\.md\b", path.read_text(encoding="utf-8", errors="replace")):
+        for name in re.findall(r"\bdocs/\w[\w./-]*\.md\b", path.read_text(encoding="utf-8", errors="replace")):
             if not (ROOT / name).exists():
                 named.append(f"{path.relative_to(ROOT)}: {name}")
     assert not named, named

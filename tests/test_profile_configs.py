@@ -137,14 +137,9 @@ EXPECTED = {
 }
 
 DESCRIBED = {
-    "ci": "profile 'ci': 48×64 images, UNet 16-32-64-128, 150 iterations (depth-only 150), lr 0.01, auto-stop off, "
-          "hole curvature weight 1, hole flatness weight 0.6 (relaxed at colour edges by exp(-100·|∇grey|)) + the "
-          "colour image (blurred, σ 0.5 px; not for depth-only), and with the input's colour-guided fill (colorization and bilateral solver, averaged), share 0.25 "
-          "(not for depth-only)",
+    "ci": "profile 'ci': 48×64 images, UNet 16-32-64-128, 150 iterations (depth-only 150), lr 0.01, auto-stop off",
     "class": "profile 'class': 96×128 images, UNet 16-32-64-128-256, ≤ 600 iterations (depth-only 600), lr 0.01, "
-             "auto-stop on, hole curvature weight 1, hole flatness weight 0.6 (relaxed at colour edges by "
-             "exp(-300·|∇grey|)), input: the pixel coordinates + the colour image (blurred, σ 1 px; not for depth-only), "
-             "and with the input's colour-guided fill (colorization and bilateral solver, averaged), share 0.25 (not for depth-only)",
+             "auto-stop on",
     "paper": "profile 'paper': 512×960 images, UNet 32-64-128-256-512, 16000 iterations (depth-only 6000), lr 5e-05, "
              "auto-stop off",
 }

@@ -48,13 +48,24 @@ def test_ddp_recipe_selects_the_default_and_bad_names_are_refused(monkeypatch):
     assert set(RECIPES) >= {"paper", "kit"}
 
 
-def test_a_profiles_first_line_names_what_the_recipe_in_force_adds():
+@pytest.mark.parametrize("profile", ["ci", "class", "paper"])
+@pytest.mark.parametrize("recipe", ["paper", "kit", "photo"])
+def test_a_recipes_line_says_what_that_recipe_runs_at_the_profile(profile, recipe):
+    """The recipe line a notebook prints names each addition the config it builds has switched on, and none it
+    has off (notebook 09 runs photo: its lines must not name the kit's hole terms); the profile line above it
+    names size and budget only, so the two cannot disagree."""
+    from ddp_lite.method.config import FitConfig
     from ddp_lite.method.profiles import get_profile
-    profile = get_profile("class")
-    assert "curvature" in profile.describe("kit") and "coordinates" in profile.describe("kit")
-    paper = profile.describe("paper")
-    assert "curvature" not in paper and "flatness" not in paper and "input:" not in paper
-    assert paper == profile.describe("kit").split(", hole curvature")[0]  # the size and budget are the same
+    config = FitConfig.for_profile(profile, variant="rgbd", recipe=recipe).flat()
+    first, line = get_profile(profile).describe(recipe).split("\n")
+    assert line == get_recipe(recipe).describe(profile) and line.startswith(f"recipe '{recipe}'")
+    switched = {"hole curvature": config["smoothness"] > 0, "hole flatness": config["flatness"] > 0,
+                "the colour image": config["image_input"] > 0, "pixel coordinates": config["net_input"] == "meshgrid",
+                "made sharp": config["refine"], "colour-guided fill": config["blend_fill"] > 0}
+    assert {words: words in line for words in switched} == switched, line
+    assert ("nothing added" in line) == (not any(switched.values()))
+    assert not any(words in first for words in switched) and "recipe" not in first
+    assert first == get_profile(profile).describe()
 
 
 def test_the_loss_equation_marks_exactly_the_kits_additions():

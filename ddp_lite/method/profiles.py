@@ -17,7 +17,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..core.checks import env_choice, named_choice
-from .kit.recipes import describe_method, get_recipe
+from .kit.recipes import get_recipe
 from .paper.variants import get_variant
 
 __all__ = ["Profile", "PROFILES", "get_profile", "current_profile_name", "profile_table", "update_profile_table"]
@@ -64,13 +64,13 @@ class Profile:
         return tuple(m for m in self.lr_milestones if m < iterations)
 
     def describe(self, recipe=None) -> str:
-        """One line for a notebook's first cell: the size and budget, and what ``recipe`` (a name or
-        :class:`Recipe`; None: the one ``DDP_RECIPE`` selects, ``kit`` by default) adds to the paper's method here."""
+        """One line for a notebook's first cell: the size and budget. With ``recipe`` (a name or
+        :class:`Recipe`) a second line says what that recipe runs here (:meth:`Recipe.describe`)."""
         H, W = self.size
         return (f"profile '{self.name}': {H}×{W} images, UNet {'-'.join(map(str, self.channels))}, "
                 f"{'≤ ' if self.auto_stop else ''}{self.iterations} iterations (depth-only {self.iterations_depth_only}), "
                 f"lr {self.lr:g}, auto-stop {'on' if self.auto_stop else 'off'}"
-                + describe_method(get_recipe(recipe).settings(self.name)))
+                + (f"\n{get_recipe(recipe).describe(self)}" if recipe is not None else ""))
 
 
 PROFILES = {

@@ -53,6 +53,7 @@ class Recipe:
     why: str = ""
     at: dict = field(default_factory=dict)  # profile name → overrides there
     base: str | None = None  # the recipe these settings are applied on top of
+    purpose: str = ""  # who it is for, in a few words, for the line a notebook prints
 
     def settings(self, profile: str) -> dict:
         """The ``FitConfig`` fields this recipe sets at the profile named ``profile``."""
@@ -60,6 +61,15 @@ class Recipe:
         values.update(self.at.get(profile, {}))
         values.update(self.overrides)
         return values
+
+    def describe(self, profile) -> str:
+        """One line for a notebook's first cell: this recipe's purpose, then what it runs at ``profile`` (a name
+        or a :class:`~ddp_lite.method.profiles.Profile`), written from :meth:`settings`: the paper's losses and
+        each addition with its weight, or "nothing added"."""
+        name = profile if isinstance(profile, str) else profile.name
+        added = describe_method(self.settings(name))
+        return (f"recipe '{self.name}'" + (f" ({self.purpose})" if self.purpose else "") + f" at '{name}': "
+                "the paper's losses (Eq. 2-5)" + (added if added else " from its 16-channel noise input, nothing added"))
 
 
 # The kit's additions, per profile (FitConfig fields), each with why; what each bought on the quality suite,
@@ -94,21 +104,23 @@ KIT_AT = {
 PHOTO_HOLE_TERMS = dict(smoothness=0.0, flatness=0.0)
 
 RECIPES = {
-    "kit": Recipe("kit", {}, "the paper's losses plus the kit's hole terms and net inputs, which fill large holes "
-                             "better at small sizes (KIT_AT: what each profile adds, and why)", at=KIT_AT),
+    "kit": Recipe("kit", {}, "the paper's losses plus what the kit found to fill large holes better at small sizes "
+                             "(KIT_AT: what each profile adds, and why; at the paper's size nothing)", at=KIT_AT,
+                  purpose="the default: the kit's additions for small sizes"),
     # the kit's settings at the profile with every addition switched off: what stays acts on nothing
     # (the colour-edge strength, the blur of an image that is not in the input) but bf16 at class, the
     # precision the net runs in, not what it optimises
     "paper": Recipe("paper", dict(smoothness=0.0, flatness=0.0, image_input=0.0, fill_input=0.0, net_input="noise",
                                   noise_channels=16, blend_paper=False, blend_fill=0.0),
-                    "the paper's losses (Eq. 2-5) from its 16-channel noise input, nothing added", base="kit"),
+                    "the paper's losses (Eq. 2-5) from its 16-channel noise input, nothing added", base="kit",
+                    purpose="the paper's method alone"),
     # for real photographs: a fit blurs depth edges over a few pixels and a colour-guided solve puts them on
     # the photo's edges; chosen on half the real suite's scenes among fill shares and solves, confirmed on the
     # other half (docs/studies/real_suite.md)
     "photo": Recipe("photo", dict(refine=True),
                     "for real photographs: the kit's fit without its hole terms, made sharp by an image-guided "
                     "bilateral solve, with the kit's share of a colour-guided fill; one fit", base="kit",
-                    at={name: PHOTO_HOLE_TERMS for name in ("ci", "class")}),
+                    at={name: PHOTO_HOLE_TERMS for name in ("ci", "class")}, purpose="for real photographs"),
 }
 
 
@@ -124,12 +136,24 @@ def get_recipe(name: str | Recipe | None = None) -> Recipe:
     return named_choice(name, RECIPES, "recipe", current_recipe_name)
 
 
+def _describe_input(settings: dict) -> str:
+    """The net's input where it is not the paper's noise alone: ", net input: ..." or ""."""
+    parts = []
+    if settings.get("net_input", "noise") == "meshgrid":
+        parts.append("the pixel coordinates" + (" + noise" if settings.get("noise_channels", 16) > 2 else ""))
+    else:
+        parts.append("noise")
+    if settings.get("image_input", 0.0):
+        parts.append(f"the colour image (blurred, σ {settings.get('image_blur', 1.0):g} px; not for depth-only)")
+    return ", net input: " + " + ".join(parts) if parts != ["noise"] else ""
+
+
 def describe_method(settings: dict) -> str:
     """What ``settings`` (as :meth:`Recipe.settings` gives) add to the paper's method, for one line
     of a notebook's first cell: "" for the paper's method."""
     smoothness, flatness = settings.get("smoothness", 0.0), settings.get("flatness", 0.0)
     reach, edge = settings.get("flatness_reach"), settings.get("smoothness_edge", 10.0)
-    noise_channels, ensemble = settings.get("noise_channels", 16), settings.get("ensemble", 1)
+    ensemble = settings.get("ensemble", 1)
     return ((f", hole curvature weight {smoothness:g}" if smoothness else "")
             + (f", hole flatness weight {flatness:g}" if flatness else "")
             + (f" (in enclosed holes only within {reach:g} px of valid depth)"
@@ -138,10 +162,7 @@ def describe_method(settings: dict) -> str:
                + {"grey": "|∇grey|", "rgb": "max over R, G, B of |∇I|", "structure": "|∇ structure of grey|"}[
                    settings.get("edge_guide", "grey")] + "))"
                if smoothness or flatness else "")
-            + (", input: the pixel coordinates" + (" + noise" if noise_channels > 2 else "")
-               if settings.get("net_input", "noise") == "meshgrid" else "")
-            + (f" + the colour image (blurred, σ {settings.get('image_blur', 1.0):g} px; not for depth-only)"
-               if settings.get("image_input", 0.0) else "")
+            + _describe_input(settings)
             + (", the warp term only where the neighbour can see" if settings.get("warp_occlusion") else "")
             + (", the warp term only where the images single out one depth" if settings.get("warp_confidence") else "")
             + (f", the warp term only in the holes and within {settings['warp_reach']:g} px of them"
