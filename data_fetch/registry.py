@@ -281,7 +281,7 @@ _add(Dataset(
     files=(RemoteFile("nyu_depth_v2_labeled.mat",
                       "http://horatio.cs.nyu.edu/mit/silberman/nyu_depth_v2/nyu_depth_v2_labeled.mat"),),
     licence="No licence stated on the download page; research use, cite Silberman et al., ECCV 2012.",
-    use="Kinect-style holes (rawDepths) vs the toolbox's cross-bilateral fill (depths); Fig. 9 (load_nyu).",
+    use="Kinect-style holes (rawDepths) vs the toolbox's cross-bilateral fill (depths); Fig. 8 (ddp_lite.data.datasets.load_nyu).",
     size_note="About 2.8 GB as stated on the NYU Depth v2 page (not verified here).",
     homepage="https://cs.nyu.edu/~silberman/datasets/nyu_depth_v2.html",
 ))

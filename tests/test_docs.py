@@ -178,3 +178,44 @@ def test_the_readmes_standing_rows_are_the_per_scene_tables_means(per_case_table
             assert (over_best, over_table6) == means[kind][columns[recipe, variant]], (recipe, variant, kind)
             checked += 1
     assert checked == 4 * 5
+
+
+# --- names the pages give ----------------------------------------------------------------------------------
+
+NAMING_FILES = [README, ROOT / "environment.txt", ROOT / "data_fetch" / "registry.py"] + USER_PAGES[1:]
+
+
+@pytest.mark.parametrize("path", NAMING_FILES, ids=lambda p: str(p.relative_to(ROOT)))
+def test_every_dotted_kit_name_a_page_gives_can_be_imported(path):
+    """``ddp_lite.a.b.name`` in a page, the environment file or the data registry is a module, or an attribute
+    of one: a reader who types it finds it."""
+    import importlib
+    missing = []
+    for dotted in sorted(set(re.findall(r"\bddp_lite(?:\.\w+)+", path.read_text(encoding="utf-8")))):
+        parts = dotted.split(".")
+        for cut in range(len(parts), 0, -1):
+            try:
+                found = importlib.import_module(".".join(parts[:cut]))
+            except ModuleNotFoundError:
+                continue
+            try:
+                for attribute in parts[cut:]:
+                    found = getattr(found, attribute)
+            except AttributeError:
+                missing.append(dotted)
+            break
+        else:
+            missing.append(dotted)
+    assert not missing, f"{path.relative_to(ROOT)}: {missing}"
+
+
+def test_nyu_is_one_figure_of_the_paper_everywhere():
+    """The paper's NYU v2 figure is its Fig. 8 (the eighth figure of paper.tex, ``fig:nyu``): every line of the
+    tree that names NYU or Kinect with a figure number gives that one."""
+    numbers = {}
+    for path in _tracked(".py", ".ipynb", ".md", ".txt"):
+        for line in path.read_text(encoding="utf-8", errors="replace").splitlines():
+            if re.search(r"NYU|Kinect", line):
+                for number in re.findall(r"\bFig(?:\.|ure) (\d+)", line):
+                    numbers.setdefault(number, []).append(str(path.relative_to(ROOT)))
+    assert set(numbers) == {"8"}, numbers
