@@ -17,7 +17,7 @@ A profile (``ci``, ``class``, ``paper``; ``DDP_PROFILE``) sets the size and the 
   :mod:`ddp_lite.method.full_resolution` at the fit's own size, averaged over four smoothness settings),
   with the kit's share of the colour-guided fill: one fit, 0.92× the best fill of each case on the mean
   of the real suite's 61 cases over seeds 0-2, SGBM's depth declared a stereo matcher's
-  (``docs/studies/real_suite.md``). ``ddp-lite complete`` runs one such solve at the photo's full size instead.
+  (``docs/results.md``; how it was chosen: ``docs/studies/real_suite.md``). ``ddp-lite complete`` runs one such solve at the photo's full size instead.
   For a stereo matcher's depth, ``depth_source="stereo"`` (``FitConfig`` field; ``complete --depth-source``):
   the solves and the fill do not read the rim of its holes, which the matcher often got wrong, and reach
   twice as far (:mod:`ddp_lite.method.kit.blend`).
