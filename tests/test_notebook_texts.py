@@ -7,7 +7,7 @@ rules, checked on every Markdown cell of every notebook (instructor's copy, expe
 included), without executing anything:
 
 1. **No history.** How the kit got here (earlier recipes, old runs, what changed) lives in
-   ``docs/``, not in a notebook: no cell uses a phrase of ``HISTORY_PHRASES``, and none sends the
+   ``docs/studies/``, not in a notebook: no cell uses a phrase of ``HISTORY_PHRASES``, and none sends the
    reader to a history page (``HISTORY_PAGES``) for what a notebook found.
 
 2. **No run figure in prose.** A *sentence* that names a profile (``ci``/``class``/``paper`` in
@@ -101,7 +101,7 @@ def test_no_markdown_cell_tells_the_kits_history(path):
     for index, text in _markdown(path):
         lowered = " ".join(text.lower().split())
         said = [p for p in HISTORY_PHRASES + HISTORY_PAGES if p in lowered]
-        assert not said, f"{path.name}, cell {index}: {said} is history: it belongs in docs/ ({text[:120]!r})"
+        assert not said, f"{path.name}, cell {index}: {said} is history: it belongs in the record of studies, docs/studies/ ({text[:120]!r})"
 
 
 @pytest.mark.parametrize("path", SOURCES, ids=lambda p: p.stem[:2])
