@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import os
 import time
+import warnings
 
 import cv2
 import numpy as np
@@ -240,6 +241,34 @@ def _comparison(depth, filled, gt, classical: dict) -> tuple[str, dict]:
             + f" (best colour-guided fill: {best})"), rmse
 
 
+def _inert_flags(args, config, max_side: int, shape, full_shape, refine: bool) -> list[str]:
+    """What each flag that acts on nothing in this combination would not do, said before the fit: the fit runs
+    at ``shape`` (H, W) of the image's ``full_shape``; ``refine``: the fill is sharpened at full size; ``config``:
+    the fit's, with the recipe's own solve already moved to full size or dropped."""
+    from ..method.kit.recipes import get_recipe
+    said = []
+    if args.max_side is not None and args.max_side > max(full_shape):
+        said.append(f"--max-side {args.max_side} acts on nothing: the image's longer side is {max(full_shape)} px, "
+                    f"and the fit runs at the image's own size")
+    if args.no_refine and args.raw:
+        said.append("--no-refine acts on nothing: --raw implies it (the net's own output everywhere, nothing sharpened)")
+    elif args.no_refine and tuple(shape) == tuple(full_shape):
+        said.append(f"--no-refine acts on nothing: the fit runs at the image's own size ({shape[0]}×{shape[1]}, "
+                    f"--max-side {max_side}), so there is no full-size sharpening to skip"
+                    + (" (the recipe's own solve at that size still runs: --recipe kit for none)"
+                       if config.combination.refine else ""))
+    if args.depth_source != "clean" and not (refine or config.combination.blend_fill != 0 or config.combination.refine):
+        why = ("--raw writes the net's own output" if args.raw
+               else f"--variant {args.variant} mixes in no colour-guided fill" if args.variant == "d"
+               else f"recipe {get_recipe(args.recipe).name!r} mixes in no colour-guided fill")
+        said.append(f"--depth-source {args.depth_source} acts on nothing: only the fill's share and the sharpening "
+                    f"read it, and here there are neither ({why}"
+                    + (", and --no-refine" if args.no_refine and not args.raw else "")
+                    + (f"; the fit runs at the image's own size" if not args.raw and not args.no_refine else "")
+                    + ")")
+    return said
+
+
 def complete_command(args) -> int:
     """``ddp-lite complete``: fill the holes of one depth map from its files. Its outputs are written
     as one set under a lock taken before the fit (``ddp_lite.core.outpaths.output_set``)."""
@@ -264,6 +293,7 @@ def _complete(args, writers, staged, start) -> int:
     from ..method.kit.blend import rim_width
     from ..sequences.working_size import fill_holes_at_full_size, shrink, working_shape
     from ..method.kit.recipes import get_recipe
+    from ..method.inert_settings import InertSettingWarning
     profile, recipe = get_profile(args.profile), get_recipe(args.recipe)  # --recipe, else DDP_RECIPE, else kit
     config = FitConfig.for_profile(profile, variant=args.variant, recipe=recipe, seed=args.seed,
                                    depth_source=args.depth_source,
@@ -301,6 +331,12 @@ def _complete(args, writers, staged, start) -> int:
     refine = not (args.raw or args.no_refine) and shape != depth.shape
     if refine or args.raw:  # the recipe's solve (photo) runs at the photo's full size instead: twice costs
         config = config.replace(refine=False)
+    for line in _inert_flags(args, config, max_side, shape, depth.shape, refine):
+        warnings.warn(line, InertSettingWarning)  # said before the fit
+    if config.combination.blend_fill == 0 and not config.combination.refine:
+        # nothing in the fit's own steps reads the source (the full-size solve is given it directly): the same
+        # numbers, and the fit is not told of a setting it would call inert
+        config = config.replace(depth_source="clean")
     print(f"{depth.shape[0]}×{depth.shape[1]} (H×W), {holes.mean():.1%} holes; fitting at "
           f"{shape[0]}×{shape[1]} (--max-side {max_side}), profile '{profile.name}', recipe '{recipe.name}'"
           + (f", then sharpened at {depth.shape[0]}×{depth.shape[1]} along the photo's edges (off: --no-refine)"

@@ -17,7 +17,7 @@ from .complete import fill_heldout, held_out, refined, with_fill_share
 from .fit import DepthResult, check_run, fit_once, run_fit
 from .input_checks import check_fit_inputs
 from .paper.nets import make_input
-from .runtime.options import RunOptions
+from .runtime.options import RunOptions, names_misplaced_arguments
 
 __all__ = ["complete_depth_coarse_to_fine"]
 
@@ -57,6 +57,7 @@ def _downsample_camera(camera: Camera, scale: int) -> Camera:
     return Camera(camera.K, camera.cam_from_world, width, height).resized(width // scale, height // scale)
 
 
+@names_misplaced_arguments
 def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neighbors=(), variant: str = "rgbd+warp",
                                   config: FitConfig | None = None, gt_depth=None,
                                   transform: DisparityTransform | None = None, coarse_fraction: float = 0.5,

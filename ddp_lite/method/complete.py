@@ -29,7 +29,7 @@ from .config import FitConfig
 from .paper.disparity import DisparityTransform
 from .kit.ensemble import mean_outputs
 from .input_checks import FitInputs, check_fit_inputs
-from .runtime.options import RunOptions
+from .runtime.options import RunOptions, names_misplaced_arguments
 from .runtime.side_by_side import run_side_by_side, side_by_side_workers
 from .fit import DepthResult, check_run, run_fit
 from .kit.recipes import get_recipe
@@ -38,6 +38,7 @@ __all__ = ["complete_depth", "fill_heldout", "held_out", "with_fill_share", "ble
            "combined_result", "refined", "input_fill", "mixed_with_fill", "SOLVE_SETTINGS"]
 
 
+@names_misplaced_arguments
 @cached(like="depth", types=(DepthResult, DisparityTransform))
 def complete_depth(rgb, depth, camera: Camera | None = None, neighbors=(), variant: str = "rgbd+warp",
                    config: FitConfig | None = None, gt_depth=None, transform: DisparityTransform | None = None,

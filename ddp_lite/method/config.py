@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
+import warnings
 from dataclasses import dataclass
 
 from ..core.checks import check_int
@@ -134,6 +135,12 @@ class FitConfig:
                       iterations=iterations, lr_milestones=profile.milestones(iterations))
         values.update(get_recipe(recipe).settings(profile.name))
         if not get_variant(variant).uses_rgb:  # a colour-guided fill or solve would bring colour into a depth-only result
+            if values.get("refine") and "refine" not in overrides:  # the recipe's own solve: say that it is dropped
+                from .inert_settings import InertSettingWarning
+                fill = " and its share of a colour-guided fill" if values.get("blend_fill", 0.0) != 0 else ""
+                warnings.warn(f"recipe {get_recipe(recipe).name!r}: its refine (an image-guided solve toward the fit)"
+                              f"{fill} dropped for variant {get_variant(variant).name!r} (depth only, no colour to "
+                              f"guide it): the result is its fit alone", InertSettingWarning, stacklevel=2)
             values["blend_fill"] = 0.0
             values["refine"] = False
         values.update(overrides)

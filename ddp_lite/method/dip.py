@@ -17,7 +17,7 @@ from .paper.nets import check_input_size
 from .fit_cache import cached
 from .runtime.device import resolve_device
 from .runtime.memory import check_memory
-from .runtime.options import RunOptions, run_options
+from .runtime.options import RunOptions, names_misplaced_arguments, run_options
 from .runtime.tensors import to_tensor
 from .stopping import holdout_mask
 
@@ -49,6 +49,7 @@ def describe_image_fit(config: FitConfig, height: int, width: int) -> str:
             f"auto-stop {'on' if config.stopping.auto_stop else 'off'}, input: {inputs}{jitter}")
 
 
+@names_misplaced_arguments
 @cached(like="image", types=(ImageResult,))
 def fit_image(image, mask=None, config: FitConfig | None = None, clean=None, callback=None, *,
               options: RunOptions | None = None) -> ImageResult:

@@ -30,7 +30,7 @@ from .paper.disparity import DisparityTransform
 from .paper.total_loss import PaperLoss
 from .runtime.device import resolve_device
 from .runtime.memory import check_memory
-from .runtime.options import RunOptions, run_options
+from .runtime.options import RunOptions, names_misplaced_arguments, run_options
 from .runtime.tensors import to_tensor
 from .stopping import heldout_error_fn, holdout_mask
 
@@ -86,6 +86,7 @@ def check_run(options, callback=None, init=None) -> RunOptions:
     return options
 
 
+@names_misplaced_arguments
 def fit_once(rgb, depth, camera, neighbors, variant, config, *, options=None, gt_depth=None, transform=None,
              callback=None, init=None, noise=None) -> DepthResult:
     """One fit (no ensemble, blend or fill): :func:`check_run` and

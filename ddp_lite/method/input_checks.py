@@ -2,7 +2,8 @@
 camera, neighbours and transform (:func:`check_fit_inputs`), into :class:`FitInputs`.
 
 A clear ``TypeError``/``ValueError`` naming the argument, or a warning for a neighbour that adds
-nothing (:func:`~ddp_lite.core.views.check_neighbor_views`); nothing given is modified.
+nothing (:func:`~ddp_lite.core.views.check_neighbor_views`) and for a setting that acts on nothing
+(:mod:`~ddp_lite.method.inert_settings`); nothing given is modified.
 """
 from __future__ import annotations
 
@@ -15,6 +16,7 @@ from ..core.camera import Camera
 from ..core.checks import check_depth, check_image
 from ..core.views import check_neighbor_views, image_and_camera
 from .config import FitConfig
+from .inert_settings import warn_inert_settings
 from .paper.disparity import DisparityTransform
 from .paper.nets import check_input_size
 from .paper.variants import Variant, get_variant
@@ -77,6 +79,7 @@ def check_fit_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth, t
         raise ValueError(f"variant {spec.name!r} needs camera and at least one neighbor; use 'rgbd' without them")
     if spec.needs_neighbors:
         check_neighbor_views(camera, depth, neighbors)
+    warn_inert_settings(config, spec, len(neighbors), stacklevel=4)  # said before the fit, as the errors are
     # the depth ↔ disparity map: derived from the valid depth, or one given that must cover it
     if transform is None:
         transform = DisparityTransform.from_depth(depth, margin=config.paper.disparity_margin)
