@@ -34,8 +34,6 @@ in parallel (one thread each) and ``--report`` prints the tables. Asserts nothin
 from __future__ import annotations
 
 import argparse
-import ast
-import json
 import os
 import tempfile
 import time
@@ -58,7 +56,9 @@ from ddp_lite.studies.real_cases import REAL_HOLES, factor_for_profile, make_rea
 from ddp_lite.method.kit.recipes import RECIPES as KIT_RECIPES  # noqa: E402
 from ddp_lite.data.resample import resize_scene  # noqa: E402
 from ddp_lite.world.scenes import SCENES  # noqa: E402
-from _common import add_profile_args, profile_from_args  # noqa: E402
+from _common import (RowsFile, add_profile_args, check_configs, check_output_folder, check_rows_in,  # noqa: E402
+                     check_rows_out, count, data_root, lane, parse_args, profile_from_args, read_rows,
+                     recipe_overrides, seed, split_top)
 from study_recipes import STUDY  # noqa: E402
 
 NAMED = ("house", "desk", "room", "street")
@@ -147,87 +147,95 @@ def region_errors(case, depth) -> dict:
 
 
 def parse_recipe(text: str) -> tuple[str, dict]:
-    """``name`` (from RECIPES) or ``name:key=value,key=value`` → (name, overrides)."""
-    if ":" not in text:
-        if text not in RECIPES:
-            raise SystemExit(f"unknown recipe {text!r}; known: {sorted(RECIPES)} (or name:key=value,...)")
-        return text, RECIPES[text]
-    name, body = text.split(":", 1)
-    overrides = {}
-    for item in body.split(";") if ";" in body else _split_top(body):
-        key, value = item.split("=", 1)
-        overrides[key.strip()] = ast.literal_eval(value.strip())
+    """``name`` (from RECIPES) or ``name:key=value,key=value`` (RECIPES' ``name``, or the default's, with those
+    ``FitConfig`` overrides) → (name, overrides); ``ValueError`` naming what is wrong (``_common.recipe_overrides``)."""
+    name, overrides = recipe_overrides(text)
+    if ":" not in text and name not in RECIPES:
+        raise ValueError(f"--recipes: unknown recipe {text!r}; known: {', '.join(sorted(RECIPES))} "
+                         f"(or name:key=value,...)")
     return name, {**RECIPES.get(name, {}), **overrides}
 
 
-def _split_top(body: str) -> list[str]:
-    """Split on commas that are not inside brackets: ``channels=(16, 32),lr=0.01``."""
-    parts, depth, current = [], 0, ""
-    for ch in body:
-        depth += ch in "([{"
-        depth -= ch in ")]}"
-        if ch == "," and depth == 0:
-            parts.append(current)
-            current = ""
-        else:
-            current += ch
-    return parts + [current] if current else parts
+_split_top = split_top  # bench_real and the studies read recipes with it
+
+# what changes a row's numbers: a resumed run reuses a row only when all of these match
+ROW_FIELDS = ("case", "method", "variant", "seed", "size", "profile", "overrides")
+
+
+def check_case_name(name: str) -> None:
+    """``ValueError`` unless ``name`` is a case this script builds: ``scene/holes`` of a named or curved scene
+    (holes ``HOLES``), ``fixture/sgm-dense|sgm-sparse``, ``motorcycle-F/holes`` or ``middlebury:FOLDER-F/holes``
+    (holes ``REAL_HOLES``, F a pooling factor ≥ 1)."""
+    scene, slash, holes = name.rpartition("/")
+    if not slash:
+        raise ValueError(f"--cases {name!r}: a case is scene/holes, e.g. desk/blobs or motorcycle-4/sgbm")
+    if scene.startswith(("motorcycle-", MIDDLEBURY)):
+        folder, _, factor = scene.rpartition("-")
+        if not factor.isdigit() or int(factor) < 1:
+            raise ValueError(f"--cases {name!r}: the pooling factor after '-' must be a whole number ≥ 1")
+        if folder.startswith(MIDDLEBURY) and not Path(folder[len(MIDDLEBURY):]).is_dir():
+            raise ValueError(f"--cases {name!r}: no such folder {folder[len(MIDDLEBURY):]!r}")
+        if holes not in REAL_HOLES:
+            raise ValueError(f"--cases {name!r}: a real case's holes are one of {', '.join(REAL_HOLES)}")
+    elif scene == "fixture":
+        if holes != "sgm-dense" and holes != "sgm-sparse":
+            raise ValueError(f"--cases {name!r}: the fixture's holes are sgm-dense or sgm-sparse")
+    elif scene not in SCENES:
+        raise ValueError(f"--cases {name!r}: no scene {scene!r}; known: {', '.join(sorted(SCENES))}, fixture, "
+                         f"motorcycle-F, middlebury:FOLDER-F")
+    elif holes not in HOLES:
+        raise ValueError(f"--cases {name!r}: holes are one of {', '.join(HOLES)}")
 
 
 def run(args) -> None:
     profile = profile_from_args(args)
     names = (args.cases or suite(args.quick, args.suite)) + middlebury_cases(args.middlebury, profile)
-    lane, lanes = (int(v) for v in args.lane.split("/"))
+    index_of_lane, lanes = args.lane
     recipes = [parse_recipe(r) for r in args.recipes]
-    out = open(args.out, "a") if args.out else None
-    done = set()
-    if args.out and Path(args.out).exists():
-        for line in Path(args.out).read_text().splitlines():
-            row = json.loads(line)
-            done.add((row["case"], row["method"], row.get("variant"), row.get("seed"), row["size"]))
-    for index, name in enumerate(names):
-        if index % lanes != lane:
-            continue
-        case, fb = build_case(name, profile)
-        size = f"{case.depth.shape[0]}x{case.depth.shape[1]}"
-        rows = []
+    rows = RowsFile(args.out, ROW_FIELDS)
+    try:
+        for index, name in enumerate(names):
+            if index % lanes == index_of_lane:
+                _run_case(name, profile, recipes, args, rows)
+    finally:
+        rows.close()
 
-        def record(row):  # at once: a lane stopped part-way keeps what it finished
-            rows.append(row)
-            if out:
-                out.write(json.dumps(row) + "\n")
-                out.flush()
-        disparity_in = fb / case.depth
-        for method, fill in baselines.BASELINES.items():
-            if (name, method, None, None, size) not in done:  # a fill added since the file was written runs too
-                start = time.perf_counter()
-                filled = fill(disparity_in, case.rgb)
-                record(dict(case=name, method=method, variant=None, seed=None, size=size,
-                            px=rmse_px(fb / filled, case, fb), seconds=time.perf_counter() - start,
-                            **region_errors(case, fb / filled)))
-        for recipe, overrides in recipes:
-            for variant in args.variants:
-                if variant == "rgbd+warp" and not case.neighbors:
+
+def _run_case(name: str, profile, recipes, args, rows: RowsFile) -> None:
+    """Every fill and every fit of ``recipes`` × ``args.variants`` × ``args.seeds`` on one case not yet in ``rows``."""
+    case, fb = build_case(name, profile)
+    size = f"{case.depth.shape[0]}x{case.depth.shape[1]}"
+    here = dict(case=name, size=size, profile=profile.name)
+    disparity_in = fb / case.depth
+    for method, fill in baselines.BASELINES.items():
+        key = dict(here, method=method, variant=None, seed=None, overrides=None)
+        if not rows.done(key):  # a fill added since the file was written runs too
+            start = time.perf_counter()
+            filled = fill(disparity_in, case.rgb)
+            rows.record(dict(key, px=rmse_px(fb / filled, case, fb), seconds=time.perf_counter() - start,
+                             **region_errors(case, fb / filled)))
+    for recipe, overrides in recipes:
+        for variant in args.variants:
+            if variant == "rgbd+warp" and not case.neighbors:
+                continue
+            for seed_ in args.seeds:
+                key = dict(here, method=recipe, variant=variant, seed=seed_, overrides=repr(overrides))
+                if rows.done(key):
                     continue
-                for seed in args.seeds:
-                    if (name, recipe, variant, seed, size) in done:
-                        continue
-                    source = {"depth_source": case.depth_source} if hasattr(case, "depth_source") else {}
-                    config = FitConfig.for_profile(profile, variant=variant, **{"seed": seed, **source, **overrides})
-                    neighbors = case.neighbors if variant == "rgbd+warp" else ()
-                    start = time.perf_counter()
-                    result = complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant,
-                                            config=config, options=RunOptions(progress=False))
-                    record(dict(case=name, method=recipe, variant=variant, seed=seed, size=size,
-                                px=rmse_px(result.merged(case.depth), case, fb),
-                                seconds=time.perf_counter() - start, iterations=result.iterations,
-                                overrides=repr(overrides), **region_errors(case, result.merged(case.depth))))
-                    if args.save_fits:  # the fit's disparity (1/m): members of any ensemble, averaged later
-                        save_fit(Path(args.save_fits), rows[-1], result.merged(case.depth))
-                    print(f"{name:<22} {recipe:<14} {variant:<10} seed {seed}: {rows[-1]['px']:.3f} px "
-                          f"({rows[-1]['seconds']:.0f} s)", flush=True)
-    if out:
-        out.close()
+                source = {"depth_source": case.depth_source} if hasattr(case, "depth_source") else {}
+                config = FitConfig.for_profile(profile, variant=variant, **{"seed": seed_, **source, **overrides})
+                neighbors = case.neighbors if variant == "rgbd+warp" else ()
+                start = time.perf_counter()
+                result = complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant,
+                                        config=config, options=RunOptions(progress=False))
+                row = dict(key, px=rmse_px(result.merged(case.depth), case, fb),
+                           seconds=time.perf_counter() - start, iterations=result.iterations,
+                           **region_errors(case, result.merged(case.depth)))
+                rows.record(row)
+                if args.save_fits:  # the fit's disparity (1/m): members of any ensemble, averaged later
+                    save_fit(Path(args.save_fits), row, result.merged(case.depth))
+                print(f"{name:<22} {recipe:<14} {variant:<10} seed {seed_}: {row['px']:.3f} px "
+                      f"({row['seconds']:.0f} s)", flush=True)
 
 
 def fit_path(folder: Path, case: str, recipe: str, variant: str, seed: int, size: str) -> Path:
@@ -359,11 +367,12 @@ def report_together(rows: list[dict]) -> None:
 
 def report(path: str, size: str | None = None, extra=None) -> None:
     """Print the tables of a results file; ``extra(rows)`` may return more rows (saved fits' ensembles)."""
-    rows = [json.loads(line) for line in Path(path).read_text().splitlines() if line.strip()]
+    rows = read_rows(path)
     rows += extra(rows) if extra else []
-    sizes = sorted({r["size"] for r in rows}) if size is None else [size]
-    for size in sizes:
-        here = [r for r in rows if r["size"] == size]
+    # rows of one size and profile are one table: a profile's fits are never scored against another's
+    groups = sorted({(r["size"], r.get("profile") or "") for r in rows if size is None or r["size"] == size})
+    for size_here, profile in groups:
+        here = [r for r in rows if r["size"] == size_here and (r.get("profile") or "") == profile]
         classical = {}
         for r in here:
             if r["variant"] is None:
@@ -372,7 +381,8 @@ def report(path: str, size: str | None = None, extra=None) -> None:
         for r in here:
             if r["variant"] is not None and r["case"] in classical:
                 fits.setdefault((r["method"], r["variant"]), {}).setdefault(r["case"], {})[r["seed"]] = r
-        print(f"\n=== {size}: hole RMSE (disparity px); ratio = DDP / best classical fill of the case ===")
+        print(f"\n=== {size_here}{f', profile {profile}' if profile else ''}: hole RMSE (disparity px); "
+              f"ratio = DDP / best classical fill of the case ===")
         cases = sorted(classical)
         best = {c: min(classical[c].values()) for c in cases}
         winner = {c: min(classical[c], key=classical[c].get) for c in cases}
@@ -409,7 +419,7 @@ def report(path: str, size: str | None = None, extra=None) -> None:
         report_together(rows)
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     add_profile_args(parser)
     parser.add_argument("--quick", action="store_true", help="a small subset of the suite, for iterating")
@@ -428,24 +438,97 @@ def main() -> None:
                         help="other Middlebury 2014 pairs (im0/im1.png, disp0.pfm, calib.txt): their five real hole "
                              "kinds join the suite")
     parser.add_argument("--recipes", nargs="+", default=["default"])
-    parser.add_argument("--variants", nargs="+", default=["rgbd", "rgbd+warp"])
-    parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1])
-    parser.add_argument("--lane", default="0/1", help="i/n: run every n-th case starting at i (parallel lanes)")
+    parser.add_argument("--variants", nargs="+", default=["rgbd", "rgbd+warp"], choices=("d", "rgbd", "rgbd+warp"))
+    parser.add_argument("--seeds", type=seed, nargs="+", default=[0, 1])
+    parser.add_argument("--lane", type=lane, default=(0, 1), help="i/n: run every n-th case starting at i (parallel lanes)")
     parser.add_argument("--out", help="append one JSON line per fit here (and skip fits already in it)")
-    parser.add_argument("--report", metavar="JSONL", help="print the tables of a results file and exit")
+    parser.add_argument("--report", metavar="JSONL", nargs="?", const=True,
+                        help="print the tables of a results file and exit (alone: of --out, or with --suite "
+                             "middlebury of the size's default file)")
     parser.add_argument("--save-fits", metavar="DIR", help="keep each DDP fit's output here (inverse depth, .npy)")
-    parser.add_argument("--ensembles", type=int, nargs="+", default=[], metavar="K",
+    parser.add_argument("--ensembles", type=count, nargs="+", default=[], metavar="K",
                         help="with --report and --save-fits: also report the mean of K saved fits (seeds s..s+K-1)")
     parser.add_argument("--mixes", nargs="+", default=[], metavar="A+B",
                         help="with --report and --save-fits: also report the mean of one fit of each recipe (same seed)")
-    args = parser.parse_args()
+    return parser
+
+
+def _middlebury_rows_path(args) -> Path:
+    import bench_real
+
+    if isinstance(args.report, str):
+        return Path(args.report)
+    return Path(args.out or bench_real.RESULTS / f"real_suite_{args.real_size}.jsonl")
+
+
+def check_args(args) -> None:
+    """Every argument checked before any work (``ValueError`` naming the option): the cases, each recipe's
+    config at every variant and seed, the data, the rows file and folders."""
+    if args.report is True and not args.out and args.suite != "middlebury":
+        raise ValueError("--report without a file reports --out's rows: give --report FILE or --out FILE")
+    if args.refill and args.suite != "middlebury":
+        raise ValueError("--refill acts on nothing without --suite middlebury")
+    if (args.ensembles or args.mixes) and not (args.report and args.save_fits):
+        raise ValueError("--ensembles and --mixes need --report and --save-fits (they average saved fits)")
+    if args.report:
+        check_rows_in(_middlebury_rows_path(args) if args.suite == "middlebury" else
+                      (args.report if isinstance(args.report, str) else args.out), "--report")
+        return
+    if args.suite == "middlebury":
+        _check_middlebury(args)
+        return
+    profile = profile_from_args(args)
+    for name in args.cases or []:
+        check_case_name(name)
+    try:
+        middlebury_cases(args.middlebury, profile)
+    except (OSError, ValueError) as error:
+        raise ValueError(f"--middlebury: {error}") from None
+    recipes = [parse_recipe(r) for r in args.recipes]
+    check_configs((f"--recipes {name}", lambda o=overrides, v=variant, s=seed_: FitConfig.for_profile(
+        profile, variant=v, **{"seed": s, **o})) for name, overrides in recipes for variant in args.variants
+        for seed_ in args.seeds)
+    if args.out:
+        check_rows_out(args.out)
+    if args.save_fits:
+        check_output_folder(args.save_fits, "--save-fits")
+
+
+def _check_middlebury(args) -> None:
+    import bench_real
+    from ddp_lite.studies.real_suite import suite_case_names
+
+    if not args.data:
+        raise ValueError("--suite middlebury needs --data DIR (a folder of Middlebury scenes)")
+    for given, flag in ((args.size, "--size"), (args.quick, "--quick"), (args.lane != (0, 1), "--lane"),
+                        (args.middlebury, "--middlebury"), (args.save_fits, "--save-fits")):
+        if given:
+            raise ValueError(f"{flag} acts on nothing with --suite middlebury (its sizes are --real-size eighth or "
+                             f"quarter; its cases --data's and --cases)")
+    try:
+        root = data_root(args.data)
+    except argparse.ArgumentTypeError as error:
+        raise ValueError(f"--data: {error}") from None
+    if args.cases:
+        names = suite_case_names(root)
+        unknown = [c for c in args.cases if c not in names]
+        if unknown:
+            raise ValueError(f"--cases: {', '.join(unknown)} not in the suite under {args.data} "
+                             f"(its cases: {', '.join(names[:6])}, ...)")
+    recipes = [r for r in args.recipes if r != "default"] or ["kit", "paper", "photo"]
+    check_configs((f"--recipes {r}", lambda r=r, v=v, s=s: bench_real.recipe_config(args.profile, v, r, s))
+                  for r in recipes for v in args.variants for s in args.seeds)
+    check_rows_out(_middlebury_rows_path(args), "--out")
+
+
+def main(argv=None) -> None:
+    parser = build_parser()
+    args = parse_args(parser, argv, check_args)
     if args.suite == "middlebury":
         import bench_real
 
-        out = Path(args.out or args.report or bench_real.RESULTS / f"real_suite_{args.real_size}.jsonl")
+        out = _middlebury_rows_path(args)
         if not args.report:
-            if not args.data:
-                parser.error("--suite middlebury needs --data DIR (a folder of Middlebury scenes)")
             torch_threads = max(2, args.threads)  # the recipes of a case fit side by side, one thread each
             profile_from_args(argparse.Namespace(threads=torch_threads, profile=args.profile, size=None))
             recipes = [r for r in args.recipes if r != "default"] or ["kit", "paper", "photo"]
@@ -454,9 +537,12 @@ def main() -> None:
             else:
                 bench_real.run(args.data, args.real_size, recipes, args.variants, args.seeds, out, args.profile,
                                args.cases)
-        bench_real.report(out)
+            bench_real.report(out, args.real_size, args.profile)  # this run's rows, not another size's or profile's
+        else:
+            bench_real.report(out)
         return
     if args.report:
+        report_path = args.report if isinstance(args.report, str) else args.out
         extra = None
         if (args.ensembles or args.mixes) and args.save_fits:
             profile = profile_from_args(args)
@@ -464,7 +550,7 @@ def main() -> None:
                                    for e in ensemble_rows(rows, Path(args.save_fits), k, profile)]
                                   + [m for mix in args.mixes
                                      for m in mix_rows(rows, Path(args.save_fits), mix.split("+"), profile)])
-        report(args.report, extra=extra)
+        report(report_path, extra=extra)
         return
     run(args)
     if args.out:

@@ -1,7 +1,7 @@
 """The real suite: every fill and DDP (kit, paper, photo; rgbd and rgbd+warp) on every Middlebury scene.
 
     python benchmarks/bench_quality.py --suite middlebury --data DIR                    # eighth size, seed 0
-    python benchmarks/bench_quality.py --suite middlebury --data DIR --size quarter --seeds 0 1 2
+    python benchmarks/bench_quality.py --suite middlebury --data DIR --real-size quarter --seeds 0 1 2
     python benchmarks/bench_quality.py --suite middlebury --data DIR --report           # the tables only
     python benchmarks/bench_quality.py --suite middlebury --data DIR --variants rgbd+warp \
         --recipes kit kit:warp_combine=min --cases Art/sgbm Art/occlusion                  # a lever, on some cases
@@ -9,19 +9,19 @@
 ``DIR`` is a folder of Middlebury scenes with ground truth (what ``python -m data_fetch fetch
 middlebury2006 --from …`` and its siblings install, or a folder laid out like it); the cases are
 ``ddp_lite.studies.real_suite``'s: DepthComp's own holes on Plastic, seeded blobs, OpenCV SGBM's holes and
-the truth's occlusions on every scene, and Motorcycle. ``--size eighth`` (≈ 160×140, about 40 s a fit on
+the truth's occlusions on every scene, and Motorcycle. ``--real-size eighth`` (≈ 160×140, about 40 s a fit on
 one core) is for iterating, ``quarter`` (≈ 320×280, minutes a fit) for confirming.
 
 It prints its expected wall time before it starts, fits the recipes of a case side by side (one torch
 thread each), appends one JSON row per fill or fit to ``--out`` (default
-``benchmarks/results/real_suite_<size>.jsonl``) and skips what is already there, so a stopped run resumes.
+``benchmarks/results/real_suite_<size>.jsonl``) and skips what is already there, so a stopped run resumes: a
+row is reused only at the same size and profile (``ROW_FIELDS``), and a last line cut short is moved aside.
 Scores: hole RMSE in disparity px of the working size; per case the ratio of each DDP row to the best of
 all fills and to the best of the paper's Table 6 methods present in the kit (``baselines.PAPER_TABLE6``).
 Then the per-scene table, the means per hole kind and over all cases, and how long it took. Asserts nothing.
 """
 from __future__ import annotations
 
-import ast
 import json
 import time
 from collections import defaultdict
@@ -34,6 +34,7 @@ from ddp_lite.method.config import FitConfig
 from ddp_lite.method.runtime.options import RunOptions
 from ddp_lite.studies.real_cases import _fit_reusing, _plain_fits
 from ddp_lite.studies.real_suite import SUITE_HOLES, make_suite_case, suite_case_names
+from _common import RowsFile, read_rows, recipe_overrides
 
 RESULTS = Path(__file__).resolve().parent / "results"
 SECONDS_PER_FIT = {"eighth": 45.0, "quarter": 240.0}  # one class fit on one core, nothing else running (Xeon, AMX; eighth measured, quarter estimated)
@@ -46,9 +47,12 @@ def table6_fills() -> tuple[str, ...]:
     return tuple(n for n in names if n in baselines.BASELINES)
 
 
-def _done(path: Path) -> tuple[list[dict], set]:
-    rows = [json.loads(line) for line in path.read_text().splitlines() if line.strip()] if path.exists() else []
-    return rows, {(r["case"], r["method"], r["variant"], r["seed"]) for r in rows}
+# what changes a row's numbers: a resumed run reuses a row only when all of these match (a fill's profile is None)
+ROW_FIELDS = ("case", "method", "variant", "seed", "size", "profile")
+
+
+def _rows(path: Path) -> list[dict]:
+    return read_rows(path)
 
 
 QUIET = RunOptions(progress=False)  # how every fit here runs
@@ -57,16 +61,7 @@ QUIET = RunOptions(progress=False)  # how every fit here runs
 def recipe_config(profile: str, variant: str, recipe: str, seed: int) -> FitConfig:
     """The config of one fit: ``recipe`` a kit recipe's name (kit, paper, photo) or that name with
     ``FitConfig`` overrides, ``kit:warp_combine=min,gammas=(0.96,0.02)`` (bare words are read as strings)."""
-    from bench_quality import _split_top  # the recipe syntax bench_quality's own --recipes reads
-
-    name, _, body = recipe.partition(":")
-    overrides = {}
-    for item in filter(None, _split_top(body)):  # commas inside brackets belong to the value
-        key, _, value = item.partition("=")
-        try:
-            overrides[key.strip()] = ast.literal_eval(value.strip())
-        except (ValueError, SyntaxError):
-            overrides[key.strip()] = value.strip()
+    name, overrides = recipe_overrides(recipe)  # ValueError naming what is wrong
     return FitConfig.for_profile(profile, variant=variant, recipe=name, seed=seed, **overrides)
 
 
@@ -77,34 +72,37 @@ def run(data, size: str, recipes, variants, seeds, out: Path, profile: str = "cl
     if cases:
         unknown = sorted(set(cases) - set(names))
         if unknown:
-            raise SystemExit(f"cases not in the suite under {data}: {unknown}")
+            raise ValueError(f"--cases: {unknown} not in the suite under {data}")
         names = [n for n in names if n in set(cases)]
-    rows, done = _done(out)
+    for recipe in recipes:  # every config checked before the first row
+        for variant in variants:
+            for seed in seeds:
+                recipe_config(profile, variant, recipe, seed).validate()
+    rows = RowsFile(out, ROW_FIELDS)
+    fill_key = lambda name, method: dict(case=name, method=method, variant=None, seed=None, size=size, profile=None)  # noqa: E731
+    fit_key = lambda name, recipe, variant, seed: dict(case=name, method=f"DDP {recipe}", variant=variant,  # noqa: E731
+                                                       seed=seed, size=size, profile=profile)
     fits_left = sum(1 for n in names for v in variants for s in seeds
-                    if any((n, f"DDP {r}", v, s) not in done for r in recipes))
+                    if any(not rows.done(fit_key(n, r, v, s)) for r in recipes))
     plain = len([r for r in recipes if not (r == "photo" and "kit" in recipes)])  # photo refines the kit fit
     expected = fits_left * plain * SECONDS_PER_FIT[size] / max(1, min(2, plain))
     print(f"{len(names)} cases, {fits_left} case-variant-seed runs of {plain} fits left: expect about "
-          f"{expected / 60:.0f} min on 2 cores (class, {size}); rows to {out}", flush=True)
-    out.parent.mkdir(parents=True, exist_ok=True)
+          f"{expected / 60:.0f} min on 2 cores ({profile}, {size}); rows to {out}", flush=True)
     start = time.perf_counter()
-    with open(out, "a") as handle:
-        def record(row):
-            handle.write(json.dumps(row) + "\n")
-            handle.flush()
+    try:
         for name in names:
             case = None
             for method, fill in baselines.BASELINES.items():
-                if (name, method, None, None) in done:
+                if rows.done(fill_key(name, method)):
                     continue
                 case = case or make_suite_case(data, name, size)
                 began = time.perf_counter()
                 disparity = fill(case.fb / case.depth, case.rgb)
-                record(dict(case=name, method=method, variant=None, seed=None, size=size,
-                            px=case.rmse_px(case.fb / disparity), seconds=time.perf_counter() - began))
+                rows.record(dict(fill_key(name, method), px=case.rmse_px(case.fb / disparity),
+                                 seconds=time.perf_counter() - began))
             for variant in variants:
                 for seed in seeds:
-                    wanted = [r for r in recipes if (name, f"DDP {r}", variant, seed) not in done]
+                    wanted = [r for r in recipes if not rows.done(fit_key(name, r, variant, seed))]
                     if not wanted:
                         continue
                     case = case or make_suite_case(data, name, size)
@@ -114,18 +112,19 @@ def run(data, size: str, recipes, variants, seeds, out: Path, profile: str = "cl
                     seconds = (time.perf_counter() - began) / max(1, len(fitted))
                     for recipe, config in zip(wanted, configs):
                         result = _fit_reusing(case, variant, config, fitted, QUIET)
-                        record(dict(case=name, method=f"DDP {recipe}", variant=variant, seed=seed, size=size,
-                                    px=case.rmse_px(result.merged(case.depth)), seconds=seconds,
-                                    iterations=int(getattr(result, "iterations", 0) or 0)))
+                        rows.record(dict(fit_key(name, recipe, variant, seed),
+                                         px=case.rmse_px(result.merged(case.depth)), seconds=seconds,
+                                         iterations=int(getattr(result, "iterations", 0) or 0)))
                     print(f"{name:<24} {variant:<10} seed {seed}: {time.perf_counter() - began:.0f} s "
                           f"({(time.perf_counter() - start) / 60:.1f} min in all)", flush=True)
+    finally:
+        rows.close()
     print(f"done in {(time.perf_counter() - start) / 60:.1f} min", flush=True)
 
 
 def refill(data, size: str, out: Path) -> None:
     """Every fill's rows of ``out`` computed again with today's fills (the DDP rows kept): after a fill changed."""
-    rows, _ = _done(out)
-    kept = [r for r in rows if r["variant"] is not None]
+    kept = [r for r in _rows(out) if r["variant"] is not None]
     temporary = out.with_suffix(".tmp")
     temporary.write_text("".join(json.dumps(r) + "\n" for r in kept))
     temporary.replace(out)
@@ -153,9 +152,11 @@ def ratios(rows: list[dict]) -> dict:
     return out
 
 
-def report(path: Path) -> None:
-    """The per-scene table and the means per hole kind, from the rows in ``path``."""
-    rows, _ = _done(path)
+def report(path: Path, size: str | None = None, profile: str | None = None) -> None:
+    """The per-scene table and the means per hole kind, from the rows in ``path`` (of one ``size`` and
+    ``profile`` where given: a run reports its own rows, not another size's or profile's)."""
+    rows = [r for r in _rows(path) if (size is None or r.get("size") == size)
+            and (profile is None or r["variant"] is None or r.get("profile") == profile)]
     if not rows:
         print(f"no rows in {path}")
         return
@@ -194,8 +195,7 @@ def report(path: Path) -> None:
 def markdown_means(path: Path) -> str:
     """The means per hole kind as a Markdown table (for the README and docs): each DDP row's ratio to the best
     fill and, after the slash, to the best of the paper's Table 6 methods; n = cases."""
-    rows, _ = _done(path)
-    table = ratios(rows)
+    table = ratios(_rows(path))
     columns = sorted({(m, v) for _, m, v in table}, key=lambda mv: (mv[1], mv[0]))
     lines = ["| DDP | " + " | ".join(SUITE_HOLES) + " | all |", "|---" * (len(SUITE_HOLES) + 2) + "|"]
     for m, v in columns:
