@@ -34,7 +34,7 @@ from ddp_lite.evaluation.experiments import make_case  # noqa: E402
 from ddp_lite.method.stopping import PlateauStopper  # noqa: E402
 from ddp_lite.method.paper.variants import VARIANTS, get_variant  # noqa: E402
 from ddp_lite.method.kit.recipes import get_recipe  # noqa: E402
-from _common import add_profile_args, profile_from_args  # noqa: E402
+from _common import add_profile_args, profile_from_args, parse_args  # noqa: E402
 
 SCENES = ("house", "desk", "room", "street")
 
@@ -51,7 +51,7 @@ def replay(heldout, patience: int, eval_every: int, decays: int):
     return kept, len(heldout) - 1
 
 
-def main() -> None:
+def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     add_profile_args(parser)
     parser.add_argument("--iterations", type=int, default=800, help="long-run length")
@@ -59,7 +59,7 @@ def main() -> None:
     parser.add_argument("--variants", nargs="+", default=list(VARIANTS))
     parser.add_argument("--seeds", type=int, nargs="+", default=[0])
     parser.add_argument("--constant-lr", action="store_true", help="never cut the lr (DIP's recipe)")
-    args = parser.parse_args()
+    args = parse_args(parser, argv)
     profile = profile_from_args(args)
     print(f"torch {torch.__version__}, {torch.get_num_threads()} thread(s); {profile.describe(get_recipe())}")
     rows = []

@@ -19,6 +19,7 @@ import nbformat
 
 from ddp_lite.interface import classroom
 from ddp_lite.interface.classroom import _environment
+from _common import parse_args
 
 NOTEBOOKS = Path(__file__).resolve().parent.parent / "notebooks"
 TIMING = re.compile(r"\d\s*(s|min|seconds?)\b|s/it|it/s")
@@ -34,11 +35,11 @@ def _printed(nb) -> list[str]:
     return lines
 
 
-def main() -> None:
+def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--profile", default="ci", choices=("ci", "class"))
     parser.add_argument("--only", nargs="*", default=[], help="notebook number prefixes, e.g. 03 05")
-    args = parser.parse_args()
+    args = parse_args(parser, argv)
     paths = sorted(p for p in NOTEBOOKS.glob("*.ipynb") if not args.only or p.stem[:2] in args.only)
     print(f"profile {args.profile}; each notebook in a fresh kernel, cold cache then warm")
     print(f"{'notebook':<26} {'cold s':>7} {'warm s':>7} {'saved':>6} {'entries':>7}  same text")

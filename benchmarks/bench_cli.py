@@ -15,6 +15,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from _common import parse_args
 
 ROOT = Path(__file__).resolve().parent.parent
 COMMANDS = ("demo", "scenes", "complete", "sequence", "student", "solutions", "grade")
@@ -40,10 +41,10 @@ def _imported(argv) -> list[str]:
     return line.split(",") if line else []
 
 
-def main() -> None:
+def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=5, help="runs per command (median; default 5)")
-    args = parser.parse_args()
+    args = parse_args(parser, argv)
     cpu = next((line.split(":", 1)[1].strip() for line in open("/proc/cpuinfo") if line.startswith("model name")),
                platform.processor()) if os.path.exists("/proc/cpuinfo") else platform.processor()
     print(f"{cpu}, {os.cpu_count()} cores, Python {platform.python_version()}; median of {args.repeat} fresh processes")

@@ -23,7 +23,7 @@ import time
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(__file__))
-from _common import add_profile_args, profile_from_args  # noqa: E402
+from _common import add_profile_args, profile_from_args, parse_args  # noqa: E402
 from bench_fit import cpu_summary  # noqa: E402
 
 from ddp_lite.classical import baselines  # noqa: E402
@@ -62,13 +62,13 @@ def run_pattern(pattern: int, profile, seed: int) -> dict:
     return row
 
 
-def main() -> None:
+def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     add_profile_args(parser)
     parser.add_argument("--patterns", type=int, nargs="+", default=[1, 2, 3], help="blob patterns (hole seeds)")
     parser.add_argument("--seed", type=int, default=0, help="the fit's seed")
     parser.add_argument("--out", help="append one JSON line per pattern here")
-    args = parser.parse_args()
+    args = parse_args(parser, argv)
     profile = profile_from_args(args)
     print(cpu_summary())
     rows = []

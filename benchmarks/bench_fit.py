@@ -27,6 +27,7 @@ import torch
 
 from ddp_lite.method.paper.variants import VARIANTS
 from isa import cpu_flags  # benchmarks/ is on the path: the scripts run from there
+from _common import parse_args
 
 
 CPU_FLAGS = ("avx512f", "avx512_bf16", "amx_bf16", "avx512_vnni")
@@ -147,7 +148,7 @@ def run_one(variant: str, height: int, width: int, channels, iterations: int, ov
                 peak_mb=peak_mb, rss_before_mb=rss_before / 1024)
 
 
-def main() -> None:
+def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--iterations", type=int, default=20)
     parser.add_argument("--narrow", action="store_true", help="also the ci profile's 16–128 net")
@@ -155,7 +156,7 @@ def main() -> None:
                         help="FitConfig field or RunOptions override, repeatable: bf16=True, pad='zeros', "
                              "channels_last=True")
     parser.add_argument("--one", nargs=4, metavar=("VARIANT", "H", "W", "CHANNELS"), help=argparse.SUPPRESS)
-    args = parser.parse_args()
+    args = parse_args(parser, argv)
     overrides = parse_overrides(args.set)
     if args.one:
         variant, height, width, channels = args.one

@@ -45,7 +45,7 @@ from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from _common import add_profile_args, profile_from_args  # noqa: E402
+from _common import add_profile_args, profile_from_args, parse_args  # noqa: E402
 from isa import isa_summary  # noqa: E402
 
 SCENES = ("Plastic", "Baby1", "Bowling1", "Art", "Books", "Dolls")
@@ -159,7 +159,7 @@ def classical_fill(name: str, case: Case, limit: float):
     return case.fb / out, seconds
 
 
-def main() -> None:
+def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     add_profile_args(parser)
     parser.add_argument("--isa", default="native", help="native or avx2 (benchmarks/isa.py)")
@@ -177,7 +177,7 @@ def main() -> None:
     parser.add_argument("--smoothness", action="store_true",
                         help="also the refinement averaged over the solves of each SMOOTHNESS_SWEEP setting")
     parser.add_argument("--out", help="append one JSON line per case and seed here")
-    args = parser.parse_args()
+    args = parse_args(parser, argv)
     profile = profile_from_args(args)
     print(isa_summary(), f"; torch threads {args.threads}", flush=True)
     cases = make_cases(args.data, args.scenes, sgbm=not args.no_sgbm)

@@ -9,6 +9,7 @@ Fusion: the 'desk' scene, 8 views at 96×128, exact depth. Baselines: view 0 of 
 """
 from __future__ import annotations
 
+import argparse
 import time
 
 
@@ -17,6 +18,7 @@ from ddp_lite.evaluation.fusion import fuse_depths, tsdf_fuse
 from ddp_lite.classical.holes import random_holes
 from ddp_lite.evaluation.metrics import hole_rmse
 from ddp_lite.world.scenes import make_scene
+from _common import parse_args
 
 
 def _best_of(fn, repeats: int = 3) -> float:
@@ -28,7 +30,8 @@ def _best_of(fn, repeats: int = 3) -> float:
     return min(times)
 
 
-def main() -> None:
+def main(argv=None) -> None:
+    parse_args(argparse.ArgumentParser(description=__doc__.splitlines()[0]), argv)  # no options: --check-args, --help
     scene = make_scene("desk", size=(96, 128), n_views=8, seed=0)
     depths, cameras, images = [v.depth for v in scene], [v.camera for v in scene], [v.rgb for v in scene]
 

@@ -21,6 +21,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from _common import parse_args
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
@@ -132,7 +133,7 @@ def notebook_seconds(isa: str, threads: int, path: Path, profile: str = "class",
     return seconds
 
 
-def main() -> None:
+def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--isa", nargs="+", default=["native", "avx2"], choices=sorted(ISA_ENV))
     parser.add_argument("--threads", type=int, default=2, help="torch threads (a laptop: 2)")
@@ -141,7 +142,7 @@ def main() -> None:
     parser.add_argument("--only", nargs="+", metavar="NAME", help="notebooks whose name contains NAME")
     parser.add_argument("--keep", type=Path, metavar="DIR", help="write the executed notebooks (outputs included) here")
     parser.add_argument("--skip", nargs="+", default=[], choices=["loop", "fit", "complete"], help="parts to skip")
-    args = parser.parse_args()
+    args = parse_args(parser, argv)
     for isa in args.isa:
         print(f"\n== {isa}: {summary(isa)}; {args.threads} threads", flush=True)
         if "loop" not in args.skip:

@@ -29,6 +29,7 @@ import torch
 
 sys.path.insert(0, os.path.dirname(__file__))
 from bench_fit import case, cpu_summary  # noqa: E402
+from _common import parse_args  # noqa: E402
 
 OPTIONS = {"float32": {}, "bf16": dict(bf16=True), "channels_last": dict(channels_last=True),
            "pad zeros": dict(pad="zeros"), "bf16+zeros": dict(bf16=True, pad="zeros"),
@@ -128,7 +129,7 @@ def hole_errors(scenes=("house", "desk"), seeds=(0, 1, 2)) -> None:
         print(f"{scene:<7} {'mean':>4} " + " ".join(f"{sum(v) / len(v):11.3f}" for v in errors.values()))
 
 
-def main() -> None:
+def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rounds", type=int, default=7)
     parser.add_argument("--variant", default="rgbd+warp")
@@ -139,7 +140,7 @@ def main() -> None:
     parser.add_argument("--baseline", help="path of another ddp_lite package, timed as 'baseline'")
     parser.add_argument("--errors", action="store_true", help="hole error of bf16 / zero padding over seeds instead")
     parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2], help="seeds of --errors")
-    args = parser.parse_args()
+    args = parse_args(parser, argv)
     torch.set_num_threads(args.threads)
     import ddp_lite
     print(cpu_summary())

@@ -8,15 +8,18 @@ mean |d - d*| in metres; "textured" excludes the sky and plain paint labels.
 """
 from __future__ import annotations
 
+import argparse
 import time
 
 import numpy as np
 
 from ddp_lite.world.scenes import list_scenes, make_scene
 from ddp_lite.classical.stereo import sgm_depth
+from _common import parse_args
 
 
-def main() -> None:
+def main(argv=None) -> None:
+    parse_args(argparse.ArgumentParser(description=__doc__.splitlines()[0]), argv)  # no options: --check-args, --help
     print("rendering (s per image, 3×3 supersampling, 2 views + their right views each)")
     for size in ((96, 128), (192, 256)):
         row = []

@@ -33,19 +33,20 @@ from ddp_lite.sequences.sequence import run_sequence
 from ddp_lite.sequences.sequence_cost import estimate_sequence, format_estimate
 from ddp_lite.sequences.sequence_files import read_manifest
 from ddp_lite.data.tum import write_tum
+from _common import parse_args
 
 
 def _depths(out: Path) -> dict:
     return {n: np.load(out / e["files"]["npy"]) for n, e in read_manifest(out)["views"].items()}
 
 
-def main() -> None:
+def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--profile", default="ci")
     parser.add_argument("--views", type=int, default=6)
     parser.add_argument("--gpu-tflops", type=float, default=5.0)
     parser.add_argument("--threads", type=int, default=2, help="torch threads in-process: views side by side")
-    args = parser.parse_args()
+    args = parse_args(parser, argv)
     profile = get_profile(args.profile)
     root = Path(tempfile.mkdtemp())
     scene = make_scene("desk", size=profile.size, n_views=args.views)

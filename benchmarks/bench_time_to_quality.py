@@ -39,7 +39,7 @@ from ddp_lite.evaluation.experiments import make_case  # noqa: E402
 from ddp_lite.method.coarse_to_fine import complete_depth_coarse_to_fine  # noqa: E402
 from ddp_lite.method.runtime.options import RunOptions  # noqa: E402
 from ddp_lite.method.kit.recipes import get_recipe  # noqa: E402
-from _common import add_profile_args, profile_from_args  # noqa: E402
+from _common import add_profile_args, profile_from_args, parse_args  # noqa: E402
 
 SCENES = ("house", "desk", "room", "street")
 VARIANT = "rgbd+warp"
@@ -104,7 +104,7 @@ def row(name, result, target) -> str:
 HEAD = f"{'':<22} {'it→tgt':>6} {'s→tgt':>8} {'best':>7} {'kept':>7} {'ran':>6} {'total s':>7} {'s/it':>6}"
 
 
-def main() -> None:
+def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     add_profile_args(parser)
     parser.add_argument("--budget", type=int, help="iterations of the fixed-budget recipes (default: 2 × the profile's)")
@@ -114,7 +114,7 @@ def main() -> None:
     parser.add_argument("--parts", nargs="+", default=["main", "warm", "precision", "c2f"],
                         choices=["main", "warm", "precision", "c2f"])
     parser.add_argument("--seed", type=int, default=0, help="fit seed (net init, noise, held-out pixels)")
-    args = parser.parse_args()
+    args = parse_args(parser, argv)
     profile = profile_from_args(args)
     budget = args.budget or 2 * profile.iterations
     tol = 1 + args.tolerance

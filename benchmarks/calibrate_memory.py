@@ -9,10 +9,13 @@ Each fit runs in a fresh subprocess so that its ru_maxrss is its own. The consta
 """
 from __future__ import annotations
 
+import argparse
 import json
 import resource
 import subprocess
 import sys
+
+from _common import parse_args
 
 CASES = [(96, 128, "rgbd", (32, 64, 128, 256, 512)), (192, 256, "rgbd", (32, 64, 128, 256, 512)),
          (384, 512, "rgbd", (32, 64, 128, 256, 512)), (192, 256, "d", (32, 64, 128, 256, 512)),
@@ -33,12 +36,13 @@ def one(H: int, W: int, variant: str, channels) -> dict:
     return {"peak_gib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2 ** 20}
 
 
-def main() -> None:
+def main(argv=None) -> None:
+    parse_args(argparse.ArgumentParser(description=__doc__.splitlines()[0]), argv)  # no options: --check-args, --help
     from ddp_lite.method.config import FitConfig
     from ddp_lite.method.runtime.memory import estimate_peak_memory_gb
     print(f"{'size':>9} {'variant':>7} {'net':>20} {'measured GiB':>12} {'estimate':>9}")
     for H, W, variant, channels in CASES:
-        out = subprocess.run([sys.executable, __file__, json.dumps([H, W, variant, channels])], check=True,
+        out = subprocess.run([sys.executable, __file__, "--one", json.dumps([H, W, variant, channels])], check=True,
                              capture_output=True, text=True).stdout
         measured = json.loads(out)["peak_gib"]
         estimate = estimate_peak_memory_gb(FitConfig(channels=channels), 1 if variant == "d" else 4, H, W)
@@ -46,7 +50,7 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    if len(sys.argv) > 1:
-        print(json.dumps(one(*json.loads(sys.argv[1]))))
+    if len(sys.argv) == 3 and sys.argv[1] == "--one":  # one fit, in the fresh process main starts for it
+        print(json.dumps(one(*json.loads(sys.argv[2]))))
     else:
         main()

@@ -25,7 +25,7 @@ import bench_quality as bq
 from ddp_lite.core.files import atomic_path
 from ddp_lite.classical.baselines import BASELINES
 from ddp_lite.method.kit.blend import FILL_MEMBERS
-from _common import add_profile_args, profile_from_args
+from _common import add_profile_args, profile_from_args, parse_args
 
 MEMBERS = {
     "col": ("colorization",),
@@ -77,7 +77,7 @@ def report(out: dict, reference: tuple[str, float]) -> None:
                       f"({change['better']}/{change['n']} gain)  geometric {np.exp(np.log(value).mean()):.3f}")
 
 
-def main() -> None:
+def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     add_profile_args(parser)
     parser.add_argument("rows", nargs="+", type=Path, help="bench_quality.py --out files of the fits")
@@ -85,7 +85,7 @@ def main() -> None:
     parser.add_argument("--recipe", default="alone", help="the recipe whose saved fits are the fits alone")
     parser.add_argument("--reference", default="col:0.2", help="member:share the changes are paired against")
     parser.add_argument("--out", type=Path, help="one JSON line per fit: its ratio at every member and share")
-    args = parser.parse_args()
+    args = parse_args(parser, argv)
     member, share = args.reference.split(":")
     rows = [json.loads(line) for path in args.rows for line in path.read_text().splitlines() if line.strip()]
     rows = list({(r["case"], r["seed"], r["variant"]): r for r in rows

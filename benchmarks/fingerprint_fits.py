@@ -13,6 +13,7 @@ the table is identical before and after a behaviour-preserving change on the sam
 """
 from __future__ import annotations
 
+import argparse
 import hashlib
 import os
 import sys
@@ -29,6 +30,7 @@ from ddp_lite.method.complete import complete_depth  # noqa: E402
 from ddp_lite.world.scenes import make_scene  # noqa: E402
 from ddp_lite.method.config import FitConfig  # noqa: E402
 from ddp_lite.method.runtime.options import RunOptions  # noqa: E402
+from _common import parse_args  # noqa: E402
 
 SIZE = (32, 32)
 ITERATIONS = 20
@@ -76,7 +78,8 @@ def configs():
                                                                            bf16=False), True
 
 
-def main() -> None:
+def main(argv=None) -> None:
+    parse_args(argparse.ArgumentParser(description=__doc__.splitlines()[0]), argv)  # no options: --check-args, --help
     torch.set_num_threads(1)
     scene = make_scene("desk", size=SIZE, n_views=3, seed=0)
     ref = scene[0]

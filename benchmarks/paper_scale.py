@@ -38,7 +38,7 @@ from ddp_lite.studies.real_cases import REAL_HOLES, factor_for_profile  # noqa: 
 from ddp_lite.studies.table6 import TABLE6_SCENES, table6_case  # noqa: E402
 from ddp_lite.method.runtime.device import resolve_device  # noqa: E402
 from ddp_lite.method.runtime.options import RunOptions  # noqa: E402
-from _common import add_profile_args, profile_from_args  # noqa: E402
+from _common import add_profile_args, profile_from_args, parse_args  # noqa: E402
 from bench_quality import build_case, region_errors, report, rmse_px  # noqa: E402
 
 RECIPES = ("paper", "kit")
@@ -226,7 +226,7 @@ def main(argv=None) -> None:
     parser.add_argument("--budget-s", type=float, help="cut the iterations so that the whole run takes about this long")
     parser.add_argument("--probe-iterations", type=int, default=10, help="iterations timed per config for --budget-s")
     parser.add_argument("--out", help="write the rows (bench_quality's JSON lines) here")
-    args = parser.parse_args(argv)
+    args = parse_args(parser, argv)
     for name in ("iterations", "probe_iterations"):
         value = getattr(args, name)
         if value is not None and value < 1:

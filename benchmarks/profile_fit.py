@@ -17,11 +17,12 @@ from torch.profiler import ProfilerActivity, profile
 
 sys.path.insert(0, os.path.dirname(__file__))
 from bench_fit import case, config_and_options, cpu_summary, parse_overrides  # noqa: E402
+from _common import parse_args  # noqa: E402
 
 SIZES = {"96x128": ((96, 128), (32, 64, 128, 256, 512)), "48x64": ((48, 64), (16, 32, 64, 128))}
 
 
-def main() -> None:
+def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--iterations", type=int, default=30)
     parser.add_argument("--variant", default="rgbd+warp")
@@ -30,7 +31,7 @@ def main() -> None:
     parser.add_argument("--only", choices=sorted(SIZES), help="one size only")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                         help="FitConfig field or RunOptions override")
-    args = parser.parse_args()
+    args = parse_args(parser, argv)
     torch.set_num_threads(args.threads)
     from ddp_lite.method.complete import complete_depth
     print(cpu_summary())

@@ -76,6 +76,7 @@ from ddp_lite.method.full_resolution import SMOOTHNESS_STEREO, refine_full_resol
 from ddp_lite.method.kit.blend import FILL_MEMBERS, best_fill_share, fill_holdout, trusted_depth  # noqa: E402
 from bench_real import table6_fills  # noqa: E402
 from ddp_lite.studies.real_suite import SUITE_HOLES, make_suite_case, suite_case_names  # noqa: E402
+from _common import parse_args  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
 HALF_A = ("Art", "Dolls", "Moebius", "Baby1", "Baby3", "Bowling2", "Adirondack", "Jadeplant", "Pipes", "Playtable")
@@ -543,7 +544,7 @@ def _setting(item: str) -> tuple[str, object]:
     return field_name, int(number) if number.is_integer() and "." not in value else number
 
 
-def main() -> None:
+def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("what", choices=("fit", "report", "stereo-grid", "answer-rules", "warp-scenes", "per-case"))
     parser.add_argument("--data", required=True, help="a folder of Middlebury scenes with ground truth")
@@ -563,7 +564,7 @@ def main() -> None:
                         help="report: summarise these rows files (written by earlier reports) instead of scoring")
     parser.add_argument("--against", type=Path,
                         help="report: also compare, paired, with the rows of other fits (e.g. the narrow net's)")
-    args = parser.parse_args()
+    args = parse_args(parser, argv)
     names = suite_case_names(args.data)
     if args.cases:
         unknown = sorted(set(args.cases) - set(names))

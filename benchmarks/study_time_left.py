@@ -20,6 +20,7 @@ from pathlib import Path
 
 from ddp_lite.method.stopping import PlateauStopper
 from ddp_lite.method.time_left import EXPECTED_STOP_SHARE, earliest_stop, expected_stop
+from _common import parse_args
 
 ROWS = Path(__file__).parent / "results" / "time_left_class.jsonl"
 
@@ -74,11 +75,11 @@ def replay(row: dict, rule) -> list:
     return errors
 
 
-def main() -> None:
+def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--record", nargs=2, metavar=("LANE/LANES", "OUT"), help="fit and append rows instead")
     parser.add_argument("--rows", default=str(ROWS))
-    args = parser.parse_args()
+    args = parse_args(parser, argv)
     if args.record:
         lane, lanes = (int(v) for v in args.record[0].split("/"))
         record(lane, lanes, args.record[1])

@@ -14,6 +14,7 @@ padded as ``photometric_cost`` pads it). Printed: the share of pixels whose swee
 """
 from __future__ import annotations
 
+import argparse
 import math
 import os
 import sys
@@ -31,6 +32,7 @@ from ddp_lite.method.kit.warp_cost import forward_differences, census_distance, 
 from ddp_lite.studies.real_cases import REAL_HOLES  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(__file__))
+from _common import parse_args  # noqa: E402
 from study_warp_residual import filled_truth, real_sweep, textured_pixels  # noqa: E402  (the same pair, planes, truth)
 
 WRONG_PX = 2.0  # a minimum this far from the truth pulls the fit wrong
@@ -85,9 +87,12 @@ def scale_at_truth(holes: str) -> dict:
     return {name: float(cost[0, 0].numpy()[valid].mean()) for name, cost in costs(ref, warped).items()}
 
 
-if __name__ == "__main__":
+def main(argv=None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--scale", action="store_true", help="each cost's mean at the true depth, on the valid input")
+    args = parse_args(parser, argv)
     torch.set_num_threads(1)
-    if "--scale" in sys.argv[1:]:
+    if args.scale:
         print(f"mean cost per pixel at the true depth, valid input: {'holes':10s} intensity  census  ratio")
         for kind in REAL_HOLES:
             means = scale_at_truth(kind)
@@ -96,3 +101,7 @@ if __name__ == "__main__":
     else:
         for kind in REAL_HOLES:
             study(kind)
+
+
+if __name__ == "__main__":
+    main()

@@ -15,6 +15,7 @@ the minimum is wrong (> 2 px) among the kept and the dropped ones. Ground truth 
 """
 from __future__ import annotations
 
+import argparse
 import os
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")
@@ -29,6 +30,7 @@ from ddp_lite.method.kit.visibility import Visibility  # noqa: E402
 from ddp_lite.method.paper.warp import Warper  # noqa: E402
 from ddp_lite.method.kit.warp_confidence import cost_volume, photometric_cost, sweep_planes, warp_confidence  # noqa: E402
 from ddp_lite.studies.real_cases import REAL_HOLES, make_real_case  # noqa: E402
+from _common import parse_args  # noqa: E402
 
 WRONG_PX = 2.0  # a minimum this far from the truth pulls the fit wrong
 
@@ -128,18 +130,25 @@ def combined_lines(case) -> list[str]:
     return lines
 
 
-if __name__ == "__main__":
-    import argparse
+def main(argv=None) -> None:
+    from ddp_lite.studies.real_suite import SUITE_HOLES, make_suite_case, suite_case_names
+    from _common import data_root
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--data", metavar="DIR", help="a folder of Middlebury scenes: the real suite's cases instead")
-    parser.add_argument("--holes", nargs="+", default=None, help="hole kinds (default: all of the chosen suite's)")
+    parser.add_argument("--data", metavar="DIR", type=data_root,
+                        help="a folder of Middlebury scenes: the real suite's cases instead")
+    parser.add_argument("--holes", nargs="+", default=None, choices=sorted(set(REAL_HOLES) | set(SUITE_HOLES)),
+                        help="hole kinds (default: all of the chosen suite's)")
     parser.add_argument("--size", default="eighth", choices=("eighth", "quarter"))
-    args = parser.parse_args()
+
+    def check(args):
+        kinds = SUITE_HOLES if args.data else REAL_HOLES
+        wrong = [h for h in args.holes or () if h not in kinds]
+        if wrong:
+            raise ValueError(f"--holes: {', '.join(wrong)} not among the chosen suite's ({', '.join(kinds)})")
+    args = parse_args(parser, argv, check)
     torch.set_num_threads(1)
     if args.data:
-        from ddp_lite.studies.real_suite import make_suite_case, suite_case_names
-
         for name in suite_case_names(args.data):
             if args.holes is None or name.split("/")[1] in args.holes:
                 case = make_suite_case(args.data, name, args.size)
@@ -150,3 +159,7 @@ if __name__ == "__main__":
     else:
         for kind in args.holes or REAL_HOLES:
             study(kind)
+
+
+if __name__ == "__main__":
+    main()

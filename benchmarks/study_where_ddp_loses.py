@@ -24,6 +24,7 @@ import numpy as np  # noqa: E402
 from scipy import stats  # noqa: E402
 
 from ddp_lite.studies.real_suite import make_suite_case  # noqa: E402
+from _common import parse_args  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
 
@@ -52,13 +53,13 @@ def features(case) -> dict:
             "disparity spread": float(np.percentile(disparity, 95) - np.percentile(disparity, 5))}
 
 
-def main() -> None:
+def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", required=True, help="the folder of Middlebury scenes the suite ran on")
     parser.add_argument("--size", default="eighth", choices=("eighth", "quarter"))
     parser.add_argument("--method", default="DDP kit")
     parser.add_argument("--variant", default="rgbd")
-    args = parser.parse_args()
+    args = parse_args(parser, argv)
     table = ratios(RESULTS / f"real_suite_{args.size}.jsonl", args.method, args.variant)
     names = sorted(table)
     described = {name: features(make_suite_case(args.data, name, args.size)) for name in names}
