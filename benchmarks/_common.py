@@ -3,7 +3,7 @@
 Arguments: :func:`parse_args` adds ``--check-args`` to every script (check the arguments, print
 ``arguments OK`` and exit 0 before any work: what the test of the documented commands runs) and turns a
 ``check(args)`` that raises ``ValueError`` into a usage error naming the option (exit 2). The argument types
-(:func:`count`, :func:`seed`, :func:`lane`, :func:`data_root`, ...) do the same inside argparse.
+(:func:`positive_int`, :func:`seed_int`, :func:`lane`, :func:`data_root`, ...) do the same inside argparse.
 
 Rows: one JSON line per fill or fit, appended as each finishes (:class:`RowsFile`). A row is reused on a
 resumed run only when every field that changes its numbers (:func:`row_key`: size, profile, recipe and its
@@ -20,22 +20,24 @@ import json
 import os
 from pathlib import Path
 
-import torch
-
-from ddp_lite.method.profiles import PROFILES, get_profile
-
 
 # ------------------------------------------------------------------ the command line
 
 def add_profile_args(parser: argparse.ArgumentParser, profile: str = "class") -> None:
     """``--size H W``, ``--profile`` and ``--threads``."""
-    parser.add_argument("--size", type=count, nargs=2, metavar=("H", "W"), help="image size (default: the profile's)")
+    from ddp_lite.method.profiles import PROFILES
+
+    parser.add_argument("--size", type=positive_int, nargs=2, metavar=("H", "W"), help="image size (default: the profile's)")
     parser.add_argument("--profile", default=profile, choices=sorted(PROFILES))
-    parser.add_argument("--threads", type=count, default=1)
+    parser.add_argument("--threads", type=positive_int, default=1)
 
 
 def profile_from_args(args):
     """Set torch's thread count and return the chosen profile, resized by ``--size``."""
+    import torch  # here, not above: a script held to AVX2 (isa.py) starts again before torch is imported
+
+    from ddp_lite.method.profiles import get_profile
+
     torch.set_num_threads(args.threads)
     profile = get_profile(args.profile)
     return dataclasses.replace(profile, size=tuple(args.size)) if args.size else profile
@@ -72,14 +74,14 @@ def _number(kind, minimum, what: str):
     return convert
 
 
-count = _number(int, 1, "a whole number ≥ 1")
-seed = _number(int, 0, "a seed, a whole number ≥ 0")
-fraction = _number(float, 0.0, "a number ≥ 0")
+positive_int = _number(int, 1, "a whole number ≥ 1")
+seed_int = _number(int, 0, "a seed, a whole number ≥ 0")
+nonnegative_float = _number(float, 0.0, "a number ≥ 0")
 
 
-def positive(text: str) -> float:
+def positive_float(text: str) -> float:
     """A float > 0 (seconds, a budget)."""
-    value = fraction(text)
+    value = nonnegative_float(text)
     if not value > 0 or value == float("inf"):
         raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text!r}")
     return value

@@ -15,19 +15,20 @@ import time
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
-from _common import add_profile_args, profile_from_args, parse_args  # noqa: E402
+from _common import add_profile_args, profile_from_args, parse_args, seed_int, positive_float  # noqa: E402
 
 from ddp_lite.evaluation.experiments import TABLE2_CONFIGS, ablation, format_mean_spread  # noqa: E402
 from ddp_lite.method.kit.recipes import get_recipe  # noqa: E402
+from ddp_lite.world.scenes import SCENES  # noqa: E402
 
 
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     add_profile_args(parser)
-    parser.add_argument("--scenes", nargs="+", default=["house", "desk"])
-    parser.add_argument("--seeds", nargs="+", type=int, default=None, help="default: the profile's seeds")
+    parser.add_argument("--scenes", nargs="+", default=["house", "desk"], choices=sorted(SCENES))
+    parser.add_argument("--seeds", nargs="+", type=seed_int, default=None, help="default: the profile's seeds")
     parser.add_argument("--holes", default="edge", choices=("edge", "sgm", "random"))
-    parser.add_argument("--tau", type=float, default=0.01, help="P/R/F distance as a fraction of the median depth")
+    parser.add_argument("--tau", type=positive_float, default=0.01, help="P/R/F distance as a fraction of the median depth")
     args = parse_args(parser, argv)
     profile = profile_from_args(args)
     seeds = args.seeds if args.seeds is not None else list(profile.seeds)

@@ -34,7 +34,7 @@ from ddp_lite.evaluation.experiments import make_case  # noqa: E402
 from ddp_lite.method.stopping import PlateauStopper  # noqa: E402
 from ddp_lite.method.paper.variants import VARIANTS, get_variant  # noqa: E402
 from ddp_lite.method.kit.recipes import get_recipe  # noqa: E402
-from _common import add_profile_args, profile_from_args, parse_args  # noqa: E402
+from _common import add_profile_args, profile_from_args, parse_args, positive_int, seed_int  # noqa: E402
 
 SCENES = ("house", "desk", "room", "street")
 
@@ -54,10 +54,10 @@ def replay(heldout, patience: int, eval_every: int, decays: int):
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     add_profile_args(parser)
-    parser.add_argument("--iterations", type=int, default=800, help="long-run length")
-    parser.add_argument("--scenes", nargs="+", default=list(SCENES))
-    parser.add_argument("--variants", nargs="+", default=list(VARIANTS))
-    parser.add_argument("--seeds", type=int, nargs="+", default=[0])
+    parser.add_argument("--iterations", type=positive_int, default=800, help="long-run length")
+    parser.add_argument("--scenes", nargs="+", default=list(SCENES), choices=SCENES)
+    parser.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=VARIANTS)
+    parser.add_argument("--seeds", type=seed_int, nargs="+", default=[0])
     parser.add_argument("--constant-lr", action="store_true", help="never cut the lr (DIP's recipe)")
     args = parse_args(parser, argv)
     profile = profile_from_args(args)

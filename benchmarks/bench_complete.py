@@ -23,7 +23,7 @@ import time
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(__file__))
-from _common import add_profile_args, profile_from_args, parse_args  # noqa: E402
+from _common import add_profile_args, profile_from_args, parse_args, seed_int, check_rows_out  # noqa: E402
 from bench_fit import cpu_summary  # noqa: E402
 
 from ddp_lite.classical import baselines  # noqa: E402
@@ -65,10 +65,10 @@ def run_pattern(pattern: int, profile, seed: int) -> dict:
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     add_profile_args(parser)
-    parser.add_argument("--patterns", type=int, nargs="+", default=[1, 2, 3], help="blob patterns (hole seeds)")
-    parser.add_argument("--seed", type=int, default=0, help="the fit's seed")
+    parser.add_argument("--patterns", type=seed_int, nargs="+", default=[1, 2, 3], help="blob patterns (hole seeds)")
+    parser.add_argument("--seed", type=seed_int, default=0, help="the fit's seed")
     parser.add_argument("--out", help="append one JSON line per pattern here")
-    args = parse_args(parser, argv)
+    args = parse_args(parser, argv, lambda a: check_rows_out(a.out) if a.out else None)
     profile = profile_from_args(args)
     print(cpu_summary())
     rows = []

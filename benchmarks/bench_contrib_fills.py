@@ -25,8 +25,8 @@ from fill_references import numpy_joint_bilateral  # noqa: E402
 
 import ddp_lite.classical.guided_fills as guided  # noqa: E402
 from ddp_lite.classical.baselines import BASELINES  # noqa: E402
-from ddp_lite.studies.real_cases import make_real_case  # noqa: E402
-from _common import parse_args  # noqa: E402
+from ddp_lite.studies.real_cases import REAL_HOLES, make_real_case  # noqa: E402
+from _common import parse_args, positive_int  # noqa: E402
 
 FILLS = ("nearest", "linear", "telea", "guided-filter", "cross-bilateral", "fast-global-smoother", "ebi", "fbf")
 
@@ -53,9 +53,9 @@ def old_cross_bilateral(disparity, rgb):
 
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--factor", type=int, default=2, help="Motorcycle pooled by this (2: 250×370)")
-    parser.add_argument("--holes", nargs="+", default=["blobs-1", "blobs-2", "blobs-3", "occlusion"])
-    parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--factor", type=positive_int, default=2, help="Motorcycle pooled by this (2: 250×370)")
+    parser.add_argument("--holes", nargs="+", default=["blobs-1", "blobs-2", "blobs-3", "occlusion"], choices=REAL_HOLES)
+    parser.add_argument("--repeat", type=positive_int, default=3)
     args = parse_args(parser, argv)
     model, flags = cpu_flags()
     print(f"CPU: {model}; flags: {', '.join(f for f in CPU_FLAGS if f in flags) or 'none of ' + str(CPU_FLAGS)}; "

@@ -34,7 +34,7 @@ from torch.func import functional_call, replace_all_batch_norm_modules_, stack_m
 
 sys.path.insert(0, os.path.dirname(__file__))
 from bench_fit import cpu_summary  # noqa: E402
-from _common import parse_args  # noqa: E402
+from _common import parse_args, positive_int  # noqa: E402
 
 CASES = (((48, 64), (16, 32, 64, 128), 10), ((48, 64), (32, 64, 128, 256, 512), 4),
          ((96, 128), (32, 64, 128, 256, 512), 2))  # (size, UNet widths, iterations per timed round at K = 1)
@@ -116,11 +116,11 @@ def main_fits(args) -> None:
 
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--threads", type=int, default=1)
-    parser.add_argument("--rounds", type=int, default=5)
-    parser.add_argument("--members", type=int, nargs="+", default=None, help="K values (default 1 2 4 8; --fits: 2 3 4)")
+    parser.add_argument("--threads", type=positive_int, default=1)
+    parser.add_argument("--rounds", type=positive_int, default=5)
+    parser.add_argument("--members", type=positive_int, nargs="+", default=None, help="K values (default 1 2 4 8; --fits: 2 3 4)")
     parser.add_argument("--fits", action="store_true", help="whole ensemble fits: members in turn vs side by side")
-    parser.add_argument("--iterations", type=int, default=60, help="--fits: iterations per member")
+    parser.add_argument("--iterations", type=positive_int, default=60, help="--fits: iterations per member")
     args = parse_args(parser, argv)
     torch.set_num_threads(args.threads)
     print(cpu_summary())

@@ -3,6 +3,7 @@
     python benchmarks/bench_fit.py            # all variants at 48×64 and 96×128, UNet 32–512
     python benchmarks/bench_fit.py --narrow   # also the ci profile's narrow net
     python benchmarks/bench_fit.py --set bf16=True --set pad='zeros'   # FitConfig overrides
+    python benchmarks/bench_fit.py --isa avx2  # held to AVX2 kernels, as on most laptops (isa.py)
 
 Prints a table; asserts nothing. Each configuration runs in a fresh subprocess so that its
 peak resident memory (ru_maxrss) is its own. "bound" is the iteration's floating-point work
@@ -14,20 +15,27 @@ conv / bound. A loop can get no nearer its bound than its convolutions do.
 """
 from __future__ import annotations
 
-import argparse
-import ast
-import json
-import resource
-import subprocess
+import os
 import sys
-import time
 
-import numpy as np
-import torch
+sys.path.insert(0, os.path.dirname(__file__))
+from isa import ISA_ENV, cpu_flags, reexec_with_isa  # noqa: E402  benchmarks/ is on the path: the scripts run from there
 
-from ddp_lite.method.paper.variants import VARIANTS
-from isa import cpu_flags  # benchmarks/ is on the path: the scripts run from there
-from _common import parse_args
+if __name__ == "__main__":
+    reexec_with_isa()  # before torch is imported
+
+import argparse  # noqa: E402
+import ast  # noqa: E402
+import json  # noqa: E402
+import resource  # noqa: E402
+import subprocess  # noqa: E402
+import time  # noqa: E402
+
+import numpy as np  # noqa: E402
+import torch  # noqa: E402
+
+from ddp_lite.method.paper.variants import VARIANTS  # noqa: E402
+from _common import parse_args  # noqa: E402
 
 
 CPU_FLAGS = ("avx512f", "avx512_bf16", "amx_bf16", "avx512_vnni")
@@ -150,6 +158,8 @@ def run_one(variant: str, height: int, width: int, channels, iterations: int, ov
 
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--isa", default="native", choices=sorted(ISA_ENV),
+                        help="native, or avx2: torch, oneDNN and MKL held to AVX2 kernels (isa.py)")
     parser.add_argument("--iterations", type=int, default=20)
     parser.add_argument("--narrow", action="store_true", help="also the ci profile's 16–128 net")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",

@@ -6,7 +6,7 @@ every classical fill of ``baselines.BASELINES`` computed at that full size.
     python benchmarks/bench_full_resolution.py --data DIR --cache /tmp/fits --fits-only     # the fits alone, cached
     python benchmarks/bench_full_resolution.py --data DIR --scenes Plastic/depthcomp --no-sgbm --seeds 0 1 2
     python benchmarks/bench_full_resolution.py --data DIR --scenes Plastic Baby1 Bowling1 Art Books Dolls --isa avx2 --recipe photo
-    python benchmarks/bench_full_resolution.py --data DIR --scenes ... --cache DIR --smoothness   # means of solves
+    python benchmarks/bench_full_resolution.py --data DIR --scenes Plastic Baby1 Bowling1 --cache DIR --smoothness   # means of solves
 
 Cases (each at full size, scored in the holes where the truth is known, RMSE of disparity in the image's own
 pixels, f·B/Z):

@@ -21,7 +21,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
-from _common import parse_args
+from _common import parse_args, positive_int, check_output_folder
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
@@ -136,13 +136,13 @@ def notebook_seconds(isa: str, threads: int, path: Path, profile: str = "class",
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--isa", nargs="+", default=["native", "avx2"], choices=sorted(ISA_ENV))
-    parser.add_argument("--threads", type=int, default=2, help="torch threads (a laptop: 2)")
+    parser.add_argument("--threads", type=positive_int, default=2, help="torch threads (a laptop: 2)")
     parser.add_argument("--notebooks", action="store_true", help="also time every notebook (at --profile)")
-    parser.add_argument("--profile", default="class", help="the notebooks' profile (class; ci as in make test)")
+    parser.add_argument("--profile", default="class", choices=("ci", "class", "paper"), help="the notebooks' profile (class; ci as in make test)")
     parser.add_argument("--only", nargs="+", metavar="NAME", help="notebooks whose name contains NAME")
     parser.add_argument("--keep", type=Path, metavar="DIR", help="write the executed notebooks (outputs included) here")
     parser.add_argument("--skip", nargs="+", default=[], choices=["loop", "fit", "complete"], help="parts to skip")
-    args = parse_args(parser, argv)
+    args = parse_args(parser, argv, lambda a: check_output_folder(a.keep, "--keep") if a.keep else None)
     for isa in args.isa:
         print(f"\n== {isa}: {summary(isa)}; {args.threads} threads", flush=True)
         if "loop" not in args.skip:

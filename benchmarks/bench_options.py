@@ -29,7 +29,7 @@ import torch
 
 sys.path.insert(0, os.path.dirname(__file__))
 from bench_fit import case, cpu_summary  # noqa: E402
-from _common import parse_args  # noqa: E402
+from _common import parse_args, positive_int, seed_int, existing_folder  # noqa: E402
 
 OPTIONS = {"float32": {}, "bf16": dict(bf16=True), "channels_last": dict(channels_last=True),
            "pad zeros": dict(pad="zeros"), "bf16+zeros": dict(bf16=True, pad="zeros"),
@@ -131,15 +131,15 @@ def hole_errors(scenes=("house", "desk"), seeds=(0, 1, 2)) -> None:
 
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--rounds", type=int, default=7)
-    parser.add_argument("--variant", default="rgbd+warp")
-    parser.add_argument("--threads", type=int, default=1)
+    parser.add_argument("--rounds", type=positive_int, default=7)
+    parser.add_argument("--variant", default="rgbd+warp", choices=("d", "rgbd", "rgbd+warp"))
+    parser.add_argument("--threads", type=positive_int, default=1)
     parser.add_argument("--only", choices=sorted(SIZES))
-    parser.add_argument("--options", nargs="*", default=list(OPTIONS), help=f"from {list(OPTIONS)}")
+    parser.add_argument("--options", nargs="*", default=list(OPTIONS), choices=list(OPTIONS), help=f"from {list(OPTIONS)}")
     parser.add_argument("--compile", action="store_true", help="also torch.compile (default, max-autotune-no-cudagraphs)")
-    parser.add_argument("--baseline", help="path of another ddp_lite package, timed as 'baseline'")
+    parser.add_argument("--baseline", type=existing_folder, help="path of another ddp_lite package, timed as 'baseline'")
     parser.add_argument("--errors", action="store_true", help="hole error of bf16 / zero padding over seeds instead")
-    parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2], help="seeds of --errors")
+    parser.add_argument("--seeds", type=seed_int, nargs="+", default=[0, 1, 2], help="seeds of --errors")
     args = parse_args(parser, argv)
     torch.set_num_threads(args.threads)
     import ddp_lite

@@ -57,8 +57,8 @@ from ddp_lite.method.kit.recipes import RECIPES as KIT_RECIPES  # noqa: E402
 from ddp_lite.data.resample import resize_scene  # noqa: E402
 from ddp_lite.world.scenes import SCENES  # noqa: E402
 from _common import (RowsFile, add_profile_args, check_configs, check_output_folder, check_rows_in,  # noqa: E402
-                     check_rows_out, count, data_root, lane, parse_args, profile_from_args, read_rows,
-                     recipe_overrides, seed, split_top)
+                     check_rows_out, positive_int, data_root, lane, parse_args, profile_from_args, read_rows,
+                     recipe_overrides, seed_int, split_top)
 from study_recipes import STUDY  # noqa: E402
 
 NAMED = ("house", "desk", "room", "street")
@@ -439,14 +439,14 @@ def build_parser() -> argparse.ArgumentParser:
                              "kinds join the suite")
     parser.add_argument("--recipes", nargs="+", default=["default"])
     parser.add_argument("--variants", nargs="+", default=["rgbd", "rgbd+warp"], choices=("d", "rgbd", "rgbd+warp"))
-    parser.add_argument("--seeds", type=seed, nargs="+", default=[0, 1])
+    parser.add_argument("--seeds", type=seed_int, nargs="+", default=[0, 1])
     parser.add_argument("--lane", type=lane, default=(0, 1), help="i/n: run every n-th case starting at i (parallel lanes)")
     parser.add_argument("--out", help="append one JSON line per fit here (and skip fits already in it)")
     parser.add_argument("--report", metavar="JSONL", nargs="?", const=True,
                         help="print the tables of a results file and exit (alone: of --out, or with --suite "
                              "middlebury of the size's default file)")
     parser.add_argument("--save-fits", metavar="DIR", help="keep each DDP fit's output here (inverse depth, .npy)")
-    parser.add_argument("--ensembles", type=count, nargs="+", default=[], metavar="K",
+    parser.add_argument("--ensembles", type=positive_int, nargs="+", default=[], metavar="K",
                         help="with --report and --save-fits: also report the mean of K saved fits (seeds s..s+K-1)")
     parser.add_argument("--mixes", nargs="+", default=[], metavar="A+B",
                         help="with --report and --save-fits: also report the mean of one fit of each recipe (same seed)")

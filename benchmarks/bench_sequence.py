@@ -33,7 +33,7 @@ from ddp_lite.sequences.sequence import run_sequence
 from ddp_lite.sequences.sequence_cost import estimate_sequence, format_estimate
 from ddp_lite.sequences.sequence_files import read_manifest
 from ddp_lite.data.tum import write_tum
-from _common import parse_args
+from _common import parse_args, positive_int, positive_float
 
 
 def _depths(out: Path) -> dict:
@@ -42,10 +42,10 @@ def _depths(out: Path) -> dict:
 
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--profile", default="ci")
-    parser.add_argument("--views", type=int, default=6)
-    parser.add_argument("--gpu-tflops", type=float, default=5.0)
-    parser.add_argument("--threads", type=int, default=2, help="torch threads in-process: views side by side")
+    parser.add_argument("--profile", default="ci", choices=("ci", "class", "paper"))
+    parser.add_argument("--views", type=positive_int, default=6)
+    parser.add_argument("--gpu-tflops", type=positive_float, default=5.0)
+    parser.add_argument("--threads", type=positive_int, default=2, help="torch threads in-process: views side by side")
     args = parse_args(parser, argv)
     profile = get_profile(args.profile)
     root = Path(tempfile.mkdtemp())

@@ -39,7 +39,7 @@ from ddp_lite.evaluation.experiments import make_case  # noqa: E402
 from ddp_lite.method.coarse_to_fine import complete_depth_coarse_to_fine  # noqa: E402
 from ddp_lite.method.runtime.options import RunOptions  # noqa: E402
 from ddp_lite.method.kit.recipes import get_recipe  # noqa: E402
-from _common import add_profile_args, profile_from_args, parse_args  # noqa: E402
+from _common import add_profile_args, profile_from_args, parse_args, positive_int, seed_int, positive_float  # noqa: E402
 
 SCENES = ("house", "desk", "room", "street")
 VARIANT = "rgbd+warp"
@@ -107,13 +107,13 @@ HEAD = f"{'':<22} {'it→tgt':>6} {'s→tgt':>8} {'best':>7} {'kept':>7} {'ran':
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     add_profile_args(parser)
-    parser.add_argument("--budget", type=int, help="iterations of the fixed-budget recipes (default: 2 × the profile's)")
-    parser.add_argument("--tolerance", type=float, default=0.05)
-    parser.add_argument("--scenes", nargs="+", default=list(SCENES))
-    parser.add_argument("--warm-scene", default="house")
+    parser.add_argument("--budget", type=positive_int, help="iterations of the fixed-budget recipes (default: 2 × the profile's)")
+    parser.add_argument("--tolerance", type=positive_float, default=0.05)
+    parser.add_argument("--scenes", nargs="+", default=list(SCENES), choices=SCENES)
+    parser.add_argument("--warm-scene", default="house", choices=SCENES)
     parser.add_argument("--parts", nargs="+", default=["main", "warm", "precision", "c2f"],
                         choices=["main", "warm", "precision", "c2f"])
-    parser.add_argument("--seed", type=int, default=0, help="fit seed (net init, noise, held-out pixels)")
+    parser.add_argument("--seed", type=seed_int, default=0, help="fit seed (net init, noise, held-out pixels)")
     args = parse_args(parser, argv)
     profile = profile_from_args(args)
     budget = args.budget or 2 * profile.iterations

@@ -25,7 +25,7 @@ import bench_quality as bq
 from ddp_lite.core.files import atomic_path
 from ddp_lite.classical.baselines import BASELINES
 from ddp_lite.method.kit.blend import FILL_MEMBERS
-from _common import add_profile_args, profile_from_args, parse_args
+from _common import add_profile_args, profile_from_args, parse_args, existing_file, existing_folder, check_rows_out, read_rows
 
 MEMBERS = {
     "col": ("colorization",),
@@ -80,14 +80,14 @@ def report(out: dict, reference: tuple[str, float]) -> None:
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     add_profile_args(parser)
-    parser.add_argument("rows", nargs="+", type=Path, help="bench_quality.py --out files of the fits")
-    parser.add_argument("--fits", type=Path, required=True, help="their --save-fits folder")
+    parser.add_argument("rows", nargs="+", type=existing_file, help="bench_quality.py --out files of the fits")
+    parser.add_argument("--fits", type=existing_folder, required=True, help="their --save-fits folder")
     parser.add_argument("--recipe", default="alone", help="the recipe whose saved fits are the fits alone")
     parser.add_argument("--reference", default="col:0.2", help="member:share the changes are paired against")
     parser.add_argument("--out", type=Path, help="one JSON line per fit: its ratio at every member and share")
-    args = parse_args(parser, argv)
+    args = parse_args(parser, argv, lambda a: check_rows_out(a.out) if a.out else None)
     member, share = args.reference.split(":")
-    rows = [json.loads(line) for path in args.rows for line in path.read_text().splitlines() if line.strip()]
+    rows = [row for path in args.rows for row in read_rows(path)]
     rows = list({(r["case"], r["seed"], r["variant"]): r for r in rows
                  if r.get("method") == args.recipe and r.get("seed") is not None}.values())
     out = ratios(rows, args.fits, profile_from_args(args))

@@ -17,17 +17,17 @@ from torch.profiler import ProfilerActivity, profile
 
 sys.path.insert(0, os.path.dirname(__file__))
 from bench_fit import case, config_and_options, cpu_summary, parse_overrides  # noqa: E402
-from _common import parse_args  # noqa: E402
+from _common import parse_args, positive_int  # noqa: E402
 
 SIZES = {"96x128": ((96, 128), (32, 64, 128, 256, 512)), "48x64": ((48, 64), (16, 32, 64, 128))}
 
 
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--iterations", type=int, default=30)
-    parser.add_argument("--variant", default="rgbd+warp")
-    parser.add_argument("--rows", type=int, default=15)
-    parser.add_argument("--threads", type=int, default=1)
+    parser.add_argument("--iterations", type=positive_int, default=30)
+    parser.add_argument("--variant", default="rgbd+warp", choices=("d", "rgbd", "rgbd+warp"))
+    parser.add_argument("--rows", type=positive_int, default=15)
+    parser.add_argument("--threads", type=positive_int, default=1)
     parser.add_argument("--only", choices=sorted(SIZES), help="one size only")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                         help="FitConfig field or RunOptions override")

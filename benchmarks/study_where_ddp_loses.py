@@ -13,7 +13,6 @@ worst cases. Asserts nothing; reads the ground truth only to describe the cases.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 from collections import defaultdict
 from pathlib import Path
@@ -24,7 +23,7 @@ import numpy as np  # noqa: E402
 from scipy import stats  # noqa: E402
 
 from ddp_lite.studies.real_suite import make_suite_case  # noqa: E402
-from _common import parse_args  # noqa: E402
+from _common import parse_args, data_root, read_rows  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
 
@@ -32,8 +31,7 @@ RESULTS = Path(__file__).resolve().parent / "results"
 def ratios(path: Path, method: str, variant: str) -> dict:
     """{case: DDP px / best fill px} from the rows in ``path`` (mean over seeds)."""
     fills, fits = defaultdict(dict), defaultdict(list)
-    for line in path.read_text().splitlines():
-        row = json.loads(line)
+    for row in read_rows(path):
         if row["variant"] is None:
             fills[row["case"]][row["method"]] = row["px"]
         elif row["method"] == method and row["variant"] == variant:
@@ -55,10 +53,10 @@ def features(case) -> dict:
 
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--data", required=True, help="the folder of Middlebury scenes the suite ran on")
+    parser.add_argument("--data", required=True, type=data_root, help="the folder of Middlebury scenes the suite ran on")
     parser.add_argument("--size", default="eighth", choices=("eighth", "quarter"))
     parser.add_argument("--method", default="DDP kit")
-    parser.add_argument("--variant", default="rgbd")
+    parser.add_argument("--variant", default="rgbd", choices=("d", "rgbd", "rgbd+warp"))
     args = parse_args(parser, argv)
     table = ratios(RESULTS / f"real_suite_{args.size}.jsonl", args.method, args.variant)
     names = sorted(table)

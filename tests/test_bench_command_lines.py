@@ -28,9 +28,10 @@ TINY = "tiny:iterations=2,channels=(8, 16),auto_stop=False,lr_milestones=()"
 
 @pytest.fixture(scope="module")
 def data(tmp_path_factory):
-    """A folder of one tiny Middlebury scene with ground truth."""
+    """A folder of tiny Middlebury scenes with ground truth, named as the docs' commands name theirs."""
     root = tmp_path_factory.mktemp("scenes")
-    make_middlebury_fixture(root / "Desk", size=(48, 64), seed=0)
+    for seed_, name in enumerate(("Art", "Plastic", "Baby1", "Bowling1", "Books", "Dolls")):
+        make_middlebury_fixture(root / name, size=(48, 64), seed=seed_)
     return root
 
 
@@ -101,7 +102,7 @@ def test_the_real_suite_refuses_bad_data_cases_recipes_and_seeds_before_any_row(
                          (["--data", str(data), "--recipes", "kit:seed=1"], "--recipes"),
                          (["--data", str(data), "--recipes", "kit:warp_combine=maximum"], "warp_combine"),
                          (["--data", str(data), "--seeds", "-1"], "--seeds"),
-                         (["--data", str(data), "--cases", "Desk/nosuch"], "--cases"),
+                         (["--data", str(data), "--cases", "Art/nosuch"], "--cases"),
                          (["--data", str(data), "--size", "48", "64"], "--size")]:
         _usage_error(base + argv, capsys, option)
     assert not out.exists()
@@ -109,11 +110,11 @@ def test_the_real_suite_refuses_bad_data_cases_recipes_and_seeds_before_any_row(
 
 def test_the_documented_real_suite_commands_parse(data, capsys, tmp_path):
     rows = tmp_path / "real.jsonl"
-    rows.write_text(json.dumps(dict(case="Desk/blobs", method="linear", variant=None, seed=None, size="eighth",
+    rows.write_text(json.dumps(dict(case="Art/blobs", method="linear", variant=None, seed=None, size="eighth",
                                     profile=None, px=1.0)) + "\n")
     for argv in (["--real-size", "quarter", "--seeds", "0", "1", "2"], ["--report"],
                  ["--variants", "rgbd+warp", "--recipes", "kit", "kit:warp_combine=min,gammas=(0.96,0.02)",
-                  "--cases", "Desk/sgbm", "Desk/occlusion"]):
+                  "--cases", "Art/sgbm", "Art/occlusion"]):
         with pytest.raises(SystemExit) as stop:
             bench_quality.main(["--suite", "middlebury", "--data", str(data), "--out", str(rows), *argv, "--check-args"])
         assert stop.value.code == 0, capsys.readouterr().err
@@ -147,9 +148,9 @@ def test_a_resumed_run_with_other_overrides_fits_again(tmp_path):
 
 def test_the_real_suite_at_another_size_computes_its_own_rows(data, tmp_path, capsys):
     out = tmp_path / "real.jsonl"
-    bench_real.run(data, "eighth", [], [], [], out, cases=["Desk/blobs"])
+    bench_real.run(data, "eighth", [], [], [], out, cases=["Art/blobs"])
     eighth = out.read_text().count("\n")
-    bench_real.run(data, "quarter", [], [], [], out, cases=["Desk/blobs"])
+    bench_real.run(data, "quarter", [], [], [], out, cases=["Art/blobs"])
     rows = [json.loads(line) for line in out.read_text().splitlines()]
     assert eighth > 0 and len(rows) == 2 * eighth
     assert sorted({r["size"] for r in rows}) == ["eighth", "quarter"]
@@ -206,7 +207,7 @@ def _load(script: str, monkeypatch):
     return importlib.import_module(script)
 
 
-COMMAND = re.compile(r"(?:\.venv/bin/)?python (benchmarks/(\w+)\.py(?:[^`\n|]|\\\n)*)")
+COMMAND = re.compile(r"(?:\.venv/bin/)?python (benchmarks/(\w+)\.py(?:\\\n|[^`\n|])*)")
 
 
 def documented_commands() -> list[tuple[str, str]]:
@@ -220,7 +221,8 @@ def documented_commands() -> list[tuple[str, str]]:
         if path.suffix == ".py":
             text = text.split('"""')[1] if text.count('"""') >= 2 else ""
         for match in COMMAND.finditer(text.replace("\\\\\n", "\\\n")):
-            line = re.sub(r"\\\n\s*", " ", match.group(1)).split("#")[0].strip().rstrip("&").strip()
+            line = re.sub(r"\\\n\s*", " ", match.group(1)).split("#")[0].split(" > ")[0].strip().rstrip("&").strip()
+            line = re.sub(r"\[(--[^\]]*)\]", r"\1", line).replace(" ...", "")  # [--option value]: optional, given
             found.append((f"{path.relative_to(ROOT)}", line))
     return found
 
@@ -235,7 +237,7 @@ def _argv(line: str, data: Path, tmp: Path) -> tuple[str, list[str]]:
         if word in placeholders:
             word = placeholders[word]
         elif word.startswith("DATA/"):
-            word = str(data / "Desk")
+            word = str(data / "Art")
         elif word.startswith("benchmarks/results/") and not (ROOT / word).exists():
             word = str(tmp / Path(word).name)
         elif word.startswith("benchmarks/"):
@@ -252,6 +254,12 @@ def test_the_docs_give_benchmark_commands():
 @pytest.mark.parametrize("where, line", documented_commands())
 def test_every_documented_benchmark_command_parses(where, line, data, tmp_path, capsys, monkeypatch):
     script, argv = _argv(line, data, tmp_path)
+    monkeypatch.chdir(tmp_path)  # what an earlier command of the same page made: a folder, a rows file
+    for word in argv:
+        if not word.startswith(("-", "/")) and word.endswith("/"):
+            (tmp_path / word).mkdir(parents=True, exist_ok=True)
+        elif not word.startswith(("-", "/")) and word.endswith(".jsonl"):
+            (tmp_path / word).write_text("")
     (tmp_path / "q.jsonl").write_text("")
     if "--report" in argv and not any(Path(a).is_file() for a in argv if a.endswith(".jsonl")):
         for path in [a for a in argv if a.endswith(".jsonl")]:
