@@ -45,8 +45,10 @@ from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from _common import add_profile_args, profile_from_args, parse_args  # noqa: E402
+from _common import (add_profile_args, check_output_folder, check_rows_out, existing_folder, parse_args,  # noqa: E402
+                     positive_float, profile_from_args, seed_int)
 from isa import isa_summary  # noqa: E402
+from ddp_lite.method.profiles import get_profile  # noqa: E402
 
 SCENES = ("Plastic", "Baby1", "Bowling1", "Art", "Books", "Dolls")
 
@@ -70,6 +72,34 @@ def blob_holes(gt):
     return random_holes(gt, fraction=0.2, seed=1, blob_size=min(H, W) / 10)[0]
 
 
+def check_args(args) -> None:
+    """Before any work (``ValueError`` naming the option): each of ``--scenes`` a folder under ``--data`` with
+    holes it has, the cache folder and the rows file writable."""
+    for entry in args.scenes if args.data else ():
+        check_scene(args.data, entry)
+    if args.cache:
+        check_output_folder(args.cache, "--cache")
+    if args.out:
+        check_rows_out(args.out)
+
+
+def check_scene(data, entry: str) -> tuple[str, str, list]:
+    """``entry`` (``name`` or ``name/holes``) of ``--scenes``: (its folder under ``data``, the holes, DepthComp's
+    hole files); ``ValueError`` naming ``--scenes`` otherwise."""
+    from ddp_lite.studies.real_suite import DEPTHCOMP_FILE
+    name, _, holes = entry.partition("/")
+    matches = [f for f in sorted(os.listdir(data)) if f.split("-", 1)[-1] == name]
+    if not matches:
+        raise ValueError(f"--scenes {entry!r}: --data {os.fspath(data)!r} has no folder for scene {name!r} "
+                         f"(e.g. 2006-{name})")
+    if holes not in ("", "blobs", "depthcomp"):
+        raise ValueError(f"--scenes {entry!r}: the holes must be blobs (the default) or depthcomp")
+    hole_files = sorted(Path(data).rglob(DEPTHCOMP_FILE)) if holes == "depthcomp" else []
+    if holes == "depthcomp" and (name != "Plastic" or not hole_files):
+        raise ValueError(f"--scenes {entry!r}: DepthComp's holes exist for Plastic only, in {DEPTHCOMP_FILE} under --data")
+    return matches[0], holes, hole_files
+
+
 def make_cases(data: str | None, scenes, sgbm: bool = True) -> list:
     """The cases named in the module's docstring, Motorcycle's first."""
     from ddp_lite.data.middlebury import load_motorcycle
@@ -84,18 +114,10 @@ def make_cases(data: str | None, scenes, sgbm: bool = True) -> list:
         real = make_real_case("sgbm", factor=1)
         cases.append(Case("motorcycle/sgbm", real.rgb, real.depth, real.gt, real.fb))
     from ddp_lite.data.samples import read_depthcomp_holes
-    from ddp_lite.studies.real_suite import DEPTHCOMP_FILE
     for entry in scenes if data else ():
-        name, _, holes = entry.partition("/")
-        matches = [f for f in sorted(os.listdir(data)) if f.split("-", 1)[-1] == name]
-        if not matches:
-            raise SystemExit(f"--data {data!r} has no folder for scene {name!r} (e.g. 2006-{name})")
-        if holes not in ("", "blobs", "depthcomp"):
-            raise SystemExit(f"--scenes: {entry!r}: the holes must be blobs (the default) or depthcomp")
-        hole_files = sorted(Path(data).rglob(DEPTHCOMP_FILE)) if holes == "depthcomp" else []
-        if holes == "depthcomp" and (name != "Plastic" or not hole_files):
-            raise SystemExit(f"--scenes: DepthComp's holes exist for Plastic only, in {DEPTHCOMP_FILE} under --data")
-        rail = load_rail_scene(os.path.join(data, matches[0]))
+        name = entry.partition("/")[0]
+        folder, holes, hole_files = check_scene(data, entry)
+        rail = load_rail_scene(os.path.join(data, folder))
         gt = rail[0].depth
         if holes == "depthcomp":
             depth = np.where(read_depthcomp_holes(hole_files[0], gt.shape), np.nan, gt).astype(np.float32)
@@ -117,6 +139,8 @@ def fit_small(case: Case, profile, seed: int, cache: str | None, isa: str, recip
     if cache:
         os.makedirs(cache, exist_ok=True)
         tag = "" if recipe == "kit" else f"_{recipe}"  # the kit's fits keep the names they were cached under
+        if tuple(profile.size) != tuple(get_profile(profile.name).size):  # --size: a fit at another working size
+            tag += f"_{profile.size[0]}x{profile.size[1]}"
         path = os.path.join(cache, f"{case.name.replace('/', '_')}_{profile.name}{tag}_s{seed}_{isa}.npz")
         if os.path.exists(path):
             stored = np.load(path)
@@ -162,22 +186,22 @@ def classical_fill(name: str, case: Case, limit: float):
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     add_profile_args(parser)
-    parser.add_argument("--isa", default="native", help="native or avx2 (benchmarks/isa.py)")
-    parser.add_argument("--data", help="a folder of Middlebury 2005/2006 scenes (2006-Plastic/ ...)")
+    parser.add_argument("--isa", default="native", choices=("native", "avx2"), help="native or avx2 (benchmarks/isa.py)")
+    parser.add_argument("--data", type=existing_folder, help="a folder of Middlebury 2005/2006 scenes (2006-Plastic/ ...)")
     parser.add_argument("--scenes", nargs="+", default=list(SCENES[:3]),
                         help="scene names under --data (Plastic/depthcomp: the paper's own holes)")
     parser.add_argument("--no-sgbm", action="store_true", help="skip Motorcycle's SGBM holes")
-    parser.add_argument("--seeds", type=int, nargs="+", default=[0], help="the fit's seeds")
+    parser.add_argument("--seeds", type=seed_int, nargs="+", default=[0], help="the fit's seeds")
     from ddp_lite.method.kit.recipes import RECIPES
     parser.add_argument("--recipe", choices=tuple(RECIPES), default="kit", help="the fit's recipe")
     parser.add_argument("--cache", help="keep (and reuse) each fit's working-size depth in this folder")
     parser.add_argument("--fits-only", action="store_true", help="only run (and cache) the fits")
-    parser.add_argument("--fill-limit", type=float, default=60.0, help="seconds a classical fill may take")
+    parser.add_argument("--fill-limit", type=positive_float, default=60.0, help="seconds a classical fill may take")
     parser.add_argument("--sweep", action="store_true", help="try every refinement setting of SWEEP")
     parser.add_argument("--smoothness", action="store_true",
                         help="also the refinement averaged over the solves of each SMOOTHNESS_SWEEP setting")
     parser.add_argument("--out", help="append one JSON line per case and seed here")
-    args = parse_args(parser, argv)
+    args = parse_args(parser, argv, check_args)
     profile = profile_from_args(args)
     print(isa_summary(), f"; torch threads {args.threads}", flush=True)
     cases = make_cases(args.data, args.scenes, sgbm=not args.no_sgbm)

@@ -76,7 +76,8 @@ from ddp_lite.method.full_resolution import SMOOTHNESS_STEREO, refine_full_resol
 from ddp_lite.method.kit.blend import FILL_MEMBERS, best_fill_share, fill_holdout, trusted_depth  # noqa: E402
 from bench_real import table6_fills  # noqa: E402
 from ddp_lite.studies.real_suite import SUITE_HOLES, make_suite_case, suite_case_names  # noqa: E402
-from _common import parse_args  # noqa: E402
+from _common import (check_configs, check_output_folder, check_rows_out, data_root, existing_file,  # noqa: E402
+                     parse_args, positive_int, read_rows, seed_int)
 
 RESULTS = Path(__file__).resolve().parent / "results"
 HALF_A = ("Art", "Dolls", "Moebius", "Baby1", "Baby3", "Bowling2", "Adirondack", "Jadeplant", "Pipes", "Playtable")
@@ -107,11 +108,19 @@ def fit(data, names, seeds, fits: Path, variant: str, size: str, channels: tuple
     """One kit fit per case and seed on the held-out input, saved to ``fits`` (``channels``: the net's
     encoder widths, None → the profile's; ``settings``: other ``FitConfig`` fields, e.g. ``fill_input``)."""
     fits.mkdir(parents=True, exist_ok=True)
+    # what changes a saved fit besides its case, variant and seed (its name): a resumed run reuses only its own
+    made_with = json.dumps(dict(size=size, channels=list(channels) if channels else None, settings=settings or {}),
+                           sort_keys=True)
     start = time.perf_counter()
     for seed in seeds:
         for name in names:
             path = fits / f"{name.replace('/', '__')}__{variant}__{seed}.npz"
             if path.exists():
+                with np.load(path) as saved:
+                    made = str(saved["made_with"]) if "made_with" in saved.files else None
+                if made is not None and made != made_with:
+                    raise ValueError(f"--fits {fits}: {path.name} was fitted with {made}, this run fits with "
+                                     f"{made_with}; give another --fits folder")
                 continue
             case = make_suite_case(data, name, size)
             depth, heldout = held_out_input(case, seed)
@@ -123,9 +132,20 @@ def fit(data, names, seeds, fits: Path, variant: str, size: str, channels: tuple
                                     options=RunOptions(progress=False))
             seconds = time.perf_counter() - began
             with atomic_path(path) as temporary:
-                np.savez_compressed(temporary, depth=result.depth, heldout=heldout, seconds=seconds)
+                np.savez_compressed(temporary, depth=result.depth, heldout=heldout, seconds=seconds,
+                                    made_with=np.array(made_with))
             print(f"{name:<24} seed {seed}: {seconds:.0f} s ({(time.perf_counter() - start) / 60:.1f} min in all)",
                   flush=True)
+
+
+def _saved_depth(saved, path: Path, case) -> np.ndarray:
+    """A saved fit's depth (H, W) metres; ``ValueError`` when it was fitted at another size than ``case``'s."""
+    depth = saved["depth"]
+    if depth.shape != case.depth.shape:
+        raise ValueError(f"--fits: {path} is {depth.shape[0]}×{depth.shape[1]}, the case at this --size "
+                         f"{case.depth.shape[0]}×{case.depth.shape[1]}: fitted at another size; give its --size or "
+                         f"another --fits folder")
+    return depth
 
 
 def _rmse(estimate: np.ndarray, truth: np.ndarray, mask: np.ndarray) -> float:
@@ -206,7 +226,7 @@ def rules(case, fit_depth: np.ndarray, heldout: np.ndarray, seed: int, core: boo
 
 def report(data, names, seeds, fits: Path, variant: str, size: str, out: Path, from_rows: list[Path],
            other_fits: Path | None = None, core: bool = False) -> None:
-    rows = [json.loads(line) for path in from_rows for line in path.read_text().splitlines()]
+    rows = [row for path in from_rows for row in read_rows(path)]
     rows = [r for r in rows if r["seed"] in seeds and r["case"] in names]
     for seed in seeds if not from_rows else ():
         for name in names:
@@ -215,7 +235,7 @@ def report(data, names, seeds, fits: Path, variant: str, size: str, out: Path, f
                 continue
             case = make_suite_case(data, name, size)
             with np.load(path) as saved:
-                scores = rules(case, saved["depth"], saved["heldout"], seed, core)
+                scores = rules(case, _saved_depth(saved, path, case), saved["heldout"], seed, core)
                 seconds = float(saved["seconds"])
             rows.append(dict(case=name, seed=seed, variant=variant, size=size, half=half(name), fit_seconds=seconds,
                              **scores))
@@ -270,7 +290,7 @@ def report(data, names, seeds, fits: Path, variant: str, size: str, out: Path, f
     if not from_rows:
         print(f"rows to {out}")
     if other_fits:
-        compare(rows, [json.loads(line) for line in other_fits.read_text().splitlines()], groups)
+        compare(rows, read_rows(other_fits), groups)
     if "chosen share: f" not in rows[0]:
         return
     shares = defaultdict(list)
@@ -308,7 +328,7 @@ def stereo_grid(data, names, seeds, fits: Path, variant: str, size: str, out: Pa
                 continue
             case = make_suite_case(data, name, size)
             with np.load(path) as saved:
-                fit_depth = saved["depth"]
+                fit_depth = _saved_depth(saved, path, case)
             valid = np.isfinite(case.depth)
             truth_in = case.fb / case.depth
 
@@ -369,7 +389,7 @@ def answer_rules(data, names, seeds, fits: Path, variant: str, size: str, out: P
             if not path.exists():
                 continue
             with np.load(path) as saved:
-                fit_depth = saved["depth"]
+                fit_depth = _saved_depth(saved, path, case)
             solve = case.fb / refine_over_smoothness(trusted, case.rgb, fit_depth,
                                                      SMOOTHNESS_STEREO if source == "stereo" else SOLVE_MEANS["mean of 4 solves"])
             solves[name].append(solve)
@@ -411,7 +431,7 @@ def warp_scenes(warp_rows: Path, rgbd_rows: Path, residual: Path) -> None:
     ``report --core`` of rgbd+warp fits (``warp_rows``) and of rgbd fits (``rgbd_rows``)."""
     def load(path):
         rows = {}
-        for r in map(json.loads, path.read_text().splitlines()):
+        for r in read_rows(path):
             by_source(r)
             rows[r["case"], r["seed"]] = r
         return rows
@@ -453,7 +473,7 @@ def _variant_rows(warp_rows: Path, rgbd_rows: Path) -> dict:
     ``photo by source`` rule added."""
     variants = {}
     for label, path in (("rgbd+warp", warp_rows), ("rgbd", rgbd_rows)):
-        rows = [json.loads(line) for line in path.read_text().splitlines()]
+        rows = read_rows(path)
         for r in rows:
             by_source(r)
         variants[label] = {(r["case"], r["seed"]): r for r in rows}
@@ -547,38 +567,48 @@ def _setting(item: str) -> tuple[str, object]:
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("what", choices=("fit", "report", "stereo-grid", "answer-rules", "warp-scenes", "per-case"))
-    parser.add_argument("--data", required=True, help="a folder of Middlebury scenes with ground truth")
-    parser.add_argument("--seeds", type=int, nargs="+", default=[0])
+    parser.add_argument("--data", required=True, type=data_root, help="a folder of Middlebury scenes with ground truth")
+    parser.add_argument("--seeds", type=seed_int, nargs="+", default=[0])
     parser.add_argument("--cases", nargs="+", help="scene/holes names; default: the whole suite")
     parser.add_argument("--variant", default="rgbd+warp", choices=("rgbd", "rgbd+warp"))
     parser.add_argument("--size", default="eighth", choices=("eighth", "quarter"))
     parser.add_argument("--fits", type=Path, default=RESULTS / "fill_blend_fits")
-    parser.add_argument("--channels", type=int, nargs="+",
+    parser.add_argument("--channels", type=positive_int, nargs="+",
                         help="fit: the net's encoder widths (default: the profile's; 8 16 32 64 128 is the narrow net)")
     parser.add_argument("--set", nargs="+", default=[], metavar="FIELD=VALUE",
                         help="fit: other FitConfig fields of the fits, e.g. fill_input=1 (numbers or words)")
     parser.add_argument("--core", action="store_true",
                         help="report: only the rules that compare fits (fit, kit, photo's one and four solves)")
     parser.add_argument("--out", type=Path, default=RESULTS / "fill_blends_eighth.jsonl")
-    parser.add_argument("--from-rows", type=Path, nargs="+", default=[],
+    parser.add_argument("--from-rows", type=existing_file, nargs="+", default=[],
                         help="report: summarise these rows files (written by earlier reports) instead of scoring")
-    parser.add_argument("--against", type=Path,
+    parser.add_argument("--against", type=existing_file,
                         help="report: also compare, paired, with the rows of other fits (e.g. the narrow net's)")
-    args = parse_args(parser, argv)
+    def check(args):
+        unknown = sorted(set(args.cases or ()) - set(suite_case_names(args.data)))
+        if unknown:
+            raise ValueError(f"--cases: not in the suite under {args.data}: {unknown}")
+        settings = dict(_setting(item) for item in args.set)
+        check_configs([("--set / --channels", lambda: FitConfig.for_profile(
+            "class", variant=args.variant, recipe="kit", blend_fill=0.0,
+            **({"channels": tuple(args.channels)} if args.channels else {}), **settings))])
+        if args.what in ("warp-scenes", "per-case") and len(args.from_rows) != 2 and not (
+                args.what == "per-case" and len(args.from_rows) == 4):
+            raise ValueError(f"{args.what}: --from-rows WARP_ROWS RGBD_ROWS (two files"
+                             + ("; per-case: then the photo recipe's own two, optionally)" if args.what == "per-case"
+                                else ")"))
+        if args.what in ("answer-rules", "stereo-grid", "report"):
+            check_rows_out(args.out)
+        if args.what == "fit":
+            check_output_folder(args.fits, "--fits")
+    args = parse_args(parser, argv, check)
     names = suite_case_names(args.data)
     if args.cases:
-        unknown = sorted(set(args.cases) - set(names))
-        if unknown:
-            raise SystemExit(f"--cases: not in the suite under {args.data}: {unknown}")
         names = [n for n in names if n in set(args.cases)]
     if args.what == "fit":
         fit(args.data, names, args.seeds, args.fits, args.variant, args.size,
             tuple(args.channels) if args.channels else None, dict(_setting(item) for item in args.set))
     elif args.what in ("warp-scenes", "per-case"):
-        if len(args.from_rows) != 2 and not (args.what == "per-case" and len(args.from_rows) == 4):
-            raise SystemExit(f"{args.what}: --from-rows WARP_ROWS RGBD_ROWS (two files"
-                             + ("; per-case: then the photo recipe's own two, optionally)" if args.what == "per-case"
-                                else ")"))
         if args.what == "per-case":
             per_case(*args.from_rows[:2], tuple(args.from_rows[2:]) or None)
         else:

@@ -32,6 +32,9 @@ def data(tmp_path_factory):
     root = tmp_path_factory.mktemp("scenes")
     for seed_, name in enumerate(("Art", "Plastic", "Baby1", "Bowling1", "Books", "Dolls")):
         make_middlebury_fixture(root / name, size=(48, 64), seed=seed_)
+    import cv2
+    import numpy as np
+    cv2.imwrite(str(root / "plastic-disp-hole.png"), np.zeros((48, 64), np.uint8))  # DepthComp's holes, as named
     return root
 
 
@@ -236,6 +239,12 @@ def _argv(line: str, data: Path, tmp: Path) -> tuple[str, list[str]]:
     for word in words[1:]:
         if word in placeholders:
             word = placeholders[word]
+        elif re.fullmatch(r"DIR\d+", word):  # another folder of the same page's commands
+            (tmp / word).mkdir(exist_ok=True)
+            word = str(tmp / word)
+        elif re.fullmatch(r"[A-Z][A-Z0-9]*(_[a-z0-9]+)?", word) and not word.startswith("DIR"):  # rows made before
+            (tmp / word).write_text("")
+            word = str(tmp / word)
         elif word.startswith("DATA/"):
             word = str(data / "Art")
         elif word.startswith("benchmarks/results/") and not (ROOT / word).exists():
