@@ -35,7 +35,7 @@ import numpy as np  # noqa: E402
 import torch  # noqa: E402
 
 from ddp_lite.method.paper.variants import VARIANTS  # noqa: E402
-from _common import parse_args  # noqa: E402
+from _common import parse_args, positive_int  # noqa: E402
 
 
 CPU_FLAGS = ("avx512f", "avx512_bf16", "amx_bf16", "avx512_vnni")
@@ -55,7 +55,7 @@ def parse_overrides(items) -> dict:
     for item in items:
         key, sep, value = item.partition("=")
         if not sep or not key.strip():
-            raise SystemExit(f"--set expects KEY=VALUE, got {item!r}")
+            raise ValueError(f"--set expects KEY=VALUE, got {item!r}")
         try:
             overrides[key.strip()] = ast.literal_eval(value)
         except (ValueError, SyntaxError):
@@ -132,6 +132,16 @@ def config_and_options(overrides: dict, **fields):
     return config, RunOptions(**{"progress": False, **run})
 
 
+def check_sets(items) -> None:
+    """``--set`` items checked before any work: ``ValueError`` naming the option for a bad item, field or value."""
+    try:
+        config, options = config_and_options(parse_overrides(items))
+        config.validate()
+        options.validate()
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"--set: {error}") from None
+
+
 def run_one(variant: str, height: int, width: int, channels, iterations: int, overrides=None) -> dict:
     from torch.utils.flop_counter import FlopCounterMode
     from ddp_lite.method.complete import complete_depth
@@ -160,13 +170,13 @@ def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--isa", default="native", choices=sorted(ISA_ENV),
                         help="native, or avx2: torch, oneDNN and MKL held to AVX2 kernels (isa.py)")
-    parser.add_argument("--iterations", type=int, default=20)
+    parser.add_argument("--iterations", type=positive_int, default=20)
     parser.add_argument("--narrow", action="store_true", help="also the ci profile's 16–128 net")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                         help="FitConfig field or RunOptions override, repeatable: bf16=True, pad='zeros', "
                              "channels_last=True")
     parser.add_argument("--one", nargs=4, metavar=("VARIANT", "H", "W", "CHANNELS"), help=argparse.SUPPRESS)
-    args = parse_args(parser, argv)
+    args = parse_args(parser, argv, lambda a: check_sets(a.set))
     overrides = parse_overrides(args.set)
     if args.one:
         variant, height, width, channels = args.one

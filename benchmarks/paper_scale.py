@@ -38,7 +38,8 @@ from ddp_lite.studies.real_cases import REAL_HOLES, factor_for_profile  # noqa: 
 from ddp_lite.studies.table6 import TABLE6_SCENES, table6_case  # noqa: E402
 from ddp_lite.method.runtime.device import resolve_device  # noqa: E402
 from ddp_lite.method.runtime.options import RunOptions  # noqa: E402
-from _common import add_profile_args, profile_from_args, parse_args  # noqa: E402
+from _common import (add_profile_args, check_rows_out, existing_folder, parse_args, positive_float, positive_int,  # noqa: E402
+                     profile_from_args, seed_int)
 from bench_quality import build_case, region_errors, report, rmse_px  # noqa: E402
 
 RECIPES = ("paper", "kit")
@@ -167,7 +168,7 @@ def run(args) -> None:
             memory = peak_memory_mb(device)
             merged = result.merged(case.depth)
             for recipe, variant in [k for k in planned if planned[k] == planned[key] and k[1] == key[1]]:
-                rows.append(dict(case=name, method=recipe, variant=variant, seed=args.seed, size=size, px=rmse_px(merged, case, fb),
+                rows.append(dict(case=name, method=recipe, variant=variant, seed=args.seed, size=size, profile=profile.name, px=rmse_px(merged, case, fb),
                                  seconds=wall, iterations=result.iterations,
                                  seconds_per_iteration=result.seconds / max(1, result.iterations),
                                  peak_mb=memory, **region_errors(case, merged)))
@@ -208,6 +209,14 @@ def print_timing(timing: dict, planned: dict, device: torch.device) -> None:
               f"{mb.max():>13.0f}")
 
 
+def check_args(args) -> None:
+    """Before any work: ``--data`` only with ``--table6``, a writable ``--out``."""
+    if args.data and not args.table6:
+        raise ValueError("--data acts on nothing without --table6 (Motorcycle's pair ships with the kit)")
+    if args.out:
+        check_rows_out(args.out)
+
+
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     add_profile_args(parser)
@@ -215,24 +224,18 @@ def main(argv=None) -> None:
     parser.add_argument("--recipes", nargs="+", default=list(RECIPES), choices=sorted(recipes.RECIPES))
     parser.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=VARIANTS)
     parser.add_argument("--holes", nargs="+", default=list(REAL_HOLES), choices=REAL_HOLES, help="hole kinds")
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--seed", type=seed_int, default=0)
     parser.add_argument("--table6", action="store_true",
                         help="the paper's Table 6 scenes (Plastic under DepthComp's holes, Baby1, Bowling1) instead of "
                              "Motorcycle's hole kinds")
-    parser.add_argument("--data", metavar="DIR", help="with --table6: a folder of Middlebury scenes (HalfSize, as "
+    parser.add_argument("--data", metavar="DIR", type=existing_folder, help="with --table6: a folder of Middlebury scenes (HalfSize, as "
                                                       "data_fetch installs them); default the shipped quarter-size copies")
-    parser.add_argument("--iterations", type=int, help="iterations per fit (default: the profile's schedule); "
+    parser.add_argument("--iterations", type=positive_int, help="iterations per fit (default: the profile's schedule); "
                                                        "the lr milestones scale with it")
-    parser.add_argument("--budget-s", type=float, help="cut the iterations so that the whole run takes about this long")
-    parser.add_argument("--probe-iterations", type=int, default=10, help="iterations timed per config for --budget-s")
+    parser.add_argument("--budget-s", type=positive_float, help="cut the iterations so that the whole run takes about this long")
+    parser.add_argument("--probe-iterations", type=positive_int, default=10, help="iterations timed per config for --budget-s")
     parser.add_argument("--out", help="write the rows (bench_quality's JSON lines) here")
-    args = parse_args(parser, argv)
-    for name in ("iterations", "probe_iterations"):
-        value = getattr(args, name)
-        if value is not None and value < 1:
-            parser.error(f"--{name.replace('_', '-')} must be a positive number of iterations, got {value}")
-    if args.budget_s is not None and not args.budget_s > 0:
-        parser.error(f"--budget-s must be a positive number of seconds, got {args.budget_s}")
+    args = parse_args(parser, argv, check_args)
     try:
         run(args)
     except (ValueError, TypeError, MemoryError, RuntimeError) as error:

@@ -16,7 +16,7 @@ import torch
 from torch.profiler import ProfilerActivity, profile
 
 sys.path.insert(0, os.path.dirname(__file__))
-from bench_fit import case, config_and_options, cpu_summary, parse_overrides  # noqa: E402
+from bench_fit import case, check_sets, config_and_options, cpu_summary, parse_overrides  # noqa: E402
 from _common import parse_args, positive_int  # noqa: E402
 
 SIZES = {"96x128": ((96, 128), (32, 64, 128, 256, 512)), "48x64": ((48, 64), (16, 32, 64, 128))}
@@ -31,7 +31,7 @@ def main(argv=None) -> None:
     parser.add_argument("--only", choices=sorted(SIZES), help="one size only")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                         help="FitConfig field or RunOptions override")
-    args = parse_args(parser, argv)
+    args = parse_args(parser, argv, lambda a: check_sets(a.set))
     torch.set_num_threads(args.threads)
     from ddp_lite.method.complete import complete_depth
     print(cpu_summary())

@@ -554,7 +554,7 @@ def _setting(item: str) -> tuple[str, object]:
     that is neither a number nor true/false stays a word."""
     field_name, sep, value = item.partition("=")
     if not sep or not field_name:
-        raise SystemExit(f"--set: expected FIELD=VALUE, got {item!r}")
+        raise ValueError(f"--set: expected FIELD=VALUE, got {item!r}")
     if value.lower() in ("true", "false"):
         return field_name, value.lower() == "true"
     try:

@@ -13,14 +13,13 @@ before the run after the cut was counted (after the cut: the next plateau). Prin
 from __future__ import annotations
 
 import argparse
-import json
 import statistics
 import time
 from pathlib import Path
 
 from ddp_lite.method.stopping import PlateauStopper
 from ddp_lite.method.time_left import EXPECTED_STOP_SHARE, earliest_stop, expected_stop
-from _common import parse_args
+from _common import RowsFile, check_rows_out, existing_file, lane, parse_args, read_rows
 
 ROWS = Path(__file__).parent / "results" / "time_left_class.jsonl"
 
@@ -36,8 +35,11 @@ def record(lane: int, lanes: int, out: str) -> None:
     profile = get_profile("class")
     jobs = [(name, variant, seed) for name in suite(False, "synthetic") + suite(False, "real")
             for variant, seed in (("rgbd", 0), ("rgbd+warp", 1))]
-    with open(out, "a") as rows:
+    rows = RowsFile(out, ("case", "variant", "seed", "profile"))  # a stopped lane resumes
+    try:
         for name, variant, seed in jobs[lane::lanes]:
+            if rows.done(dict(case=name, variant=variant, seed=seed, profile=profile.name)):
+                continue
             case, _ = build_case(name, profile)
             if variant == "rgbd+warp" and not case.neighbors:
                 continue
@@ -47,14 +49,14 @@ def record(lane: int, lanes: int, out: str) -> None:
                                     case.neighbors if variant == "rgbd+warp" else (), variant=variant, config=config,
                                     options=RunOptions(progress=False))
             history = result.history
-            rows.write(json.dumps(dict(case=name, variant=variant, seed=seed, cap=config.paper.iterations,
-                                       ran=int(result.iterations), cuts=[int(i) for i in history["lr_decay_iteration"]],
-                                       eval_iteration=[int(i) for i in history["eval_iteration"]],
-                                       heldout=[float(e) for e in history["heldout"]],
-                                       patience=config.stopping.patience, eval_every=config.stopping.eval_every,
-                                       decays=config.stopping.plateau_decays,
-                                       seconds=time.perf_counter() - start)) + "\n")
-            rows.flush()
+            rows.record(dict(case=name, variant=variant, seed=seed, profile=profile.name, cap=config.paper.iterations,
+                             ran=int(result.iterations), cuts=[int(i) for i in history["lr_decay_iteration"]],
+                             eval_iteration=[int(i) for i in history["eval_iteration"]],
+                             heldout=[float(e) for e in history["heldout"]],
+                             patience=config.stopping.patience, eval_every=config.stopping.eval_every,
+                             decays=config.stopping.plateau_decays, seconds=time.perf_counter() - start))
+    finally:
+        rows.close()
 
 
 def old_rule(stopper: PlateauStopper, done: int, cap: int) -> int:
@@ -78,13 +80,20 @@ def replay(row: dict, rule) -> list:
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--record", nargs=2, metavar=("LANE/LANES", "OUT"), help="fit and append rows instead")
-    parser.add_argument("--rows", default=str(ROWS))
-    args = parse_args(parser, argv)
+    parser.add_argument("--rows", default=str(ROWS), type=existing_file, help="the recorded rows to replay")
+
+    def check(args):
+        if args.record:
+            try:
+                lane(args.record[0])
+            except argparse.ArgumentTypeError as error:
+                raise ValueError(f"--record LANE/LANES: {error}") from None
+            check_rows_out(args.record[1], "--record OUT")
+    args = parse_args(parser, argv, check)
     if args.record:
-        lane, lanes = (int(v) for v in args.record[0].split("/"))
-        record(lane, lanes, args.record[1])
+        record(*lane(args.record[0]), args.record[1])
         return
-    rows = [json.loads(line) for line in Path(args.rows).read_text().splitlines()]
+    rows = read_rows(args.rows)
     after = sorted(r["ran"] - r["cuts"][0] for r in rows if r["cuts"])
     print(f"{len(rows)} fits; stopped at {statistics.median(r['ran'] for r in rows):.0f} of 600 (median), "
           f"{sum(r['ran'] == r['cap'] for r in rows)} at the cap; after the cut ({len(after)} fits) they ran "
