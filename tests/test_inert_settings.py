@@ -145,7 +145,25 @@ def _complete(tmp_path, *flags):
     from ddp_lite.interface.cli import main
     _pair(tmp_path)
     return main(["complete", "--rgb", str(tmp_path / "rgb.png"), "--depth", str(tmp_path / "depth.npy"),
-                 "--out", str(tmp_path / "filled.npy"), "--profile", "ci", "--iterations", "3", *flags])
+                 "--out", str(tmp_path / "filled.npy"), "--profile", "ci", "--iterations", "2", *flags])
+
+
+def _flags_said(*flags, full_shape=(60, 90)):
+    """What ``complete`` says of its flags for an image of ``full_shape``, from its own parser and rules."""
+    from ddp_lite.interface.cli import build_parser
+    from ddp_lite.interface.cli_complete import _inert_flags
+    from ddp_lite.method.kit.recipes import get_recipe
+    from ddp_lite.sequences.working_size import working_shape
+    args = build_parser().parse_args(["complete", "--rgb", "r.png", "--depth", "d.npy", "--out", "o.npy",
+                                      "--profile", "ci", *flags])
+    max_side = args.max_side or 64
+    shape = working_shape(full_shape, max_side)
+    refine = not (args.raw or args.no_refine) and shape != full_shape
+    config = FitConfig.for_profile("ci", variant=args.variant, recipe=get_recipe(args.recipe),
+                                   **({"blend_fill": 0.0} if args.raw else {}))
+    if refine or args.raw:
+        config = config.replace(refine=False)
+    return _inert_flags(args, config, max_side, shape, full_shape, refine)
 
 
 @pytest.mark.parametrize("flags, said", [
@@ -155,18 +173,27 @@ def _complete(tmp_path, *flags):
     (("--max-side", "16", "--raw", "--no-refine"), "--no-refine acts on nothing: --raw"),
     (("--max-side", "90", "--no-refine"), "--no-refine acts on nothing: the fit runs at the image's own size"),
     (("--max-side", "400"), "--max-side 400 acts on nothing"),
+    (("--max-side", "90", "--recipe", "paper", "--depth-source", "stereo"), "--depth-source stereo acts on nothing"),
 ])
-def test_complete_says_which_flag_acts_on_nothing_before_the_fit(tmp_path, capsys, flags, said):
-    assert _complete(tmp_path, *flags) == 0
-    err = capsys.readouterr().err
-    assert f"ddp-lite complete: warning: {said}" in err
+def test_complete_says_which_flag_acts_on_nothing(flags, said):
+    lines = _flags_said(*flags)
+    assert len(lines) == 1 and lines[0].startswith(said), lines
 
 
 @pytest.mark.parametrize("flags", [
     ("--max-side", "16", "--depth-source", "stereo"),  # the fill's share and the full-size solve read it
+    ("--max-side", "16", "--recipe", "paper", "--depth-source", "stereo"),  # the full-size solve reads it
+    ("--max-side", "90", "--recipe", "photo", "--depth-source", "stereo"),  # photo's own solve reads it
     ("--max-side", "16", "--no-refine"),
     ("--max-side", "16", "--raw"),
+    ("--max-side", "90"),
 ])
-def test_complete_is_silent_where_each_flag_acts(tmp_path, capsys, flags):
-    assert _complete(tmp_path, *flags) == 0
-    assert "acts on nothing" not in capsys.readouterr().err
+def test_complete_is_silent_where_each_flag_acts(flags):
+    assert _flags_said(*flags) == []
+
+
+def test_complete_says_it_before_the_fit_and_the_fit_is_told_nothing_inert(tmp_path, capsys):
+    assert _complete(tmp_path, "--max-side", "16", "--raw", "--depth-source", "stereo") == 0
+    err = capsys.readouterr().err
+    assert err.count("acts on nothing") == 1  # the flag, said once; not again by the fit as its config field
+    assert "ddp-lite complete: warning: --depth-source stereo acts on nothing" in err
