@@ -76,6 +76,14 @@ def test_bench_quality_refuses_a_bad_argument_before_any_work(argv, option, caps
     assert not (tmp_path / "rows.jsonl").exists()
 
 
+def test_bench_quality_refuses_an_out_it_cannot_write(capsys, tmp_path):
+    (tmp_path / "a-file").write_text("")
+    _usage_error(["--out", str(tmp_path / "a-file" / "rows.jsonl")], capsys, "--out")
+    _usage_error(["--out", str(tmp_path)], capsys, "--out")  # a folder
+    _usage_error(["--save-fits", str(tmp_path / "a-file")], capsys, "--save-fits")
+    _usage_error(["--report", str(tmp_path / "none.jsonl")], capsys, "--report")
+
+
 def test_bench_quality_refuses_a_read_only_out_or_save_fits(capsys, tmp_path):
     out = tmp_path / "rows.jsonl"
     out.write_text("")
