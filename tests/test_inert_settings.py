@@ -111,6 +111,16 @@ def test_the_photo_recipe_for_a_depth_only_fit_says_its_solve_is_dropped():
         assert FitConfig.for_profile("ci", variant="rgbd", recipe="photo").combination.refine is True
 
 
+def test_a_callback_rate_without_a_callback_is_said():
+    from ddp_lite.method.fit import check_run
+    with pytest.warns(InertSettingWarning, match="callback_every=5 acts on nothing: no callback"):
+        check_run(RunOptions(progress=False, callback_every=5))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", InertSettingWarning)
+        check_run(RunOptions(progress=False, callback_every=5), callback=lambda it, out: None)
+        check_run(RunOptions(progress=False))
+
+
 @pytest.mark.parametrize("name", ["device", "progress", "channels_last", "max_memory_gb", "callback_every"])
 def test_a_run_option_given_to_complete_depth_names_run_options(name):
     rgb, depth, _, _ = _inputs()

@@ -87,7 +87,8 @@ def test_a_colour_guided_fill_never_enters_a_depth_only_result():
     from ddp_lite.method.config import FitConfig
     assert FitConfig.for_profile("class", variant="rgbd", recipe="kit").combination.blend_fill == 0.25
     assert FitConfig.for_profile("class", variant="d", recipe="kit").combination.blend_fill == 0.0
-    assert FitConfig.for_profile("class", variant="d", recipe="photo").combination.blend_fill == 0.0
+    with pytest.warns(UserWarning, match="dropped for variant 'd'"):  # said: photo's solve is its point
+        assert FitConfig.for_profile("class", variant="d", recipe="photo").combination.blend_fill == 0.0
     assert FitConfig.for_profile("ci", variant="rgbd", recipe="kit").combination.blend_fill == 0.25  # as at class
     assert FitConfig.for_profile("ci", variant="d", recipe="kit").combination.blend_fill == 0.0
 

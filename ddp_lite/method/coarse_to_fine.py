@@ -17,7 +17,8 @@ from .complete import fill_heldout, held_out, refined, with_fill_share
 from .fit import DepthResult, check_run, fit_once, run_fit
 from .input_checks import check_fit_inputs
 from .paper.nets import make_input
-from .runtime.options import RunOptions, names_misplaced_arguments
+from .misplaced_arguments import names_misplaced_arguments
+from .runtime.options import RunOptions
 
 __all__ = ["complete_depth_coarse_to_fine"]
 

@@ -29,7 +29,8 @@ from .config import FitConfig
 from .paper.disparity import DisparityTransform
 from .kit.ensemble import mean_outputs
 from .input_checks import FitInputs, check_fit_inputs
-from .runtime.options import RunOptions, names_misplaced_arguments
+from .misplaced_arguments import names_misplaced_arguments
+from .runtime.options import RunOptions
 from .runtime.side_by_side import run_side_by_side, side_by_side_workers
 from .fit import DepthResult, check_run, run_fit
 from .kit.recipes import get_recipe

@@ -17,7 +17,8 @@ from .paper.nets import check_input_size
 from .fit_cache import cached
 from .runtime.device import resolve_device
 from .runtime.memory import check_memory
-from .runtime.options import RunOptions, names_misplaced_arguments, run_options
+from .misplaced_arguments import names_misplaced_arguments
+from .runtime.options import RunOptions, run_options
 from .runtime.tensors import to_tensor
 from .stopping import holdout_mask
 

@@ -13,6 +13,7 @@ which calls this module, never the reverse.
 from __future__ import annotations
 
 import time
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -30,7 +31,8 @@ from .paper.disparity import DisparityTransform
 from .paper.total_loss import PaperLoss
 from .runtime.device import resolve_device
 from .runtime.memory import check_memory
-from .runtime.options import RunOptions, names_misplaced_arguments, run_options
+from .misplaced_arguments import names_misplaced_arguments
+from .runtime.options import RunOptions, run_options
 from .runtime.tensors import to_tensor
 from .stopping import heldout_error_fn, holdout_mask
 
@@ -81,6 +83,10 @@ def check_run(options, callback=None, init=None) -> RunOptions:
     its ``callback_every`` calls, and ``init``, None or a :class:`DepthResult` to warm-start from."""
     options = run_options(options)
     check_callback(callback, options.callback_every)
+    if callback is None and options.callback_every:
+        from .inert_settings import InertSettingWarning
+        warnings.warn(f"options.callback_every={options.callback_every} acts on nothing: no callback is given to call",
+                      InertSettingWarning, stacklevel=3)
     if init is not None and not isinstance(init, DepthResult):
         raise TypeError(f"init must be a DepthResult, got {type(init).__name__}")
     return options

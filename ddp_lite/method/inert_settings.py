@@ -16,7 +16,9 @@ says so in its description). Each rule names the component that would have read 
 - ``flatness_reach`` without ``flatness``.
 
 A recipe whose own refinement a variant drops (``photo`` for ``d``: the solve is guided by the colour image)
-is said by :meth:`FitConfig.for_profile <ddp_lite.method.config.FitConfig.for_profile>`, which drops it.
+is said by :meth:`FitConfig.for_profile <ddp_lite.method.config.FitConfig.for_profile>`, which drops it; a
+run's ``callback_every`` without a callback by :func:`~ddp_lite.method.fit.check_run`; ``ddp-lite complete``'s
+flags by ``interface.cli_complete``.
 """
 from __future__ import annotations
 

@@ -8,16 +8,13 @@ Every entry point that runs a fit takes them as ``options``:
 from __future__ import annotations
 
 import dataclasses
-import difflib
-import functools
-import inspect
 from dataclasses import dataclass
 
 from ...core.checks import check_bool, check_int, check_real
 from ...core.settings import Settings
 from .device import resolve_device
 
-__all__ = ["RunOptions", "RUN_OPTIONS", "run_options", "names_misplaced_arguments"]
+__all__ = ["RunOptions", "RUN_OPTIONS", "run_options"]
 
 
 @dataclass(frozen=True)
@@ -56,34 +53,3 @@ def run_options(options) -> RunOptions:
                         f"got {type(options).__name__}")
     options.validate()
     return options
-
-
-def names_misplaced_arguments(function):
-    """Decorate an entry point that runs a fit: a keyword it does not take is refused with a ``TypeError``
-    that says where it goes, a run option to ``options=RunOptions(...)``, a config field to
-    ``config=FitConfig...``, else the nearest parameter, instead of Python's bare "unexpected keyword"."""
-    parameters = inspect.signature(function).parameters
-    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in parameters.values()):
-        return function  # it takes any keyword itself
-
-    @functools.wraps(function)
-    def wrapper(*args, **kwargs):
-        for name in kwargs:
-            if name not in parameters:
-                raise TypeError(_misplaced(function.__name__, name, parameters))
-        return function(*args, **kwargs)
-    return wrapper
-
-
-def _misplaced(function: str, name: str, parameters) -> str:
-    from ..config import FIELDS  # (config imports this module)
-
-    if name in RUN_OPTIONS:
-        return (f"{function}() got {name!r}: it is a run option (how a fit runs, not what it computes); pass "
-                f"options=RunOptions({name}=...) (ddp_lite.RunOptions)")
-    if name in FIELDS:
-        return (f"{function}() got {name!r}: it is a FitConfig field (what a fit computes); pass "
-                f"config=FitConfig.for_profile({name}=...)")
-    close = difflib.get_close_matches(name, list(parameters), n=1)
-    return (f"{function}() got an unexpected keyword argument {name!r}"
-            + (f"; did you mean {close[0]!r}?" if close else f"; it takes {', '.join(parameters)}"))
