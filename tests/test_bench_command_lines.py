@@ -222,9 +222,9 @@ COMMAND = re.compile(r"(?:\.venv/bin/)?python (benchmarks/(\w+)\.py(?:\\\n|[^`\n
 
 
 def documented_commands() -> list[tuple[str, str]]:
-    """(where, command line) of every benchmark command in README.md, benchmarks/README.md, docs/*.md and the
+    """(where, command line) of every benchmark command in README.md, benchmarks/README.md, docs/**/*.md and the
     benchmarks' docstrings, continuation lines joined, comments cut."""
-    sources = [ROOT / "README.md", ROOT / "benchmarks" / "README.md", *sorted((ROOT / "docs").glob("*.md")),
+    sources = [ROOT / "README.md", ROOT / "benchmarks" / "README.md", *sorted((ROOT / "docs").rglob("*.md")),
                *sorted((ROOT / "benchmarks").glob("*.py"))]
     found = []
     for path in sources:
