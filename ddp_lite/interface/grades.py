@@ -10,7 +10,8 @@ from pathlib import Path
 
 import nbformat
 
-from ..core.files import regular_file, write_bytes_atomic
+from ..core.files import read_regular_bytes, regular_file, write_bytes_atomic
+from ..core.printable import printable as shown
 from .classroom import exercises, listed_exercises, open_answers, read_notebook, source_notebooks
 from .grading import Score, match_submissions, notebook_files
 
@@ -125,32 +126,47 @@ def write_csv(scores: list[Score], path) -> None:
 
 def write_feedback(scores: list[Score], out_dir, submissions_dir, source_dir="notebooks") -> list[Path]:
     """Write each student's open answers to ``<out_dir>/<student>.md`` (question, answer, points
-    field), atomically; returns the paths. The question is the source's exercise list item."""
+    field), atomically; returns the paths. The question is the source's exercise list item.
+
+    Questions and answers are looked up by notebook and exercise: the grade ids of open answers repeat
+    from notebook to notebook (``ex3_answer``). An exercise of a notebook that was not handed in, could
+    not be read or lacks its answer cell says which."""
     out_dir = Path(out_dir)
-    questions = {}
+    questions = {}  # (notebook stem, exercise "01.3"): the exercise list's item
     for path in source_notebooks(source_dir):
         nb = read_notebook(path)
         items = listed_exercises(nb)
         for number, meta in exercises(nb):
-            questions[meta["grade_id"]] = items.get(number, "")
+            questions[(path.stem, f"{path.stem[:2]}.{number}")] = items.get(number, "")
     written = []
     for student in dict.fromkeys(s.student for s in scores):
         manual = [s for s in scores if s.student == student and s.kind == "manual"]
         handed_in, _, _ = match_submissions(
             notebook_files(Path(submissions_dir) / student),
             list(dict.fromkeys(f"{s.notebook}.ipynb" for s in manual)))
-        answers = {}
-        for name, path in handed_in.items():
+        handed_in = {Path(name).stem: path for name, path in handed_in.items()}
+        unreadable = {s.notebook for s in manual if s.status == "unreadable"}  # the grader said why
+        answers = {}  # (notebook stem, grade_id): the student's answer
+        for notebook, path in handed_in.items():
+            if notebook in unreadable:
+                continue  # a link to the source, say: never read again here
             try:
-                answers.update(open_answers(nbformat.read(regular_file(path, "notebook"), as_version=4)))
-            except Exception:  # unreadable: already reported by grade(); its answers show as missing
-                pass
-        lines = [f"# Open answers: {student}", ""]
+                nb = nbformat.reads(read_regular_bytes(path, "notebook").decode("utf-8"), as_version=4)
+                answers.update({(notebook, grade_id): text for grade_id, text in open_answers(nb).items()})
+            except Exception:  # changed since it was graded: its answers show as not found
+                unreadable.add(notebook)
+        lines = [f"# Open answers: {shown(student)}", ""]
         for s in manual:
-            answer = answers.get(s.grade_id)
+            answer = answers.get((s.notebook, s.grade_id))
+            if s.notebook not in handed_in:
+                answer = f"*({s.notebook} was not handed in)*"
+            elif s.notebook in unreadable:
+                answer = f"*({shown(handed_in[s.notebook].name)} could not be read as a notebook: no answer to show)*"
+            elif answer is None:
+                answer = f"*(the hand-in of {s.notebook} has no answer cell for {s.exercise})*"
             lines += [f"## {s.exercise} ({s.notebook}, {s.max_points:g} points): {s.status}", "",
-                      f"> {questions.get(s.grade_id, '')}".replace("\n", "\n> "), "",
-                      (answer if answer is not None else "*(not handed in)*").strip(), "",
+                      f"> {questions.get((s.notebook, s.exercise), '')}".replace("\n", "\n> "), "",
+                      answer.strip(), "",
                       f"points: {s.points:g}" if s.status == "graded" else "points: ", ""]
         target = out_dir / f"{student}.md"
         write_bytes_atomic(target, "\n".join(lines).encode("utf-8"))
