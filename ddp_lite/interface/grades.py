@@ -12,7 +12,7 @@ import nbformat
 
 from ..core.files import read_regular_bytes, regular_file, write_bytes_atomic
 from ..core.printable import printable as shown
-from .classroom import exercises, listed_exercises, open_answers, read_notebook, source_notebooks
+from .classroom import exercises, listed_exercises, open_answers, read_sources, source_notebooks
 from .grading import Score, match_submissions, notebook_files
 
 __all__ = ["read_hand_points", "merge_hand_points", "format_grades", "write_csv", "write_feedback", "spreadsheet_text"]
@@ -133,11 +133,11 @@ def write_feedback(scores: list[Score], out_dir, submissions_dir, source_dir="no
     not be read or lacks its answer cell says which."""
     out_dir = Path(out_dir)
     questions = {}  # (notebook stem, exercise "01.3"): the exercise list's item
-    for path in source_notebooks(source_dir):
-        nb = read_notebook(path)
+    for name, nb in read_sources(source_notebooks(source_dir)).items():
+        stem = Path(name).stem
         items = listed_exercises(nb)
         for number, meta in exercises(nb):
-            questions[(path.stem, f"{path.stem[:2]}.{number}")] = items.get(number, "")
+            questions[(stem, f"{stem[:2]}.{number}")] = items.get(number, "")
     written = []
     for student in dict.fromkeys(s.student for s in scores):
         manual = [s for s in scores if s.student == student and s.kind == "manual"]

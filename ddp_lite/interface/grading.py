@@ -36,7 +36,9 @@ import nbformat
 
 from ..core.files import regular_file, write_bytes_atomic
 from ..core.outpaths import check_output_folder
-from .classroom import exercises, nbgrader_meta, read_notebook, source_notebooks, student_copy, write_notebook
+from .classroom import (exercises, nbgrader_meta, read_notebook, read_sources, source_notebooks, student_copy,
+                        write_notebook)
+from .source_rules import check_source, read_source
 from .grading_kernel import check_imports, run_graded
 
 __all__ = ["GradingStopped", "Score", "grade_notebook", "grade", "match_submissions"]
@@ -83,9 +85,10 @@ def grade_notebook(submission, source, student: str = "", timeout: int = 600, pr
     """
     if not isinstance(source, nbformat.NotebookNode):
         name = name or Path(source).stem
-        source = read_notebook(source)
+        source = read_source(source)
     if not name:
         raise ValueError("name: give the notebook's file stem when source is a NotebookNode")
+    check_source(source, name)
     expected = exercises(source)
     if submission is None:
         return [Score(student, name, f"{name[:2]}.{n}", m["grade_id"], "manual" if m.get("solution") else "auto",
@@ -95,7 +98,7 @@ def grade_notebook(submission, source, student: str = "", timeout: int = 600, pr
     if not (isinstance(timeout, int) and timeout > 0):
         raise ValueError(f"timeout must be a positive number of seconds, got {timeout!r}")
     nb = read_notebook(submission) if not isinstance(submission, nbformat.NotebookNode) else copy.deepcopy(submission)
-    locked = {nbgrader_meta(c)["grade_id"]: c for c in student_copy(source).cells
+    locked = {nbgrader_meta(c)["grade_id"]: c for c in student_copy(source, name).cells
               if nbgrader_meta(c).get("locked") and nbgrader_meta(c).get("grade_id")}
     for index, cell in enumerate(nb.cells):
         grade_id = nbgrader_meta(cell).get("grade_id")
@@ -271,7 +274,7 @@ def grade(submissions_dir, source_dir="notebooks", timeout: int = 600, profile: 
         check_output_folder(executed_dir, "executed_dir (--executed)")
         for student in students:
             check_output_folder(Path(executed_dir) / student.name, "executed_dir (--executed)")
-    source_nbs = {path.name: read_notebook(path) for path in sources}
+    source_nbs = read_sources(sources)  # every malformed one named before any student runs
     # the checks' modules are loaded now, before a submission could edit their files
     for module in check_imports(c.source for nb in source_nbs.values() for c in nb.cells
                                 if nbgrader_meta(c).get("grade") and not nbgrader_meta(c).get("solution")):
