@@ -53,3 +53,19 @@ def test_open_answers_are_read_under_their_own_notebooks_question(tmp_path):
     assert "03_third was not handed in" in ben[2] and "Ben's" not in ben[2]
     for text in ada + ben:  # the expected answers never reach a student's feedback
         assert "Expected answer" not in text and "facets" not in text
+
+
+def test_names_with_control_characters_show_escaped_and_still_take_hand_points(tmp_path):
+    import csv
+
+    name = "ada\x1b[31m\u202e"
+    scores = [Score(name, "01_first", "01.1", "ex1_answer", "manual", 0.0, 1.0, "answered"),
+              Score("=cmd", "01_first", "01.1", "ex1_answer", "manual", 0.0, 1.0, "answered")]
+    grades.write_csv(scores, tmp_path / "grades.csv")
+    text = (tmp_path / "grades.csv").read_text(encoding="utf-8")
+    assert "\x1b" not in text and "\u202e" not in text and "ada\\x1b[31m\\u202e" in text
+    shown_names = [row["student"] for row in csv.DictReader(open(tmp_path / "grades.csv", encoding="utf-8"))]
+    merged = grades.merge_hand_points(scores, {(shown_names[0], "01.1"): 1.0, (shown_names[1], "01.1"): 0.5})
+    assert [(s.student, s.points, s.status) for s in merged] == [(name, 1.0, "graded"), ("=cmd", 0.5, "graded")]
+    table = grades.format_grades(merged)
+    assert "\x1b" not in table and "ada\\x1b[31m\\u202e" in table

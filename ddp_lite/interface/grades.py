@@ -59,7 +59,9 @@ def merge_hand_points(scores: list[Score], points: dict, source="points") -> lis
     Refused (ValueError) if a row names a student or exercise that was not graded, an exercise that
     is autograded, or more points than the exercise's maximum.
     """
-    by_key = {(s.student, s.exercise): s for s in scores}
+    # a name as grades.csv or the table shows it (escaped, a formula quoted) names the same student
+    by_key = {(name, s.exercise): s for s in scores for name in (spreadsheet_text(s.student), s.student)}
+    points = {(by_key[key].student if key in by_key else key[0], key[1]): value for key, value in points.items()}
     for (student, exercise), value in points.items():
         score = by_key.get((student, exercise))
         if score is None:
@@ -78,7 +80,7 @@ def format_grades(scores: list[Score]) -> str:
     auto = [s for s in scores if s.kind == "auto"]
     columns = list(dict.fromkeys(s.exercise for s in auto))
     students = list(dict.fromkeys(s.student for s in scores))
-    width = max([7] + [len(s) for s in students])
+    width = max([7] + [len(shown(s)) for s in students])
     hand = any(s.status == "graded" for s in scores)
     lines = [f"{'student':<{width}} " + " ".join(f"{c:>5}" for c in columns) + f" {'auto':>7} {'open':>6}"
              + (f" {'hand':>9}" if hand else "")]
@@ -91,7 +93,7 @@ def format_grades(scores: list[Score]) -> str:
         answered = sum(s.status == "answered" for s in manual)
         graded = [s for s in manual if s.status == "graded"]
         hand_points = f"{sum(s.points for s in graded):g}/{sum(s.max_points for s in graded):g}"
-        lines.append(f"{student:<{width}} " + " ".join(cells) + f" {f'{total:g}/{maximum:g}':>7}"
+        lines.append(f"{shown(student):<{width}} " + " ".join(cells) + f" {f'{total:g}/{maximum:g}':>7}"
                      f" {f'{answered + len(graded)}/{len(manual)}':>6}" + (f" {hand_points:>9}" if hand else ""))
     lines.append("points per autograded check; 'open': answers written to the open exercises (grade by hand)"
                  + ("; 'hand': the points given by hand, of the exercises graded" if hand else ""))
@@ -104,11 +106,11 @@ _FORMULA_START = ("=", "+", "-", "@", "\t", "\r")
 def spreadsheet_text(value: str) -> str:
     """A text cell a spreadsheet shows as text: one that starts with ``= + - @``, a tab or a carriage
     return (a student's folder named ``=HYPERLINK(...)``) gets a leading ``'`` (OWASP's advice against
-    CSV injection); a line break inside it is written as ``\\r`` / ``\\n`` (a row stays one line); any
-    other text is unchanged."""
+    CSV injection); a line break or any other control character inside it is written as its escape
+    (``\\r``, ``\\n``, ``\\x1b``: a row stays one line, and shows as it is); any other text is unchanged."""
     value = str(value)
     value = "'" + value if value.startswith(_FORMULA_START) else value
-    return value.replace("\r", "\\r").replace("\n", "\\n")
+    return "".join(c if c == "\t" else shown(c) for c in value)  # a tab is text to a CSV reader
 
 
 def write_csv(scores: list[Score], path) -> None:
