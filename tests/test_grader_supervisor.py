@@ -156,7 +156,7 @@ def test_no_hand_in_can_sink_the_grading_of_the_others(tmp_path, monkeypatch):
     assert table["d_drops_a_module"] == (0, "tampered"), (table, log)
     assert any(line.startswith("d_drops_a_module/") and "evil.py" in line for line in log), log
     assert table[escaped] == (2, "pass"), (table, log)
-    shown = [line for line in log if line.startswith("e_")]
+    shown = [line for line in log if "] e_" in line]
     assert shown and all("\x1b" not in line and "\u202e" not in line and "\n" not in line and "\x07" not in line
                          for line in log), log
     assert any("e_\\x1b[2J" in line and "\\u202eevil\\nfake line" in line for line in shown), shown

@@ -28,7 +28,7 @@ from pathlib import Path
 
 import nbformat
 
-from ..core.files import regular_file, write_bytes_atomic
+from ..core.files import read_regular_bytes, write_bytes_atomic
 from ..core.outpaths import check_not_overlapping, check_output_folder
 from ..method.kit.recipes import get_recipe
 from .source_rules import check_no_answer_left, check_numbering, check_source, read_source
@@ -48,7 +48,7 @@ def read_notebook(path) -> nbformat.NotebookNode:
     path = Path(path)
     if not path.exists():
         raise ValueError(f"notebook {str(path)!r} does not exist")
-    return nbformat.read(regular_file(path, "notebook"), as_version=4)  # a FIFO would block the read
+    return nbformat.reads(read_regular_bytes(path, "notebook").decode("utf-8"), as_version=4)  # never a FIFO
 
 
 def write_notebook(nb, path) -> None:

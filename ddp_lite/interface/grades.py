@@ -10,7 +10,7 @@ from pathlib import Path
 
 import nbformat
 
-from ..core.files import read_regular_bytes, regular_file, write_bytes_atomic
+from ..core.files import read_regular_bytes, write_bytes_atomic
 from ..core.printable import printable as shown
 from .classroom import exercises, listed_exercises, open_answers, read_sources, source_notebooks
 from .grading import Score, match_submissions, notebook_files
@@ -28,11 +28,14 @@ def read_hand_points(path) -> dict:
     if not path.exists():
         raise ValueError(f"points {str(path)!r}: no such file")
     try:
-        regular_file(path, "points")  # a folder or a FIFO: said as it is, before anything is opened
+        data = read_regular_bytes(path, "points")  # a folder or a FIFO: said as it is, never blocked on
     except IsADirectoryError as error:
         raise ValueError(str(error)) from None
-    with open(path, newline="", encoding="utf-8-sig") as handle:
-        rows = list(csv.DictReader(handle))
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError as error:
+        raise ValueError(f"points {str(path)!r} is not UTF-8 text ({error.reason} at byte {error.start})") from None
+    rows = list(csv.DictReader(io.StringIO(text, newline="")))
     if not rows:
         raise ValueError(f"points {str(path)!r} has no rows (columns: student, exercise, points)")
     missing = {"student", "exercise", "points"} - set(rows[0])

@@ -651,7 +651,8 @@ def _supervised(submission, source, student: str, timeout: int, profile: str, na
     notes = []
     left = new_temporary()
     if left:
-        notes.append(f"it left in the temporary folder {shown(tempfile.gettempdir())}: "
+        notes.append(f"new in the temporary folder {shown(tempfile.gettempdir())} while it ran (its own, or another "
+                     f"program's of this user): "
                      + ", ".join(f"{shown(os.path.basename(p))} ({_mib(_disk_use([p]))})" for p in left[:5])
                      + (f" (and {len(left) - 5} more)" if len(left) > 5 else ""))
     elsewhere = _state_change(before_here, _folder_state(here))
