@@ -311,3 +311,26 @@ CASES["check_kinect_quantisation"] = (_quantise(), {
     "a zero disparity kept as a reading": _quantise(zero_is_reading=True),
     "the input overwritten": _quantise(copy=False),
 })
+
+
+@pytest.mark.parametrize("error", [NotImplementedError(), ValueError(""), KeyError("k")], ids=repr)
+def test_a_failure_message_has_no_empty_part(error, tmp_path, capsys):
+    """"raised NotImplementedError:  (and 3 more)": an error without a message is named alone, in the notebook
+    and in the grader, where the student's function runs in a kernel (here a namespace of this process)."""
+    import re
+
+    from ddp_lite.interface.grading_kernel import RemoteFunction
+
+    def stub(*args):
+        raise error
+
+    namespace = {"stub": stub}
+
+    def run(code):
+        exec(code, namespace)
+    remote = RemoteFunction("stub", run, tmp_path)
+    for fn in (stub, remote):
+        assert exercises.check_psnr(fn) is False
+        out = capsys.readouterr().out
+        assert type(error).__name__ in out and "StudentError" not in out, out
+        assert not re.search(r":\s*(\(|$)", out), out  # no "Name: " followed by nothing

@@ -42,7 +42,7 @@ def test_a_hand_in_cannot_stop_hang_outlive_or_rewrite_the_grader(tmp_path, monk
     _hand_in(tmp_path, "g_honest", student)
     log = []
     started = time.monotonic()
-    scores = grading.grade(tmp_path / "hand-in", source_path.parent, timeout=3, log=log.append)
+    scores = grading.grade(tmp_path / "hand-in", source_path.parent, timeout=3, log=log.append, guarded=[precious])
     took = time.monotonic() - started
     table = {s.student: (s.points, s.status) for s in scores}
     assert table["a_hangs_in_its_function"][0] == 0 and table["b_hangs_in_a_cell"][0] == 0, (table, log)
@@ -72,3 +72,93 @@ def test_a_folder_name_never_becomes_a_spreadsheet_formula(tmp_path):
     assert [r["student"] for r in rows] == ["'=HYPERLINK(\"http://x\",\"y\")", "'+1", "'-2", "'@SUM(A1)", "'\tx", "'\\rx",
                                             "ada"]
     assert os.path.getsize(tmp_path / "grades.csv") > 0
+
+
+def test_no_hand_in_can_sink_the_grading_of_the_others(tmp_path, monkeypatch):
+    """One grading, six hand-ins: one replaces the grader's private copies with FIFOs and writes into the
+    grader's open files through /proc; one fills the temporary folder; one changes the instructor's note and
+    leaves a file in the working folder (neither is the grader's); one drops a module beside the grader's
+    code; one sits in a folder whose name holds terminal escapes; the honest one after them all is graded."""
+    import shutil
+    import sys
+    import tempfile
+    import threading
+    import uuid
+
+    source_path = _source(tmp_path)
+    student = classroom.student_copy(nbformat.read(source_path, as_version=4))
+    grader_home = tmp_path / "grader"
+    grader_home.mkdir()
+    (grader_home / "notes.md").write_text("the instructor's note\n")
+    monkeypatch.chdir(grader_home)
+    package = tmp_path / "modules" / "ddp_test_grader_module"
+    package.mkdir(parents=True)
+    (package / "__init__.py").write_text("")
+    monkeypatch.syspath_prepend(str(tmp_path / "modules"))
+    __import__("ddp_test_grader_module")  # loaded by the grader: its folder is the grader's code
+    temporary = tempfile.gettempdir()
+    filled = os.path.join(temporary, f"ddp-test-filled-{uuid.uuid4().hex}")
+    _hand_in(tmp_path, "a_fifos", student, RIGHT + (
+        "\nimport glob, os\n"
+        f"for folder in glob.glob({os.path.join(temporary, 'ddp-grade-copies-*')!r}):\n"
+        "    for name in os.listdir(folder):\n"
+        "        os.remove(os.path.join(folder, name)); os.mkfifo(os.path.join(folder, name))\n"
+        "child = os.getppid()\n"
+        "grader = int(open(f'/proc/{child}/stat').read().rsplit(')', 1)[1].split()[1])\n"
+        "for pid in (child, grader):\n"
+        "    try:\n"
+        "        fds = os.listdir(f'/proc/{pid}/fd')\n"
+        "    except OSError:\n"
+        "        continue\n"
+        "    for fd in fds:\n"
+        "        try:\n"
+        f"            if os.readlink(f'/proc/{{pid}}/fd/{{fd}}').startswith({temporary!r}):\n"
+        "                with open(f'/proc/{pid}/fd/{fd}', 'r+b') as f:\n"
+        "                    if f.read(1) == b'{':  # a notebook: the grader's copies\n"
+        "                        f.seek(0); f.write(b'x' * 100000)\n"
+        "        except OSError:\n"
+        "            pass"))
+    _hand_in(tmp_path, "b_fills_the_temporary_folder", student, RIGHT + (
+        f"\nimport os, time\nos.makedirs({filled!r})\nfor i in range(40):\n"
+        f"    with open(os.path.join({filled!r}, str(i)), 'wb') as f:\n"
+        "        f.write(os.urandom(4 << 20))\n    time.sleep(0.05)"))
+    _hand_in(tmp_path, "c_writes_beside_the_grader", student, RIGHT + (
+        f"\nopen({str(grader_home / 'notes.md')!r}, 'a').write('changed\\n')\n"
+        f"open({str(grader_home / 'new.txt')!r}, 'w').write('new')"))
+    _hand_in(tmp_path, "d_drops_a_module", student, RIGHT + f"\nopen({str(package / 'evil.py')!r}, 'w').write('')")
+    escaped = "e_\x1b[2J\x1b]0;pwned\x07\u202eevil\nfake line"
+    _hand_in(tmp_path, escaped, student)
+    _hand_in(tmp_path, "f_honest", student)
+
+    def unblock():  # an old grader stuck on a FIFO is let go, so that a failure is a failure, not a hang
+        time.sleep(240)
+        for folder in __import__("glob").glob(os.path.join(temporary, "ddp-grade-copies-*")):
+            for name in os.listdir(folder):
+                try:
+                    os.close(os.open(os.path.join(folder, name), os.O_WRONLY | os.O_NONBLOCK))
+                except OSError:
+                    pass
+    threading.Thread(target=unblock, daemon=True).start()
+    log = []
+    try:
+        scores = grading.grade(tmp_path / "hand-in", source_path.parent, timeout=60, log=log.append,
+                               disk_quota=48 << 20)
+    finally:
+        shutil.rmtree(filled, ignore_errors=True)
+        sys.modules.pop("ddp_test_grader_module", None)
+    table = {s.student: (s.points, s.status) for s in scores}
+    assert table["a_fifos"] == (2, "pass") and table["f_honest"] == (2, "pass"), (table, log)
+    assert table["b_fills_the_temporary_folder"] == (0, "not run"), (table, log)
+    assert any(line.startswith("b_fills_the_temporary_folder/") and "quota" in line for line in log), log
+    assert any(line.startswith("b_fills_the_temporary_folder/") and os.path.basename(filled) in line for line in log), log
+    assert table["c_writes_beside_the_grader"] == (2, "pass"), (table, log)
+    assert any(line.startswith("c_writes_beside_the_grader/") and "notes.md" in line and "new.txt" in line
+               and "not scored" in line for line in log), log
+    assert table["d_drops_a_module"] == (0, "tampered"), (table, log)
+    assert any(line.startswith("d_drops_a_module/") and "evil.py" in line for line in log), log
+    assert table[escaped] == (2, "pass"), (table, log)
+    shown = [line for line in log if "] e_" in line]
+    assert shown and all("\x1b" not in line and "\u202e" not in line and "\n" not in line and "\x07" not in line
+                         for line in log), log
+    assert any("e_\\x1b[2J" in line and "\\u202eevil\\nfake line" in line for line in shown), shown
+    assert "\x1b" not in grades.format_grades(scores) and "\\x1b[2J" in grades.format_grades(scores)

@@ -37,8 +37,8 @@ import stat
 import tempfile
 from pathlib import Path
 
-__all__ = ["atomic_path", "write_bytes_atomic", "regular_file", "describe_kind", "path_inside", "writing_inside",
-           "PathEscapeError"]
+__all__ = ["atomic_path", "write_bytes_atomic", "regular_file", "read_regular_bytes", "describe_kind", "path_inside",
+           "writing_inside", "PathEscapeError"]
 
 
 class PathEscapeError(ValueError):
@@ -188,3 +188,38 @@ def regular_file(path, name: str = "path") -> Path:
         raise IsADirectoryError(f"{name}: {path} is a folder; expected a file")
     raise ValueError(f"{name}: {path} is {describe_kind(mode)}, not a regular file; refusing to read it "
                      f"(a reader would block or read without end)")
+
+
+def read_regular_bytes(path, name: str = "path", links: bool = True) -> bytes:
+    """The bytes of ``path``, opened so that only a regular file is ever read: the open cannot block on a
+    FIFO (``O_NONBLOCK``) and the file opened is the one checked (``fstat`` on the open descriptor, so a
+    file swapped for a FIFO, a device or a socket between a check and the read is refused, not read).
+    ``links=False`` refuses a symbolic link as well (``O_NOFOLLOW``).
+
+    Raises ``FileNotFoundError``, ``IsADirectoryError`` or ``ValueError`` (a FIFO, a device, a socket, a
+    refused link), each naming ``name`` and the path."""
+    flags = os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0) | (0 if links else getattr(os, "O_NOFOLLOW", 0))
+    try:
+        fd = os.open(path, flags)
+    except FileNotFoundError:
+        raise FileNotFoundError(f"{name}: {path} does not exist") from None
+    except IsADirectoryError:
+        raise IsADirectoryError(f"{name}: {path} is a folder; expected a file") from None
+    except OSError as error:
+        if not links and os.path.islink(path):
+            raise ValueError(f"{name}: {path} is a symbolic link; refusing to follow it") from None
+        raise
+    try:
+        mode = os.fstat(fd).st_mode
+        if stat.S_ISDIR(mode):
+            raise IsADirectoryError(f"{name}: {path} is a folder; expected a file")
+        if not stat.S_ISREG(mode):
+            raise ValueError(f"{name}: {path} is {describe_kind(mode)}, not a regular file; refusing to read it "
+                             f"(a reader would block or read without end)")
+        os.set_blocking(fd, True)
+        chunks = []
+        while chunk := os.read(fd, 1 << 20):
+            chunks.append(chunk)
+        return b"".join(chunks)
+    finally:
+        os.close(fd)

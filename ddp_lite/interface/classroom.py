@@ -28,9 +28,10 @@ from pathlib import Path
 
 import nbformat
 
-from ..core.files import regular_file, write_bytes_atomic
+from ..core.files import read_regular_bytes, write_bytes_atomic
 from ..core.outpaths import check_not_overlapping, check_output_folder
 from ..method.kit.recipes import get_recipe
+from .source_rules import check_no_answer_left, check_numbering, check_source, read_source
 
 __all__ = ["student_copy", "execute", "exercises", "open_answers", "exercise_table", "update_readme_table",
            "build_student", "build_solutions"]
@@ -47,7 +48,7 @@ def read_notebook(path) -> nbformat.NotebookNode:
     path = Path(path)
     if not path.exists():
         raise ValueError(f"notebook {str(path)!r} does not exist")
-    return nbformat.read(regular_file(path, "notebook"), as_version=4)  # a FIFO would block the read
+    return nbformat.reads(read_regular_bytes(path, "notebook").decode("utf-8"), as_version=4)  # never a FIFO
 
 
 def write_notebook(nb, path) -> None:
@@ -61,7 +62,24 @@ def source_notebooks(source_dir) -> list[Path]:
     found = sorted(source_dir.glob("[0-9][0-9]_*.ipynb"))
     if not found:
         raise ValueError(f"source_dir {str(source_dir)!r} holds no numbered notebooks (01_*.ipynb ...)")
+    check_numbering(found)
     return found
+
+
+def read_sources(paths) -> dict:
+    """``{file name: notebook}`` of the source notebooks ``paths``, each read and checked
+    (:func:`ddp_lite.interface.source_rules.read_source`); every one that is malformed is named in one
+    ValueError, before anything is written or run."""
+    notebooks, problems = {}, []
+    for path in paths:
+        try:
+            notebooks[Path(path).name] = read_source(path)
+        except ValueError as error:
+            problems.append(str(error))
+    if problems:
+        raise ValueError("source notebook(s) refused:\n  " + "\n  ".join(problems) if len(problems) > 1
+                         else f"source notebook refused: {problems[0]}")
+    return notebooks
 
 
 def exercises(nb) -> list[tuple[str, dict]]:
@@ -77,11 +95,14 @@ def exercises(nb) -> list[tuple[str, dict]]:
     return out
 
 
-def student_copy(nb) -> nbformat.NotebookNode:
-    """The student version of a source notebook (a new object; ``nb`` is not modified)."""
+def student_copy(nb, name: str = "notebook") -> nbformat.NotebookNode:
+    """The student version of a source notebook (a new object; ``nb`` is not modified). A source whose copy
+    could keep an answer is refused first, and a copy that holds a line of an answer is never returned
+    (:mod:`ddp_lite.interface.source_rules`; ValueError naming ``name``, the cell and what is wrong)."""
     from nbgrader.preprocessors import (CheckCellMetadata, ClearHiddenTests, ClearMarkScheme, ClearOutput,
                                         ClearSolutions, ComputeChecksums, LockCells)
-    nb = copy.deepcopy(nb)
+    check_source(nb, name)
+    source, nb = nb, copy.deepcopy(nb)
     cells = []
     for cell in nb.cells:
         if OMIT_TAG in cell.get("metadata", {}).get("tags", []):
@@ -94,7 +115,12 @@ def student_copy(nb) -> nbformat.NotebookNode:
     # nbgrader's own order for `generate_assignment`, less the database steps (SaveCells).
     for step in (LockCells(), ClearSolutions(), ClearOutput(), CheckCellMetadata(), ClearHiddenTests(),
                  ClearMarkScheme(), ComputeChecksums()):
-        nb, resources = step.preprocess(nb, resources)
+        try:
+            nb, resources = step.preprocess(nb, resources)
+        except Exception as error:  # what the rules above did not foresee: still named
+            raise ValueError(f"{name}: nbgrader's {type(step).__name__} refuses it ({type(error).__name__}: "
+                             f"{error})") from None
+    check_no_answer_left(source, nb, name)
     return nb
 
 
@@ -154,10 +180,12 @@ def build_student(source_dir="notebooks", out_dir="build/student") -> list[Path]
     (ValueError, before anything is written) when ``out_dir`` is, contains or lies inside ``source_dir``."""
     check_not_overlapping(out_dir, "out_dir (--out)", source_dir, "source_dir (--source)")
     check_output_folder(out_dir, "out_dir (--out)")
+    sources = read_sources(source_notebooks(source_dir))
+    copies = {name: student_copy(nb, name) for name, nb in sources.items()}  # all built before one is written
     written = []
-    for path in source_notebooks(source_dir):
-        target = Path(out_dir) / path.name
-        write_notebook(student_copy(read_notebook(path)), target)
+    for name, nb in copies.items():
+        target = Path(out_dir) / name
+        write_notebook(nb, target)
         written.append(target)
     return written
 
@@ -170,12 +198,13 @@ def build_solutions(source_dir="notebooks", out_dir="build/solutions", profile: 
     check_not_overlapping(out_dir, "out_dir (--out)", source_dir, "source_dir (--source)")
     check_output_folder(out_dir, "out_dir (--out)")
     get_recipe(recipe)  # an unknown name is refused here, before any notebook runs
+    chosen = [path for path in source_notebooks(source_dir)
+              if not names or path.stem[:2] in names or path.stem in names]
+    sources = read_sources(chosen)  # a malformed one is named before the first runs
     written = []
-    for path in source_notebooks(source_dir):
-        if names and path.stem[:2] not in names and path.stem not in names:
-            continue
+    for path in chosen:
         log(f"executing {path.name} at {profile} ({recipe} recipe) ...")
-        nb = read_notebook(path)
+        nb = sources[path.name]
         try:
             execute(nb, profile=profile, timeout=timeout, workdir=path.parent, allow_errors=False, figures=True,
                     recipe=recipe)
@@ -212,8 +241,7 @@ def exercise_table(source_dir="notebooks") -> str:
     it cannot drift from them."""
     rows = ["| exercise | task | graded by | points |", "|---|---|---|---|"]
     checked = open_ = checked_points = open_points = 0
-    for path in source_notebooks(source_dir):
-        nb = read_notebook(path)
+    for path, nb in zip(paths := source_notebooks(source_dir), read_sources(paths).values()):
         items = listed_exercises(nb)
         cells = {nbgrader_meta(c).get("grade_id"): c for c in nb.cells}
         for number, meta in exercises(nb):

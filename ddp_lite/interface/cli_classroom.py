@@ -10,6 +10,7 @@ from __future__ import annotations
 import os
 
 from ..core.outpaths import check_not_overlapping, check_output_file, check_output_folder, output_lock
+from ..core.printable import printable as shown
 
 
 def student_command(args) -> int:
@@ -53,8 +54,9 @@ def grade_command(args) -> int:
         print(message, flush=True)
     outputs = [args.csv] + [folder for folder in (args.executed, args.feedback) if folder is not None]
     with output_lock(outputs, "--csv" if len(outputs) == 1 else "--csv/--executed/--feedback"):
+        guarded = [path for path in (args.points, args.csv, args.executed, args.feedback) if path is not None]
         scores = grade(args.submissions, args.source, timeout=args.timeout, profile=args.profile,
-                       executed_dir=args.executed, log=log, details=args.details)
+                       executed_dir=args.executed, log=log, details=args.details, guarded=guarded)
         if hand is not None:
             scores = merge_hand_points(scores, hand, source=args.points)
         print()
@@ -63,5 +65,5 @@ def grade_command(args) -> int:
         print(f"per-exercise scores written to {os.path.abspath(args.csv)}")
         if args.feedback:
             for path in write_feedback(scores, args.feedback, args.submissions, args.source):
-                print(f"open answers: {path}")
+                print(f"open answers: {shown(path)}")
     return 0

@@ -72,6 +72,15 @@ def _own_work(*forbidden):
     return decorate
 
 
+def _raised(error: BaseException) -> str:
+    """What the student's function raised, as a phrase: its type, then its message when it has one (``raise
+    NotImplementedError()`` has none). From a grading kernel (``StudentError``) the phrase came ready-made."""
+    message = str(error).strip()
+    if type(error).__name__ == "StudentError":
+        return message or "an error"
+    return f"{type(error).__name__}: {message}" if message else type(error).__name__
+
+
 def _report(name: str, failures: list[str], cases: int, reference: str) -> bool:
     if failures:
         print(f"FAIL {name}: {failures[0]}" + (f" (and {len(failures) - 1} more)" if len(failures) > 1 else ""))
@@ -111,7 +120,7 @@ def _run(name, fn, cases, reference_name, compare):
         try:
             got = fn(*args)
         except Exception as error:  # a student's bug should be reported, not raised
-            failures.append(f"case {i} raised {type(error).__name__}: {error}")
+            failures.append(f"case {i} raised {_raised(error)}")
             continue
         problem = _not_finite(got, expected) or compare(got, expected)
         if problem:
@@ -271,7 +280,7 @@ def check_warp(student_warp) -> bool:
         try:
             got = np.asarray(student_warp(image, depth, ref, nbr), dtype=np.float64)
         except Exception as error:
-            failures.append(f"case {i} raised {type(error).__name__}: {error}")
+            failures.append(f"case {i} raised {_raised(error)}")
             continue
         if got.shape != expected.shape:
             failures.append(f"case {i}: shape {got.shape}, expected {expected.shape}")
@@ -310,7 +319,7 @@ def check_nearest_fill(student_fill) -> bool:
         try:
             got = np.asarray(student_fill(depth.copy()), dtype=np.float64)
         except Exception as error:
-            failures.append(f"case {case} raised {type(error).__name__}: {error}")
+            failures.append(f"case {case} raised {_raised(error)}")
             continue
         if got.shape != depth.shape:
             failures.append(f"case {case}: shape {got.shape}, expected {depth.shape}")
@@ -377,7 +386,7 @@ def check_depth_from_disparity(student_depth) -> bool:
         try:
             got = np.asarray(student_depth(*args), dtype=np.float64)
         except Exception as error:
-            failures.append(f"case {i} raised {type(error).__name__}: {error}")
+            failures.append(f"case {i} raised {_raised(error)}")
             continue
         if not np.array_equal(args[0], before, equal_nan=True):
             failures.append(f"case {i}: the disparity passed in was modified")
@@ -416,7 +425,7 @@ def check_resize_calibration(student_resize) -> bool:
             K_small, doffs_small = student_resize(K, doffs, sx, sy)
             K_small = np.asarray(K_small, dtype=np.float64)
         except Exception as error:
-            failures.append(f"case {i} raised {type(error).__name__}: {error}")
+            failures.append(f"case {i} raised {_raised(error)}")
             continue
         if not np.array_equal(K, K_before):
             failures.append(f"case {i}: K passed in was modified")
@@ -463,7 +472,7 @@ def check_kinect_quantisation(student_quantise) -> bool:
         try:
             got = np.asarray(student_quantise(z, f, b, subpixel), dtype=np.float64)
         except Exception as error:
-            failures.append(f"case {i} raised {type(error).__name__}: {error}")
+            failures.append(f"case {i} raised {_raised(error)}")
             continue
         if not np.array_equal(z, before, equal_nan=True):
             failures.append(f"case {i}: the depth passed in was modified")

@@ -10,8 +10,9 @@ from pathlib import Path
 
 import nbformat
 
-from ..core.files import regular_file, write_bytes_atomic
-from .classroom import exercises, listed_exercises, open_answers, read_notebook, source_notebooks
+from ..core.files import read_regular_bytes, write_bytes_atomic
+from ..core.printable import printable as shown
+from .classroom import exercises, listed_exercises, open_answers, read_sources, source_notebooks
 from .grading import Score, match_submissions, notebook_files
 
 __all__ = ["read_hand_points", "merge_hand_points", "format_grades", "write_csv", "write_feedback", "spreadsheet_text"]
@@ -27,11 +28,14 @@ def read_hand_points(path) -> dict:
     if not path.exists():
         raise ValueError(f"points {str(path)!r}: no such file")
     try:
-        regular_file(path, "points")  # a folder or a FIFO: said as it is, before anything is opened
+        data = read_regular_bytes(path, "points")  # a folder or a FIFO: said as it is, never blocked on
     except IsADirectoryError as error:
         raise ValueError(str(error)) from None
-    with open(path, newline="", encoding="utf-8-sig") as handle:
-        rows = list(csv.DictReader(handle))
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError as error:
+        raise ValueError(f"points {str(path)!r} is not UTF-8 text ({error.reason} at byte {error.start})") from None
+    rows = list(csv.DictReader(io.StringIO(text, newline="")))
     if not rows:
         raise ValueError(f"points {str(path)!r} has no rows (columns: student, exercise, points)")
     missing = {"student", "exercise", "points"} - set(rows[0])
@@ -58,7 +62,9 @@ def merge_hand_points(scores: list[Score], points: dict, source="points") -> lis
     Refused (ValueError) if a row names a student or exercise that was not graded, an exercise that
     is autograded, or more points than the exercise's maximum.
     """
-    by_key = {(s.student, s.exercise): s for s in scores}
+    # a name as grades.csv or the table shows it (escaped, a formula quoted) names the same student
+    by_key = {(name, s.exercise): s for s in scores for name in (spreadsheet_text(s.student), s.student)}
+    points = {(by_key[key].student if key in by_key else key[0], key[1]): value for key, value in points.items()}
     for (student, exercise), value in points.items():
         score = by_key.get((student, exercise))
         if score is None:
@@ -77,7 +83,7 @@ def format_grades(scores: list[Score]) -> str:
     auto = [s for s in scores if s.kind == "auto"]
     columns = list(dict.fromkeys(s.exercise for s in auto))
     students = list(dict.fromkeys(s.student for s in scores))
-    width = max([7] + [len(s) for s in students])
+    width = max([7] + [len(shown(s)) for s in students])
     hand = any(s.status == "graded" for s in scores)
     lines = [f"{'student':<{width}} " + " ".join(f"{c:>5}" for c in columns) + f" {'auto':>7} {'open':>6}"
              + (f" {'hand':>9}" if hand else "")]
@@ -90,7 +96,7 @@ def format_grades(scores: list[Score]) -> str:
         answered = sum(s.status == "answered" for s in manual)
         graded = [s for s in manual if s.status == "graded"]
         hand_points = f"{sum(s.points for s in graded):g}/{sum(s.max_points for s in graded):g}"
-        lines.append(f"{student:<{width}} " + " ".join(cells) + f" {f'{total:g}/{maximum:g}':>7}"
+        lines.append(f"{shown(student):<{width}} " + " ".join(cells) + f" {f'{total:g}/{maximum:g}':>7}"
                      f" {f'{answered + len(graded)}/{len(manual)}':>6}" + (f" {hand_points:>9}" if hand else ""))
     lines.append("points per autograded check; 'open': answers written to the open exercises (grade by hand)"
                  + ("; 'hand': the points given by hand, of the exercises graded" if hand else ""))
@@ -103,11 +109,11 @@ _FORMULA_START = ("=", "+", "-", "@", "\t", "\r")
 def spreadsheet_text(value: str) -> str:
     """A text cell a spreadsheet shows as text: one that starts with ``= + - @``, a tab or a carriage
     return (a student's folder named ``=HYPERLINK(...)``) gets a leading ``'`` (OWASP's advice against
-    CSV injection); a line break inside it is written as ``\\r`` / ``\\n`` (a row stays one line); any
-    other text is unchanged."""
+    CSV injection); a line break or any other control character inside it is written as its escape
+    (``\\r``, ``\\n``, ``\\x1b``: a row stays one line, and shows as it is); any other text is unchanged."""
     value = str(value)
     value = "'" + value if value.startswith(_FORMULA_START) else value
-    return value.replace("\r", "\\r").replace("\n", "\\n")
+    return "".join(c if c == "\t" else shown(c) for c in value)  # a tab is text to a CSV reader
 
 
 def write_csv(scores: list[Score], path) -> None:
@@ -125,32 +131,47 @@ def write_csv(scores: list[Score], path) -> None:
 
 def write_feedback(scores: list[Score], out_dir, submissions_dir, source_dir="notebooks") -> list[Path]:
     """Write each student's open answers to ``<out_dir>/<student>.md`` (question, answer, points
-    field), atomically; returns the paths. The question is the source's exercise list item."""
+    field), atomically; returns the paths. The question is the source's exercise list item.
+
+    Questions and answers are looked up by notebook and exercise: the grade ids of open answers repeat
+    from notebook to notebook (``ex3_answer``). An exercise of a notebook that was not handed in, could
+    not be read or lacks its answer cell says which."""
     out_dir = Path(out_dir)
-    questions = {}
-    for path in source_notebooks(source_dir):
-        nb = read_notebook(path)
+    questions = {}  # (notebook stem, exercise "01.3"): the exercise list's item
+    for name, nb in read_sources(source_notebooks(source_dir)).items():
+        stem = Path(name).stem
         items = listed_exercises(nb)
         for number, meta in exercises(nb):
-            questions[meta["grade_id"]] = items.get(number, "")
+            questions[(stem, f"{stem[:2]}.{number}")] = items.get(number, "")
     written = []
     for student in dict.fromkeys(s.student for s in scores):
         manual = [s for s in scores if s.student == student and s.kind == "manual"]
         handed_in, _, _ = match_submissions(
             notebook_files(Path(submissions_dir) / student),
             list(dict.fromkeys(f"{s.notebook}.ipynb" for s in manual)))
-        answers = {}
-        for name, path in handed_in.items():
+        handed_in = {Path(name).stem: path for name, path in handed_in.items()}
+        unreadable = {s.notebook for s in manual if s.status == "unreadable"}  # the grader said why
+        answers = {}  # (notebook stem, grade_id): the student's answer
+        for notebook, path in handed_in.items():
+            if notebook in unreadable:
+                continue  # a link to the source, say: never read again here
             try:
-                answers.update(open_answers(nbformat.read(regular_file(path, "notebook"), as_version=4)))
-            except Exception:  # unreadable: already reported by grade(); its answers show as missing
-                pass
-        lines = [f"# Open answers: {student}", ""]
+                nb = nbformat.reads(read_regular_bytes(path, "notebook").decode("utf-8"), as_version=4)
+                answers.update({(notebook, grade_id): text for grade_id, text in open_answers(nb).items()})
+            except Exception:  # changed since it was graded: its answers show as not found
+                unreadable.add(notebook)
+        lines = [f"# Open answers: {shown(student)}", ""]
         for s in manual:
-            answer = answers.get(s.grade_id)
+            answer = answers.get((s.notebook, s.grade_id))
+            if s.notebook not in handed_in:
+                answer = f"*({s.notebook} was not handed in)*"
+            elif s.notebook in unreadable:
+                answer = f"*({shown(handed_in[s.notebook].name)} could not be read as a notebook: no answer to show)*"
+            elif answer is None:
+                answer = f"*(the hand-in of {s.notebook} has no answer cell for {s.exercise})*"
             lines += [f"## {s.exercise} ({s.notebook}, {s.max_points:g} points): {s.status}", "",
-                      f"> {questions.get(s.grade_id, '')}".replace("\n", "\n> "), "",
-                      (answer if answer is not None else "*(not handed in)*").strip(), "",
+                      f"> {questions.get((s.notebook, s.exercise), '')}".replace("\n", "\n> "), "",
+                      answer.strip(), "",
                       f"points: {s.points:g}" if s.status == "graded" else "points: ", ""]
         target = out_dir / f"{student}.md"
         write_bytes_atomic(target, "\n".join(lines).encode("utf-8"))

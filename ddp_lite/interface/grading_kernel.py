@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.array_archive import archive_bytes, array_node
-from ..core.files import write_bytes_atomic
+from ..core.files import read_regular_bytes, write_bytes_atomic
 
 __all__ = ["encode", "decode", "answer_call", "RemoteFunction", "StudentError", "run_graded", "check_imports"]
 
@@ -140,7 +140,7 @@ class RemoteFunction:
         failure = self._run("from ddp_lite.interface.grading_kernel import answer_call as __ddp_answer\n"
                             f"__ddp_answer(globals(), {self.name!r}, {str(self._folder)!r})\ndel __ddp_answer")
         try:
-            answer = decode(answer_file.read_bytes())
+            answer = decode(read_regular_bytes(answer_file, "the answer", links=False))  # the kernel's folder
         except Exception as error:
             raise StudentError(failure or f"no answer from {self.name} ({type(error).__name__})") from None
         if not isinstance(answer, dict):
@@ -148,7 +148,7 @@ class RemoteFunction:
         seen.update(str(name) for name in answer.get("seen", []) if isinstance(name, str))
         if "error" in answer:
             kind, message = answer["error"]
-            raise StudentError(f"{kind}: {message}")
+            raise StudentError(f"{kind}: {message}" if str(message).strip() else str(kind))
         for given, after in zip(args, answer.get("args", [])):  # a check may look at what the call did to its input
             if isinstance(given, np.ndarray) and isinstance(after, np.ndarray) and after.shape == given.shape:
                 np.copyto(given, after, casting="unsafe")
