@@ -103,6 +103,13 @@ def content_problem(path, name: str) -> str | None:
     html = stripped.startswith((b"<!doctype html", b"<html", b"<head", b"<body", b"<?xml", b"<!--"))
     looks = (f"an HTML page (starts {head[:40]!r}: the server's error or login page?)" if html
              else f"something else (starts {head[:16]!r})")
+    if lower.endswith(".txt") and not html:  # a text file: UTF-8 (or UTF-16 with its BOM) and no NUL bytes
+        from ddp_lite.core.files import NotTextError, read_text
+        try:
+            read_text(path, name)
+        except NotTextError as error:
+            return str(error).replace(f"{name}: {path} ", f"{name} ", 1)
+        return None
     if lower.endswith(".tar"):
         return None if head[257:262] == b"ustar" else f"{name} is not a tar archive: it is {looks}"
     for endings, signatures, kind in _MAGIC:

@@ -24,6 +24,8 @@ import pooch
 from ddp_lite.core.files import regular_file, write_bytes_atomic
 from .download import (ChecksumError, FetchError, ResumableDownloader, check_fetch_numbers, content_problem,
                        entry_path, normal_sha256)
+from .install_lock import TEMP_PREFIX, check_say, install_lock, remove_spent_parts, remove_stale_temporaries
+from .pixels import text_sha256
 from .registry import Dataset, RemoteFile, get_dataset
 from .unpack import archive_files, safe_extract
 
@@ -89,10 +91,26 @@ def _read_records(folder: Path) -> dict:
 
 
 def _record(folder: Path, entry: RemoteFile, sha256: str, how: str, bytes_from: str) -> None:
+    _record_many(folder, [(entry, sha256, how, bytes_from, text_sha256(folder / entry.name))])
+
+
+def _record_many(folder: Path, records_to_add) -> None:
+    """Add ``(entry, sha256, how, bytes_from, text_sha256)`` records to ``registry.json`` in one write (read,
+    added to, written back atomically: the caller holds the install lock, so no other install writes between).
+    ``text_sha256``: for a text file, the SHA-256 of its normalised text (``pixels.text_sha256``), else None."""
     records = _read_records(folder)
-    records[entry.name] = {"sha256": sha256, "url": entry.url, "how": how, "bytes_from": bytes_from,
-                           "recorded": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")}
-    write_bytes_atomic(folder / REGISTRY_FILE, (json.dumps(records, indent=2, sort_keys=True) + "\n").encode())
+    now = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+    for entry, sha256, how, bytes_from, text in records_to_add:
+        records[entry.name] = {"sha256": sha256, "url": entry.url, "how": how, "bytes_from": bytes_from,
+                               "recorded": now, **({"text_sha256": text} if text else {})}
+    write_bytes_atomic(folder / REGISTRY_FILE, (json.dumps(records, indent=2, sort_keys=True) + "\n").encode(),
+                       prefix=TEMP_PREFIX)
+
+
+def trusted_message(name: str, digest: str, folder: Path) -> str:
+    """What an install says of a file it took on trust: that nothing verified it, and what now will."""
+    return (f"{name}: installed unverified (no pinned hash, byte or pixel, exists for it): trusted on first use, its "
+            f"SHA-256 {digest} is recorded in {folder / REGISTRY_FILE} and verifies every later install")
 
 
 def _known_hash(folder: Path, entry: RemoteFile, trust: bool) -> str | None:
@@ -157,7 +175,7 @@ def _unpack(folder: Path, entry: RemoteFile, sha256: str, say) -> None:
         return
     say(f"unpacking {entry.name} into {folder}")
     safe_extract(folder / entry.name, folder)
-    write_bytes_atomic(marker, (sha256 + "\n").encode())
+    write_bytes_atomic(marker, (sha256 + "\n").encode(), prefix=TEMP_PREFIX)
 
 
 def check_names(folder: Path, dataset: Dataset, entries) -> None:
@@ -231,6 +249,7 @@ def fetch(dataset, dest=None, only=None, trust_first_download: bool = False, ret
     if not isinstance(dataset, Dataset):
         raise TypeError(f"dataset must be a name or a Dataset, got {type(dataset).__name__}")
     check_fetch_numbers(retries, backoff)  # before anything is looked at or fetched
+    say = check_say(say)
     root = data_dir(dest)
     folder = entry_path(root, dataset.name, f"dataset {dataset.name!r}")
     for where in (root, folder):
@@ -245,6 +264,18 @@ def fetch(dataset, dest=None, only=None, trust_first_download: bool = False, ret
         if missing:
             text = (dataset.manual or "Download these files by hand from {dest}.").format(dest=folder)
             raise ManualDownloadRequired(f"{text}\nStill missing in {folder}: {', '.join(missing)}")
+    with install_lock(root, dataset.name, say):  # one install of this folder at a time: no record is lost
+        remove_stale_temporaries(root, folder, [f.name for f in dataset.files], say)
+        paths = _fetch_entries(folder, dataset, entries, manual, trust_first_download, retries, progressbar,
+                               backoff, say)
+        remove_spent_parts(paths)
+    return paths
+
+
+def _fetch_entries(folder: Path, dataset: Dataset, entries, manual: bool, trust_first_download: bool, retries: int,
+                   progressbar: bool, backoff: float, say) -> list[Path]:
+    """``fetch``'s work, under the install lock: each entry downloaded (or the user's file taken), verified,
+    unpacked and, when trusted on first use, recorded; returns the verified paths."""
     paths = []
     for entry in entries:
         known = _known_hash(folder, entry, trust_first_download)
@@ -292,7 +323,7 @@ def fetch(dataset, dest=None, only=None, trust_first_download: bool = False, ret
             _record(folder, entry, digest, "trust-first-download",
                     "a manual download placed in this folder by the user" if manual
                     else f"downloaded by this fetch from {entry.url}")
-            say(f"recorded SHA-256 {digest} for {entry.name} in {folder / REGISTRY_FILE} (trusted on first use)")
+            say(trusted_message(entry.name, digest, folder))
         paths.append(path)
     return paths
 

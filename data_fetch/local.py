@@ -27,8 +27,10 @@ from pathlib import Path
 import pooch
 
 from .download import ChecksumError, FetchError, content_problem, entry_path
-from .fetch import REGISTRY_FILE, UnpinnedFileError, _check_writable, _read_records, _record, data_dir
-from .pixels import pixel_sha256
+from .fetch import (REGISTRY_FILE, UnpinnedFileError, _check_writable, _read_records, _record_many, data_dir,
+                    trusted_message)
+from .install_lock import TEMP_PREFIX, check_say, install_lock, remove_spent_parts, remove_stale_temporaries
+from .pixels import pixel_sha256, text_sha256
 from .registry import Dataset, get_dataset
 
 __all__ = ["install_from", "LocalInstall", "shared_to_registry", "source_names", "installable"]
@@ -93,8 +95,9 @@ def _find(source: Path, dataset_name: str, name: str) -> Path | None:
     return None
 
 
-def _check(path: Path, name: str, origin, pixel: str | None, byte: str | None) -> None:
-    """ChecksumError unless ``path`` matches ``pixel`` (decoded content) or ``byte`` (SHA-256 of its bytes)."""
+def _check(path: Path, name: str, origin, pixel: str | None, byte: str | None, text: str | None = None) -> None:
+    """ChecksumError unless ``path`` matches ``pixel`` (decoded content) or ``byte`` (SHA-256 of its bytes; for a
+    text file, or of its normalised text, or that matches ``text``, the recorded hash of the normalised text)."""
     if pixel:
         try:
             actual = pixel_sha256(path)
@@ -106,7 +109,9 @@ def _check(path: Path, name: str, origin, pixel: str | None, byte: str | None) -
                                 f"{pixel}; refused, nothing was installed")
     elif byte:
         actual = pooch.file_hash(str(path))
-        if actual != byte.split(":")[-1]:
+        # a text file is compared as text too: the same text saved with a byte-order mark or CRLF line ends
+        as_text = text_sha256(path)  # None for a file that is not text
+        if actual != byte.split(":")[-1] and (as_text is None or as_text not in (byte.split(":")[-1], text)):
             raise ChecksumError(f"{name} (from {origin}): SHA-256 is {actual}, expected {byte}; refused, nothing "
                                 f"was installed")
 
@@ -118,6 +123,10 @@ def install_from(dataset, source, dest=None, only=None, trust_first_download: bo
         dataset = get_dataset(dataset)
     if not isinstance(dataset, Dataset):
         raise TypeError(f"dataset must be a name or a Dataset, got {type(dataset).__name__}")
+    say = check_say(say)  # before any work: a bad one found after the copies would leave an install half done
+    if not isinstance(trust_first_download, bool):
+        raise TypeError(f"trust_first_download must be True or False, got {type(trust_first_download).__name__} "
+                        f"{trust_first_download!r}")
     if source is None or not str(source).strip():
         raise ValueError("source must name a folder (--from DIR), got nothing")
     source = Path(source).expanduser()
@@ -141,6 +150,16 @@ def install_from(dataset, source, dest=None, only=None, trust_first_download: bo
     for name, _, _ in targets:  # the one guard: every name stays inside the dataset folder
         entry_path(folder, name, f"{dataset.name} entry {name!r}")
     _check_writable(folder)
+    with install_lock(root, dataset.name, say):  # one install of this folder at a time: no record is lost
+        remove_stale_temporaries(root, folder, [f.name for f in dataset.files], say)
+        result = _install(dataset, source, folder, targets, trust_first_download, say)
+        remove_spent_parts(result.installed + result.present)
+    return result
+
+
+def _install(dataset: Dataset, source: Path, folder: Path, targets, trust_first_download: bool, say) -> LocalInstall:
+    """``install_from``'s work, under the install lock: every target found in ``source`` staged, verified and
+    installed (or nothing, on one failure); trusted ones recorded."""
     records = _read_records(folder) if folder.is_dir() else {}
     found, missing, present = [], [], []
     for name, pixel, byte in targets:
@@ -154,7 +173,7 @@ def install_from(dataset, source, dest=None, only=None, trust_first_download: bo
             if not final.is_file():
                 raise FetchError(f"{final} is in the way and is not a file; move it away and run again")
             if pixel or byte or recorded:
-                _check(final, name, final, pixel, byte or recorded)
+                _check(final, name, final, pixel, byte or recorded, records.get(name, {}).get("text_sha256"))
                 present.append(final)
                 continue
             raise UnpinnedFileError(f"{final} is already there with no pinned or recorded hash, so it cannot be "
@@ -168,30 +187,35 @@ def install_from(dataset, source, dest=None, only=None, trust_first_download: bo
             f"Re-run with --trust-first-download to accept them as they are in {source}, record their SHA-256 "
             f"there, and verify every later fetch against it.")
     staged: list[tuple[Path, Path]] = []
+    trusted: list = []
     try:
         for name, origin, pixel, byte in found:
             final = folder / name
             final.parent.mkdir(parents=True, exist_ok=True)
-            handle, temporary = tempfile.mkstemp(prefix=f".{final.name}.", suffix=f".from{final.suffix}",
+            handle, temporary = tempfile.mkstemp(prefix=f"{TEMP_PREFIX}{final.name}.", suffix=final.suffix,
                                                  dir=final.parent)
             os.close(handle)
             staged.append((Path(temporary), final))
             shutil.copyfile(origin, temporary)  # a copy: the source is never touched
-            _check(Path(temporary), name, origin, pixel, byte)
+            _check(Path(temporary), name, origin, pixel, byte, records.get(name, {}).get("text_sha256"))
             problem = None if (pixel or byte) else content_problem(temporary, name)  # before it is trusted
             if problem:
                 raise FetchError(f"{problem} (from {origin}); --trust-first-download records only a file that is "
                                  f"what its name says; nothing was installed")
+        # the records first, in one write: an install killed before its renames leaves records of files
+        # not yet there (the next one checks its copies against them), never files with no record
+        trusted = [(_Named(name), pooch.file_hash(str(temporary)), "trust-first-download",
+                    f"copied from {origin} by fetch --from", text_sha256(temporary))
+                   for (name, origin, pixel, byte), (temporary, _) in zip(found, staged) if not (pixel or byte)]
+        if trusted:
+            _record_many(folder, trusted)
         for temporary, final in staged:
             os.replace(temporary, final)
     finally:
         for temporary, _ in staged:
             Path(temporary).unlink(missing_ok=True)
-    for name, origin, pixel, byte in found:
-        if not (pixel or byte):
-            digest = pooch.file_hash(str(folder / name))
-            _record(folder, _Named(name), digest, "trust-first-download", f"copied from {origin} by fetch --from")
-            say(f"recorded SHA-256 {digest} for {name} in {folder / REGISTRY_FILE} (trusted on first use)")
+    for entry, digest, *_ in trusted:
+        say(trusted_message(entry.name, digest, folder))
     result = LocalInstall(tuple(folder / name for name, *_ in found), tuple(present), tuple(missing))
     verified = sum(1 for _, _, pixel, byte in found if pixel or byte)
     say(f"{dataset.name}: installed {len(result.installed)} file(s) into {folder} ({verified} verified against a "

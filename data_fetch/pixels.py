@@ -11,7 +11,9 @@ encoder) has other bytes but the same pixels, so ``pixel_sha256`` gives it the s
   decodes it), kind ``png``;
 * ``.pfm``: ``ddp_lite.data.fileio.read_pfm`` (float32, top row first whatever the file's row order
   and byte order), kind ``pfm``;
-* ``.txt``: the text's tokens, kind ``text``: whitespace only separates tokens, and ``= [ ] ; ,``
+* ``.txt``: the text's tokens, kind ``text``, read as every text file of the kit is
+  (``ddp_lite.core.files.read_text``: UTF-8 or UTF-16 with its byte-order mark, the mark dropped, CRLF → LF,
+  so a copy saved by a Windows editor hashes the same): whitespace only separates tokens, and ``= [ ] ; ,``
   are tokens of their own, so ``doffs= 31.34`` and ``doffs=31.34``, or ``[ 1 0 ; 0 1 ]`` and
   ``[1 0; 0 1]``, are the same text; the tokens are joined by single spaces and hashed as UTF-8
   (an array of dtype ``|u1`` and shape ``(number of bytes,)``);
@@ -29,9 +31,10 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["pixel_sha256", "reference_sha256", "decode", "PIXEL_SUFFIXES"]
+__all__ = ["pixel_sha256", "reference_sha256", "decode", "PIXEL_SUFFIXES", "text_sha256", "TEXT_SUFFIXES"]
 
 PIXEL_SUFFIXES = (".png", ".pfm", ".txt")
+TEXT_SUFFIXES = (".txt",)
 _TOKEN = re.compile(r"[=\[\];,]|[^\s=\[\];,]+")
 
 
@@ -65,10 +68,9 @@ def decode(path) -> tuple[str, np.ndarray]:
         from ddp_lite.data.fileio import read_pfm  # standard library + numpy; no torch
 
         return "pfm", read_pfm(path, "path")
-    try:
-        text = path.read_bytes().decode("utf-8")
-    except UnicodeDecodeError as error:
-        raise ValueError(f"path: {path} is not UTF-8 text ({error})") from None
+    from ddp_lite.core.files import read_text  # standard library only
+
+    text = read_text(path, "path")  # a byte-order mark dropped, CRLF → LF: an editor's copy is the same text
     return "text", np.frombuffer(" ".join(_TOKEN.findall(text)).encode("utf-8"), dtype=np.uint8)
 
 
@@ -76,3 +78,17 @@ def pixel_sha256(path) -> str:
     """SHA-256 (hex) of the decoded content of a ``.png``, ``.pfm`` or ``.txt`` file (see the module)."""
     kind, array = decode(path)
     return reference_sha256(kind, array)
+
+
+def text_sha256(path) -> str | None:
+    """For a text file (``TEXT_SUFFIXES``): SHA-256 of its text as the kit reads it (``core.files.read_text``: no
+    byte-order mark, LF line ends), UTF-8 encoded, so the copies an editor saves hash alike; else (or not
+    text) None."""
+    if Path(path).suffix.lower() not in TEXT_SUFFIXES:
+        return None
+    from ddp_lite.core.files import read_text
+
+    try:
+        return hashlib.sha256(read_text(path, "path").encode("utf-8")).hexdigest()
+    except ValueError:
+        return None

@@ -31,6 +31,7 @@ import zlib
 from pathlib import Path, PurePosixPath
 
 from .download import FetchError
+from .install_lock import TEMP_PREFIX
 
 __all__ = ["UnsafeArchiveError", "safe_extract", "check_member_name", "archive_files", "member_path", "MAX_RATIO"]
 
@@ -180,7 +181,7 @@ def safe_extract(archive, target, max_ratio: float = MAX_RATIO, only=None) -> Pa
                 raise UnsafeArchiveError(f"{archive.name}: member {name!r} resolves outside {target}")
         target.mkdir(parents=True, exist_ok=True)
         _check_expansion(archive, target, total, max_ratio)
-        staging = Path(tempfile.mkdtemp(dir=target.parent, prefix=f".{target.name}.unpack-"))
+        staging = Path(tempfile.mkdtemp(dir=target.parent, prefix=f"{TEMP_PREFIX}{target.name}.unpack-"))
         try:
             if isinstance(handle, zipfile.ZipFile):
                 for info in members:

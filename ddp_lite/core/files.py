@@ -12,6 +12,9 @@
   output folder linked to the user's own files would have them overwritten). Every atomic write
   made inside :func:`writing_inside` (``ddp_lite.core.outpaths.output_lock`` enters it for every
   output folder) goes through it, so no writer writes through a link inside its output folder.
+- The one way every text file is read (:func:`read_text`, :func:`decode_text`): UTF-8, or UTF-16 with
+  its byte-order mark; a UTF-8 byte-order mark dropped; CRLF and CR line ends made LF. Editors on
+  Windows save a ``dmin.txt`` or ``calib.txt`` that way; its numbers are the same numbers.
 - The one check every reader of a user's file makes first (:func:`regular_file`): the path names an
   existing *regular* file. A FIFO, a device or a socket under a file's name makes a reader block
   forever (hashing a FIFO waits for a writer that never comes) or read endless bytes; a folder where
@@ -37,8 +40,8 @@ import stat
 import tempfile
 from pathlib import Path
 
-__all__ = ["atomic_path", "write_bytes_atomic", "regular_file", "read_regular_bytes", "describe_kind", "path_inside",
-           "writing_inside", "PathEscapeError"]
+__all__ = ["atomic_path", "write_bytes_atomic", "regular_file", "read_regular_bytes", "read_text", "decode_text",
+           "NotTextError", "describe_kind", "path_inside", "writing_inside", "PathEscapeError"]
 
 
 class PathEscapeError(ValueError):
@@ -106,7 +109,7 @@ def _umask() -> int:
 
 
 @contextlib.contextmanager
-def atomic_path(path, suffix: str | None = None, overwrite_readonly: bool = False):
+def atomic_path(path, suffix: str | None = None, overwrite_readonly: bool = False, prefix: str = ".tmp-"):
     """Yield a temporary path next to ``path``; on success it replaces ``path``, on error it is removed.
 
     Args:
@@ -115,6 +118,8 @@ def atomic_path(path, suffix: str | None = None, overwrite_readonly: bool = Fals
             from the name (Open3D, Matplotlib) need the real one.
         overwrite_readonly: replace ``path`` even if it is read-only (no write bit); else
             ``PermissionError`` before anything is written.
+        prefix: the temporary file's name starts with it: a writer that sweeps up what a killed run left
+            (``data_fetch``) gives its own, so it recognises its temporaries and no one else's.
 
     Example:
         >>> import numpy as np, tempfile, os
@@ -136,7 +141,7 @@ def atomic_path(path, suffix: str | None = None, overwrite_readonly: bool = Fals
     directory = os.path.dirname(path)
     os.makedirs(directory, exist_ok=True)
     suffix = os.path.splitext(path)[1] if suffix is None else suffix
-    fd, tmp = tempfile.mkstemp(dir=directory, prefix=".tmp-", suffix=suffix)
+    fd, tmp = tempfile.mkstemp(dir=directory, prefix=prefix, suffix=suffix)
     os.close(fd)
     os.chmod(tmp, mode)
     try:
@@ -148,10 +153,10 @@ def atomic_path(path, suffix: str | None = None, overwrite_readonly: bool = Fals
         raise
 
 
-def write_bytes_atomic(path, data: bytes, overwrite_readonly: bool = False) -> None:
-    """Write ``data`` to ``path`` atomically."""
+def write_bytes_atomic(path, data: bytes, overwrite_readonly: bool = False, prefix: str = ".tmp-") -> None:
+    """Write ``data`` to ``path`` atomically (``prefix``: see :func:`atomic_path`)."""
     view = memoryview(data).cast("B")
-    with atomic_path(path, overwrite_readonly=overwrite_readonly) as tmp:
+    with atomic_path(path, overwrite_readonly=overwrite_readonly, prefix=prefix) as tmp:
         fd = os.open(tmp, os.O_WRONLY | os.O_TRUNC)
         try:
             while view:  # os.write may write less than it was given
@@ -223,3 +228,29 @@ def read_regular_bytes(path, name: str = "path", links: bool = True) -> bytes:
         return b"".join(chunks)
     finally:
         os.close(fd)
+
+
+class NotTextError(ValueError):
+    """A file read as text is not text (not UTF-8 or UTF-16 with a byte-order mark, or holds NUL bytes)."""
+
+
+def decode_text(data: bytes, path, name: str = "path") -> str:
+    """A text file's bytes → its text, normalised: UTF-8 (a leading UTF-8 byte-order mark dropped) or UTF-16
+    with its byte-order mark; ``\\r\\n`` and a lone ``\\r`` become ``\\n``. Anything else (another encoding,
+    NUL bytes: a binary file) → :class:`NotTextError` naming ``name`` and ``path``."""
+    try:
+        if data.startswith((b"\xff\xfe", b"\xfe\xff")):  # UTF-16 with its BOM (Windows editors' "Unicode")
+            text = data.decode("utf-16")
+        else:
+            text = data.decode("utf-8-sig")
+    except UnicodeDecodeError as error:
+        raise NotTextError(f"{name}: {path} is not a UTF-8 text file (byte {error.start} is not UTF-8, and it "
+                           f"starts with no UTF-16 byte-order mark); is it the right file?") from None
+    if "\x00" in text:
+        raise NotTextError(f"{name}: {path} holds NUL bytes: a binary file, not text; is it the right file?")
+    return text.replace("\r\n", "\n").replace("\r", "\n")
+
+
+def read_text(path, name: str = "path") -> str:
+    """The text of the regular file ``path``, as :func:`decode_text` normalises it; errors name ``name``."""
+    return decode_text(read_regular_bytes(path, name), path, name)

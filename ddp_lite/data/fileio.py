@@ -24,7 +24,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from ..core.files import regular_file
+from ..core.files import read_text, regular_file
 from .textparse import parse_error
 
 
@@ -37,12 +37,9 @@ def existing_path(path, name: str) -> Path:
 
 
 def read_text_file(path, name: str) -> str:
-    """A small text file (calibration) → str; a clear error naming it if it is not UTF-8 text."""
-    path = regular_file(path, name)
-    try:
-        return path.read_text(encoding="utf-8")
-    except UnicodeDecodeError as error:
-        raise ValueError(f"{name}: {path} is not a UTF-8 text file (byte {error.start}); is it the right file?") from None
+    """A small text file (calibration) → str, normalised as every text file the kit reads (``files.read_text``:
+    a byte-order mark dropped, CRLF → LF); a clear error naming it if it is not text."""
+    return read_text(path, name)
 
 
 _ORIENTATIONS = {2: "mirrored", 3: "rotated 180°", 4: "flipped", 5: "mirrored and rotated 90°", 6: "rotated 90°",

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ..core.files import regular_file
+from ..core.files import NotTextError, read_text, regular_file
 
 
 def parse_error(path, line: int | None, message: str) -> ValueError:
@@ -23,9 +23,9 @@ def text_lines(path, keep_blank: bool = False) -> list[tuple[int, str]]:
     """(1-based line number, stripped text) of a text file, ``#`` comments dropped (blank lines too unless asked)."""
     path = regular_file(path, "path")
     try:
-        text = path.read_text(encoding="utf-8")
-    except UnicodeDecodeError as error:
-        raise parse_error(path, None, f"not a UTF-8 text file (byte {error.start}); is it the right file?") from None
+        text = read_text(path, "path")  # a byte-order mark dropped, CRLF → LF: an editor's copy reads the same
+    except NotTextError as error:
+        raise parse_error(path, None, str(error).split(f"{path} ", 1)[-1]) from None
     lines = []
     for number, line in enumerate(text.splitlines(), 1):
         line = line.strip()
