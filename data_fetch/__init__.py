@@ -36,6 +36,10 @@ What ``fetch`` guarantees:
   exponential back-off, tqdm progress bar). A file gets its final name only after its hash
   matched; on a mismatch it is deleted (no final file, no ``.part``) and ``ChecksumError`` says so.
 * Offline or server down: a ``FetchError`` that says so and keeps the ``.part`` for resuming.
+* One install of a dataset folder at a time (``install_lock.py``): a second ``fetch`` or ``--from`` into it
+  waits, saying so, so no record in ``registry.json`` is lost; the temporary files of an install that was
+  killed are removed (and named) by the next one. Text files are compared as text (a byte-order mark and
+  CRLF line ends make no difference); a file taken on trust is said to be unverified.
 * Nothing is fetched twice: a file present with the right hash is not requested again, and an
   archive already unpacked (marker ``.<file>.unpacked``) is not unpacked again; its unpacked files
   are checked against it on every fetch (a missing one is unpacked again, one of another size is

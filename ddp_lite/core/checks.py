@@ -24,10 +24,11 @@ import numpy as np
 import torch
 
 __all__ = ["SkippedWarning", "report_skipped", "env_choice", "named_choice", "check_callback", "check_int", "check_real", "check_bool", "check_choice", "check_int_tuple", "check_image", "check_depth",
-           "check_size", "unmask", "MIN_VALID_PIXELS", "check_finite_output"]
+           "check_size", "unmask", "MIN_VALID_PIXELS", "check_finite_output", "check_same_units", "MIN_DEPTH_M"]
 
 MIN_VALID_PIXELS = 16  # a fit, or a mask, with fewer known pixels is refused
 MAX_DEPTH_RATIO = 1e6  # farthest / nearest valid depth: beyond it float32 disparity cannot resolve the far part
+MIN_DEPTH_M = 1e-6  # a micrometre: no camera measures nearer; below it, float32 denormals or a wrong unit
 
 
 def unmask(array, name: str, holes: bool):
@@ -168,11 +169,46 @@ def check_depth(depth, name: str = "depth", allow_holes: bool = True, min_valid:
                          f"{array[finite].max():.3g}: is the unit right (metres)?")
     if finite.any():
         near, far = float(converted[finite].min()), float(converted[finite].max())
+        if near < MIN_DEPTH_M:  # float32 denormals pass "> 0" and then vanish in 1/Z: an all-zero result
+            raise ValueError(f"{name} has valid depths down to {near:.3g} m ({int((converted[finite] < MIN_DEPTH_M).sum())} "
+                             f"pixel(s) below {MIN_DEPTH_M:g} m, a micrometre): no camera measures that near. Are they "
+                             f"invalid readings (make them NaN), or is the unit wrong (metres expected)?")
         if far > MAX_DEPTH_RATIO * near:
             raise ValueError(f"{name} spans {near:.3g}–{far:.3g} m, a ratio of {far / near:.3g} (at most "
                              f"{MAX_DEPTH_RATIO:g}): in float32 disparity the far part would be indistinguishable. "
                              f"Are the tiny values invalid readings (make them NaN), or is a unit wrong?")
     return converted
+
+
+UNIT_FACTORS = ((1000.0, "millimetres"), (100.0, "centimetres"), (1 / 0.3048, "feet"), (1 / 0.0254, "inches"),
+                (1 / 1000.0, "kilometres"))  # stored value per metre of each unit
+SAME_UNIT_RATIO = 2.0  # the median ratio of two depths of one scene in one unit lies within [1/2, 2]
+
+
+def check_same_units(depth, other, depth_name: str, other_name: str) -> None:
+    """Refuse ``other`` (H, W) when it is not in ``depth``'s unit: the median of ``other / depth`` over the
+    pixels valid (finite, > 0) in both lies outside [1/``SAME_UNIT_RATIO``, ``SAME_UNIT_RATIO``]. The message
+    names ``other_name``, the ratio and the unit it likely is (``UNIT_FACTORS``). Too few pixels valid in both
+    (< ``MIN_VALID_PIXELS``): the ratio of their medians, judged 4× more leniently (other pixels, other depths)."""
+    depth, other = np.asarray(depth, np.float64), np.asarray(other, np.float64)
+    with np.errstate(invalid="ignore"):
+        valid_depth, valid_other = np.isfinite(depth) & (depth > 0), np.isfinite(other) & (other > 0)
+    both = valid_depth & valid_other
+    if both.sum() >= MIN_VALID_PIXELS:
+        ratio, limit = float(np.median(other[both] / depth[both])), SAME_UNIT_RATIO
+        basis = f"the median of {other_name} / {depth_name} over the {int(both.sum())} pixels valid in both"
+    elif valid_depth.any() and valid_other.any():
+        ratio, limit = float(np.median(other[valid_other]) / np.median(depth[valid_depth])), 4 * SAME_UNIT_RATIO
+        basis = f"the ratio of their medians (too few pixels are valid in both to compare pixel by pixel)"
+    else:
+        return
+    if 1 / limit <= ratio <= limit:
+        return
+    factor, unit = min(UNIT_FACTORS, key=lambda fu: abs(np.log(ratio / fu[0])))
+    likely = (f"; {other_name} looks like {unit} against {depth_name} in metres (× {factor:.4g})"
+              if abs(np.log(ratio / factor)) < np.log(1.25) else "")
+    raise ValueError(f"{other_name} is {ratio:.4g} × {depth_name} ({basis}): they are not in the same unit, or not "
+                     f"of the same view{likely}. Give both in metres (the same scale); nothing was fitted or scored")
 
 
 def check_size(size) -> tuple[int, int]:

@@ -46,7 +46,7 @@ NYU_K = np.array([[5.1885790117450188e+02, 0.0, 3.2558244941119034e+02],
 
 def read_kitti_disparity(path) -> np.ndarray:
     """A KITTI 16-bit disparity PNG → (H, W) float32 px: value / 256, 0 (no ground truth) → NaN."""
-    raw = read_image_file(path, "path")
+    raw = read_image_file(path, "path", truth=True)
     if raw.dtype != np.uint16 or raw.ndim != 2:
         raise ValueError(f"path: {path} must be a 1-channel 16-bit PNG (KITTI disparity), got {(raw.dtype, raw.shape)}")
     disparity = raw.astype(np.float32) / np.float32(256.0)

@@ -3,8 +3,9 @@
 
 Conventions: colour comes back as float32 (H, W, 3) RGB in [0, 1] (8- or 16-bit files; grey is
 repeated to 3 channels), pixels as stored (``read_image_file``); depth through one reader,
-``read_depth``, as float32 (H, W) with 0, negative and non-finite values turned into NaN (a file's
-"no value" marker becomes NaN here), 8-bit files refused and sentinels (65535) warned.
+``read_depth``, as float32 (H, W) with 0 and non-finite values turned into NaN (a file's "no value"
+marker becomes NaN here; one negative marker value too, with a warning; varied negative values are
+refused), 8-bit files and lossy formats (a JPEG, whatever its name) refused and sentinels (65535) warned.
 A missing file raises ``FileNotFoundError`` naming the argument it came from.
 
 * **PFM** (Middlebury 2014 disparities): header ``PF`` (3 channels) or ``Pf`` (1 channel), then
@@ -109,15 +110,56 @@ def check_pixel_limit(data: bytes, path, name: str) -> None:
                          f"(a damaged or hostile file; resize it first if it is real)")
 
 
-def read_image_file(path, name: str = "path", flags: int = cv2.IMREAD_UNCHANGED) -> np.ndarray:
+# What a file is, by its first bytes (its name may say otherwise): signature → format
+_SIGNATURES = ((b"\x89PNG\r\n\x1a\n", "PNG"), (b"\xff\xd8\xff", "JPEG"), (b"II*\x00", "TIFF"), (b"MM\x00*", "TIFF"),
+               (b"\x76\x2f\x31\x01", "OpenEXR"), (b"BM", "BMP"), (b"GIF8", "GIF"), (b"\x00\x00\x00\x0cjP  ", "JPEG 2000"),
+               (b"\xff\x4f\xff\x51", "JPEG 2000"), (b"P5", "PGM"), (b"P2", "PGM"), (b"P6", "PPM"), (b"P3", "PPM"))
+_SUFFIX_FORMATS = {".png": "PNG", ".jpg": "JPEG", ".jpeg": "JPEG", ".tif": "TIFF", ".tiff": "TIFF", ".exr": "OpenEXR",
+                   ".bmp": "BMP", ".gif": "GIF", ".webp": "WebP", ".jp2": "JPEG 2000", ".pgm": "PGM", ".ppm": "PPM"}
+
+
+def image_format(data: bytes) -> str | None:
+    """The format an encoded image really is, by its first bytes ('PNG', 'JPEG', 'TIFF', 'WebP', ...; 'WebP
+    (lossy)' for a lossy WebP), whatever its name says; None when no known signature fits."""
+    if data[:4] == b"RIFF" and data[8:12] == b"WEBP":
+        return "WebP" if data[12:16] == b"VP8L" else "WebP (lossy)"
+    return next((kind for signature, kind in _SIGNATURES if data.startswith(signature)), None)
+
+
+LOSSY_FORMATS = ("JPEG", "WebP (lossy)", "JPEG 2000")  # JPEG 2000 may be either: no truth is kept in it
+
+
+def check_image_format(data: bytes, path, name: str, truth: bool) -> None:
+    """The file's real format (:func:`image_format`) against its name and its use. ``truth`` (a depth map, a
+    ground-truth disparity, a mask): a lossy format is refused, whatever the file is called (its values were
+    changed by the compression: they are no measurement); a colour image: a name that says another format
+    than the content is warned about (a ``.png`` that is really a JPEG has lost detail to compression)."""
+    real = image_format(data)
+    claimed = _SUFFIX_FORMATS.get(Path(path).suffix.lower())
+    mismatch = claimed is not None and real is not None and not real.startswith(claimed)
+    named = f" (named {Path(path).suffix} but its content is {real})" if mismatch else ""
+    if truth and real in LOSSY_FORMATS:
+        raise ValueError(f"{name}: {path} is a {real} file{named}: lossy compression changed its values, so it "
+                         f"holds no depth or ground truth to trust. Give the lossless file it came from (PNG, "
+                         f"TIFF, .pfm, .npy)")
+    if mismatch:
+        warnings.warn(f"{name}: {path} is a {real} file, not the {claimed} its name says; read as the {real} it is"
+                      + (" (lossy: its values carry compression artefacts)" if real in LOSSY_FORMATS else ""),
+                      stacklevel=4)
+
+
+def read_image_file(path, name: str = "path", flags: int = cv2.IMREAD_UNCHANGED, truth: bool = False) -> np.ndarray:
     """Any image file → the array OpenCV decodes (``flags``; BGR order), the pixels **as stored**.
 
     Every reader of the kit goes through here, so colour and depth are read the same way: a
     regular file only; a truncated JPEG refused; EXIF orientation never applied (depth maps carry
     none, and OpenCV's ``IMREAD_COLOR`` would rotate the colour alone, misregistering it against
-    its depth), with a warning naming the file when it carries an orientation other than upright."""
+    its depth), with a warning naming the file when it carries an orientation other than upright.
+    The format is the content's, not the name's (:func:`check_image_format`): ``truth=True`` for a
+    depth map, ground truth or mask, where a lossy file (a JPEG, whatever it is called) is refused."""
     path = regular_file(path, name)
     data = path.read_bytes()
+    check_image_format(data, path, name, truth)
     if data[:2] == b"\xff\xd8" and _jpeg_truncated(data):
         raise ValueError(f"{name}: {path} is a truncated JPEG (its image data has no end marker); the part "
                          f"below the cut would be read as grey. Copy or export the file again")
@@ -215,6 +257,18 @@ def _pfm_header(data: bytes, path, name: str = "path") -> tuple[int, int, int, f
     return 3 if kind == b"PF" else 1, int(width), int(height), scale, offset
 
 
+def _garbled(values: np.ndarray) -> float:
+    """The share of ``values`` that no depth or disparity map holds: NaN, or a magnitude below 1e-10 or beyond
+    1e10 (0 and ±inf, a PFM's 'unknown' markers, count as fine). Float bytes read in the wrong order have
+    random exponents: about three quarters of them land there."""
+    if not values.size:
+        return 0.0
+    with np.errstate(invalid="ignore", over="ignore"):
+        size = np.abs(values.astype(np.float64))
+        bad = np.isnan(size) | (np.isfinite(size) & ((size > 1e10) | ((size > 0) & (size < 1e-10))))
+    return float(bad.mean())
+
+
 def read_pfm(path, name: str = "path") -> np.ndarray:
     """A PFM file → float32 (H, W) or (H, W, 3), top row first, native byte order (either file endianness);
     errors name ``name`` (the argument the path came from)."""
@@ -223,7 +277,13 @@ def read_pfm(path, name: str = "path") -> np.ndarray:
     count = width * height * channels
     if len(data) - offset < 4 * count:
         raise ValueError(f"{name}: {path} is truncated: {len(data) - offset} data bytes, expected {4 * count}")
-    array = np.frombuffer(data, dtype="<f4" if scale < 0 else ">f4", count=count, offset=offset)
+    order = "<f4" if scale < 0 else ">f4"  # the scale's sign is the byte order: negative = little-endian
+    array = np.frombuffer(data, dtype=order, count=count, offset=offset)
+    if _garbled(array) > 0.5 and _garbled(array.view(array.dtype.newbyteorder())) < 0.01:
+        raise ValueError(f"{name}: {path}: its PFM scale {scale:g} says {'little' if scale < 0 else 'big'}-endian, but "
+                         f"its values read so are mostly NaN, below 1e-10 or beyond 1e10, and read in the other byte "
+                         f"order they are ordinary numbers: the scale's sign is wrong (negative = little-endian, "
+                         f"positive = big-endian). Fix the header's sign (or the writer), then read it again")
     shape = (height, width, 3) if channels == 3 else (height, width)
     return np.flipud(array.reshape(shape)).astype(np.float32)
 
@@ -301,6 +361,30 @@ def _sentinels(raw: np.ndarray) -> tuple[int, str]:
     return count, f"65535 or ≥ {FLOAT_SENTINEL_MIN:g}"
 
 
+def _check_negative(raw: np.ndarray, path, name: str) -> None:
+    """Negative values in a depth file: one value throughout (a tool's "no value" marker, e.g. -1) is read as
+    holes with a warning; varied ones (a depth with another sign convention, a disparity, a height map) are
+    refused. Either way the file, the count and the share are named: silence would make them holes unseen."""
+    if not np.issubdtype(raw.dtype, np.signedinteger) and not np.issubdtype(raw.dtype, np.floating):
+        return
+    with np.errstate(invalid="ignore"):
+        negative = np.isfinite(raw) & (raw < 0)
+    count = int(negative.sum())
+    if not count:
+        return
+    low, high = float(raw[negative].min()), float(raw[negative].max())
+    if low == high:
+        warnings.warn(f"{name}: {path}: {count} pixel(s) ({count / raw.size:.1%}) hold {low:g}, read as a 'no value' "
+                      f"marker: they become holes. If they are depths, the file's sign convention is another",
+                      stacklevel=4)
+        return
+    raise ValueError(f"{name}: {path} holds {count} negative value(s) ({count / raw.size:.1%} of its pixels, "
+                     f"{low:.4g} to {high:.4g}): a depth is positive (metres in front of the camera), and varied "
+                     f"negative values are no 'no value' marker. Is its sign convention another (OpenGL cameras "
+                     f"look down −z), or is it not a depth map (a disparity, a height)? Store 0 or NaN where there "
+                     f"is no depth")
+
+
 def read_depth(path, scale: float | None = None, name: str = "path", scale_name: str = "depth_scale") -> np.ndarray:
     """Every depth map the kit reads, of every command and format → (H, W) float32 metres = stored × ``scale``,
     NaN where the file has no depth (0, negative, NaN, inf).
@@ -326,8 +410,8 @@ def read_depth(path, scale: float | None = None, name: str = "path", scale_name:
         raw = load_npy(path, name)
     elif suffix == ".pfm":
         raw = read_pfm(path, name)
-    else:
-        raw = read_image_file(path, name)  # as stored: no EXIF rotation, like every colour image
+    else:  # as stored: no EXIF rotation, like every colour image; a lossy file (a JPEG) holds no depth
+        raw = read_image_file(path, name, truth=True)
     if raw.dtype in (np.uint8, np.int8):
         raise ValueError(f"{name}: {path} is an 8-bit {'array' if suffix == '.npy' else 'image'}, a picture (e.g. a "
                          f"depth visualisation), not a depth map: 256 levels hold no depth. Give the 16-bit PNG, "
@@ -344,6 +428,7 @@ def read_depth(path, scale: float | None = None, name: str = "path", scale_name:
             raise ValueError(f"{name}: {path} stores integers; give {scale_name}{hint}, the metres per stored unit of its "
                              f"{raw.dtype} values (0.001 for millimetres, as in most 16-bit depth PNGs; 1/5000 for TUM)")
         scale = 1.0
+    _check_negative(raw, path, name)
     count, marker = _sentinels(raw)
     if count:
         example = float(raw[(raw == np.iinfo(raw.dtype).max) if np.issubdtype(raw.dtype, np.integer)

@@ -30,6 +30,24 @@ from ..classical.stereo import disparity_to_depth, pixel_disparity
 from ..core.views import Scene, View
 
 
+MIN_BASELINE_MM = 10.0  # a calib.txt baseline below it is metres written as millimetres (Middlebury's: 100–600 mm)
+
+
+def check_scene_depth(depth: np.ndarray, what: str, path, cause: str) -> None:
+    """Refuse ground-truth depth (H, W) metres, NaN unknown, whose valid values no scene of a stereo dataset
+    holds (any depth outside ``fileio.DEPTH_RANGE_M``, or a median outside ``fileio.MEDIAN_RANGE_M``): a unit
+    or calibration error (``cause`` names the suspect), refused before it is used as truth."""
+    from .fileio import DEPTH_RANGE_M, MEDIAN_RANGE_M
+    valid = depth[np.isfinite(depth)]
+    if not valid.size:
+        return
+    low, high, median = float(valid.min()), float(valid.max()), float(np.median(valid))
+    if not (DEPTH_RANGE_M[0] <= low and high <= DEPTH_RANGE_M[1] and MEDIAN_RANGE_M[0] <= median <= MEDIAN_RANGE_M[1]):
+        raise ValueError(f"{what}: {path} gives depths {low:.3g}–{high:.3g} m (median {median:.3g} m), which no scene "
+                         f"holds (depths within {DEPTH_RANGE_M[0]:g}–{DEPTH_RANGE_M[1]:g} m, median within "
+                         f"{MEDIAN_RANGE_M[0]:g}–{MEDIAN_RANGE_M[1]:g} m): {cause}")
+
+
 def require_valid_depth(depth: np.ndarray, what: str, path) -> np.ndarray:
     """Refuse a ground-truth map with no valid pixel: it is a wrong file, not a scene."""
     if not np.isfinite(depth).any():
@@ -102,6 +120,11 @@ def parse_middlebury_calib(text: str) -> MiddleburyCalib:
             raise ValueError(f"text: {key} must be a finite number, got {entries[key]!r}")
     if numbers["baseline"] <= 0:
         raise ValueError(f"text: baseline must be positive (mm), got {numbers['baseline']}")
+    if numbers["baseline"] < MIN_BASELINE_MM:  # metres written where millimetres belong: depths 1000× too near
+        raise ValueError(f"text: baseline is {entries['baseline']}, read as millimetres ({numbers['baseline'] / 1000:.3g} "
+                         f"m), less than the {MIN_BASELINE_MM:g} mm of any stereo rig in this format (Middlebury's "
+                         f"are about 100–600 mm); a calib.txt gives the baseline in millimetres: is it in metres "
+                         f"({numbers['baseline']:g} m would be baseline={numbers['baseline'] * 1000:g})?")
     for key in ("width", "height", "ndisp"):
         if numbers[key] != int(numbers[key]) or numbers[key] <= 0:
             raise ValueError(f"text: {key} must be a positive integer, got {entries[key]!r}")
@@ -150,6 +173,8 @@ def load_middlebury(folder, size=None, name: str | None = None) -> Scene:
     if disparity.ndim != 2:
         raise ValueError(f"folder: {truth} must be a 1-channel PFM")
     depth0 = require_valid_depth(calib.depth(disparity), "folder", truth)
+    check_scene_depth(depth0, "folder", truth, f"check calib.txt's baseline ({calib.baseline * 1000:g} mm), focal "
+                                              f"({calib.focal:g} px) and doffs ({calib.doffs:g} px)")
     depth1 = calib.depth(read_pfm(folder / "disp1.pfm")) if (folder / "disp1.pfm").exists() \
         else np.full_like(depth0, np.nan)
     return stereo_scene(name or folder.name, read_rgb(folder / "im0.png", "folder"),

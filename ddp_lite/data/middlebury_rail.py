@@ -78,11 +78,14 @@ def size_scale(width: int) -> int:
 
 
 def _dmin(folder: Path) -> float:
+    tokens = read_text_file(folder / "dmin.txt", "folder").split()  # a byte-order mark, CRLF: the same text
     try:
-        dmin = float(read_text_file(folder / "dmin.txt", "folder").split()[0])
-    except (IndexError, ValueError) as error:
+        if len(tokens) != 1:
+            raise ValueError(f"it holds {len(tokens)} values{': ' + ' '.join(tokens[:4]) if tokens else ''}")
+        dmin = float(tokens[0])
+    except ValueError as error:
         raise ValueError(f"folder: {folder / 'dmin.txt'} must hold one number, the full-size disparity offset "
-                         f"({error})") from None
+                         f"({error}); is it the right file?") from None
     if not np.isfinite(dmin) or dmin < 0:
         raise ValueError(f"folder: {folder / 'dmin.txt'} must hold a finite number ≥ 0, got {dmin}")
     return dmin
@@ -90,7 +93,7 @@ def _dmin(folder: Path) -> float:
 
 def _disparity_png(path: Path, shape) -> np.ndarray:
     """A disparity PNG → (H, W) float64 intensity (≈ full-size disparity px), NaN where 0 (unknown)."""
-    raw = read_image_file(path, "folder")
+    raw = read_image_file(path, "folder", truth=True)  # a JPEG, whatever its name, is no ground truth
     if raw.ndim != 2 or raw.dtype != np.uint8:
         raise ValueError(f"folder: {path} must be an 8-bit 1-channel disparity PNG, got {raw.dtype} {raw.shape}")
     if raw.shape != shape:
@@ -209,13 +212,13 @@ def ground_truth_occlusion(folder, tolerance: float = 1.0) -> np.ndarray:
     by more than ``tolerance`` px (the left-right cross-check on the truth). Unknown truth → False."""
     folder = existing_path(folder, "folder")
     if is_2014_folder(folder):
-        mask = read_image_file(folder / "mask0nocc.png", "folder")
+        mask = read_image_file(folder / "mask0nocc.png", "folder", truth=True)
         if mask.ndim != 2:
             raise ValueError(f"folder: {folder / 'mask0nocc.png'} must be a 1-channel mask (255 seen, 128 occluded)")
         return mask == 128
     if not is_rail_folder(folder) or not (folder / "disp5.png").is_file():
         raise ValueError(f"folder: {folder} needs disp1.png and disp5.png (2005/2006) or mask0nocc.png (2014)")
-    shape = read_image_file(folder / "disp1.png", "folder").shape
+    shape = read_image_file(folder / "disp1.png", "folder", truth=True).shape
     scale = size_scale(shape[1])
     d1 = _disparity_png(folder / "disp1.png", shape) / scale  # (H, W) px at this size
     d5 = _disparity_png(folder / "disp5.png", shape) / scale

@@ -287,7 +287,7 @@ def _complete(args, writers, staged, start) -> int:
     from ..method.profiles import get_profile
     from ..core.progress import command_progress
     from ..method.time_left import earliest_share, expected_share
-    from ..core.checks import check_depth
+    from ..core.checks import check_depth, check_same_units
     from ..method.paper.nets import check_input_size
     from ..method.full_resolution import FULL_SIZE_SOLVE, refine_full_resolution
     from ..method.kit.blend import rim_width
@@ -309,6 +309,7 @@ def _complete(args, writers, staged, start) -> int:
         gt = _read_depth(args.gt, args.depth_scale, "--gt")
         if gt.shape != depth.shape:
             raise ValueError(f"--gt is {gt.shape[0]}×{gt.shape[1]} but --depth is {depth.shape[0]}×{depth.shape[1]}")
+        check_same_units(depth, gt, "--depth", "--gt")  # centimetres against metres would be scored as 100× errors
     camera = None
     if args.intrinsics is not None:
         from ..core.camera import Camera, check_intrinsics

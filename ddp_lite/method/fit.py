@@ -189,6 +189,8 @@ def hole_errors_fn(gt_depth: np.ndarray, valid: np.ndarray, transform, device):
     n_holes = max(float(holes.sum()), 1.0)
 
     def evaluate(output):
+        if not holes.any():  # no truth in the holes: no error to report (0.0 would read as a perfect fill)
+            return {"hole_rmse": float("nan"), "hole_rmse_m": float("nan")}
         disparity = output[:, :1]
         err_disp = ((disparity - gt_disp_t) ** 2 * holes_t).sum() / n_holes
         err_m = ((transform.to_depth(disparity) - gt_m_t) ** 2 * holes_t).sum() / n_holes

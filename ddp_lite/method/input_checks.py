@@ -7,13 +7,14 @@ nothing (:func:`~ddp_lite.core.views.check_neighbor_views`) and for a setting th
 """
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 import torch
 
 from ..core.camera import Camera
-from ..core.checks import check_depth, check_image
+from ..core.checks import check_depth, check_image, check_same_units
 from ..core.views import check_neighbor_views, image_and_camera
 from .config import FitConfig
 from .inert_settings import warn_inert_settings
@@ -63,7 +64,11 @@ def check_fit_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth, t
     H, W = depth.shape
     rgb = check_image(rgb, "rgb", (H, W)) if spec.uses_rgb or rgb is not None else None
     if gt_depth is not None:  # the kit's convention: NaN = unknown (a 0 would be scored as truth)
-        gt_depth = check_depth(gt_depth, "gt_depth", min_valid=0, shape=(H, W))
+        gt_depth = check_depth(gt_depth, "gt_depth", min_valid=1, shape=(H, W))  # all NaN: nothing to score
+        check_same_units(depth, gt_depth, "depth", "gt_depth")  # centimetres against metres: a 100× error scored
+        if not (np.isfinite(gt_depth) & ~np.isfinite(depth)).any():
+            warnings.warn("gt_depth has no valid value in the holes of depth, so the hole error is not defined: "
+                          "history's hole_rmse will be NaN", stacklevel=3)
     check_input_size(config.paper.net, config.paper.channels, H, W)
     if config.combination.blend_fill != 0 and rgb is None:  # the fill is guided by the colour image (None: chosen)
         raise ValueError("config.blend_fill needs the colour image: pass rgb (H, W, 3), or set blend_fill=0")

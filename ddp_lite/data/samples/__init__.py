@@ -39,7 +39,7 @@ def read_depthcomp_holes(path, shape=None) -> np.ndarray:
     sizes do), else by the nearest pixel centre."""
     from ..fileio import read_image_file  # the file readers load cv2; kept local so the list above is cheap
 
-    raw = read_image_file(path, "path")
+    raw = read_image_file(path, "path", truth=True)  # a JPEG's ringing would make and fill holes of its own
     if raw.ndim != 2:
         raise ValueError(f"path: {path} must be a 1-channel disparity PNG with 0 = hole, got shape {raw.shape}")
     holes = raw == 0
