@@ -28,7 +28,7 @@ from ..core.checks import check_bool, report_skipped
 from .file_writers import depth_png_bytes, npy_bytes, pfm_bytes
 from .fileio import (check_same_size, existing_path, read_depth, read_depth_image, read_image_file, read_rgb,
                      read_text_file)
-from .middlebury import MiddleburyCalib, require_valid_depth, stereo_scene
+from .middlebury import MiddleburyCalib, check_scene_depth, require_valid_depth, stereo_scene
 from .resample import check_optional_size, scene_depth_range, resize_view
 from ..core.views import Scene, View
 
@@ -94,6 +94,8 @@ def load_kitti(root, index: int = 0, split: str = "training", disparity: str = "
     disp = require_valid_depth(read_kitti_disparity(gt), "root", gt) if split == "training" \
         else np.full((H, W), np.nan, np.float32)
     calib = MiddleburyCalib(K, K, 0.0, baseline, W, H, 256)
+    check_scene_depth(calib.depth(disp), "root", gt, f"check {base / 'calib_cam_to_cam' / f'{stem}.txt'} "
+                                                     f"(baseline {baseline:.4g} m, focal {K[0, 0]:g} px)")
     return stereo_scene(f"kitti{stem}", rgb0, rgb1, calib.depth(disp), np.full((H, W), np.nan, np.float32),
                          calib, size)
 

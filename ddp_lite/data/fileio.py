@@ -347,7 +347,8 @@ def check_plausible_depth(depth, scale: float, flag: str = "--depth", scale_name
 
 # The values a depth file may hold that are no depth although they are valid numbers: a sensor's
 # "no reading" / saturated marker. Integer files: the type's largest value (65535 in a 16-bit PNG);
-# float files: 65535 carried over from such a PNG, and absurd magnitudes (float max, 1e10, ...).
+# float files: 65535 carried over from such a PNG, and absurd finite magnitudes (float max, 1e10, ...); inf is
+# a float file's own "unknown" marker (Middlebury's PFMs) and becomes a hole without a word.
 FLOAT_SENTINEL_MIN = 1e9
 
 
@@ -357,7 +358,7 @@ def _sentinels(raw: np.ndarray) -> tuple[int, str]:
         top = np.iinfo(raw.dtype).max
         return int((raw == top).sum()), f"{top}, the largest {raw.dtype} value"
     with np.errstate(invalid="ignore"):
-        count = int(((raw == 65535) | (np.abs(raw) >= FLOAT_SENTINEL_MIN)).sum())
+        count = int(((raw == 65535) | (np.isfinite(raw) & (np.abs(raw) >= FLOAT_SENTINEL_MIN))).sum())
     return count, f"65535 or ≥ {FLOAT_SENTINEL_MIN:g}"
 
 
@@ -432,7 +433,7 @@ def read_depth(path, scale: float | None = None, name: str = "path", scale_name:
     count, marker = _sentinels(raw)
     if count:
         example = float(raw[(raw == np.iinfo(raw.dtype).max) if np.issubdtype(raw.dtype, np.integer)
-                            else ((raw == 65535) | (np.abs(raw) >= FLOAT_SENTINEL_MIN))][0])
+                            else ((raw == 65535) | (np.isfinite(raw) & (np.abs(raw) >= FLOAT_SENTINEL_MIN)))][0])
         warnings.warn(f"{name}: {path}: {count} pixel(s) hold {marker}, which depth cameras write for 'no reading' "
                       f"or 'out of range'; they are read as depth ({example * float(scale):.4g} m at {scale_name} "
                       f"{float(scale):g}). If they mean 'no value', store 0 there", stacklevel=3)

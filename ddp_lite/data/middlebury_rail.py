@@ -37,7 +37,7 @@ import numpy as np
 from ..core.camera import Camera
 from ..core.views import Scene, View
 from .fileio import existing_path, read_image_file, read_rgb, read_text_file
-from .middlebury import load_middlebury, require_valid_depth
+from .middlebury import check_scene_depth, load_middlebury, require_valid_depth
 from .resample import check_optional_size, resize_scene, scene_depth_range
 
 __all__ = ["FULL_FOCAL", "PAIR_BASELINE", "RAIL_STEP", "RAIL_VIEWS", "load_rail_scene", "load_middlebury_scene",
@@ -161,6 +161,9 @@ def load_rail_scene(folder, neighbors=(0, 2), size=None, scale: int | None = Non
             raise ValueError(f"folder: view{k}.png is {rgb.shape[0]}×{rgb.shape[1]} but view1.png is {H}×{W} (H×W)")
         return View(rgb, depth, _rail_camera(k, W, H, scale, dmin), f"view{k}")
     depth1 = require_valid_depth(depth_of("disp1.png"), "folder", folder / "disp1.png")
+    check_scene_depth(depth1, "folder", folder / "disp1.png", f"check dmin.txt ({dmin:g} px at full size) and that "
+                                                              f"disp1.png is the dataset's disparity (intensity = "
+                                                              f"{scale} × disparity)")
     unknown = np.full((H, W), np.nan, np.float32)
     meta = {"baseline": PAIR_BASELINE, "doffs": dmin / scale, "focal": FULL_FOCAL / scale,
             "ndisp": float(np.ceil(256.0 / scale)), "scale": float(scale), **scene_depth_range([depth1])}
