@@ -13,11 +13,13 @@ import torch
 from ..core.camera import Camera
 from .config import FitConfig
 from .paper.disparity import DisparityTransform
-from .complete import fill_heldout, held_out, refined, with_fill_share
-from .fit import DepthResult, check_run, fit_once, run_fit
+from .complete import fill_heldout, held_out, with_fill_share
+from .fit import check_run, fit_once, run_fit
 from .input_checks import check_fit_inputs
+from .kit.combine import refined
 from .paper.nets import make_input
 from .misplaced_arguments import names_misplaced_arguments
+from .result import DepthResult
 from .runtime.options import RunOptions
 
 __all__ = ["complete_depth_coarse_to_fine"]

@@ -87,7 +87,7 @@ class CombinationConfig(Settings):
     blend_fill: float | None = 0.0  # share of the input's colour-guided fill in the final disparity (0: none;
     # None: chosen on held-out blobs of the valid input)
     refine: bool = False  # the fit made sharp by an image-guided edge-aware solve toward it, before the fill's
-    # share is mixed in (method.full_resolution.refine_over_smoothness at the fit's own size; variants with colour)
+    # share is mixed in (classical.full_resolution.refine_over_smoothness at the fit's own size; variants with colour)
     depth_source: str = "clean"  # "stereo": a matcher's depth, the rim of its holes not read after the fit
 
     def validate(self) -> None:

@@ -36,8 +36,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from ..classical.depth_fills import check_fill_input, nearest_values
-from ..classical.holes import hole_rim
+from .depth_fills import check_fill_input, nearest_values
+from .holes import hole_rim
 from ..core.checks import check_int
 
 __all__ = ["REFINEMENTS", "SMOOTHNESS_MEAN", "SMOOTHNESS_STEREO", "FULL_SIZE_SOLVE", "refine_full_resolution",
@@ -74,7 +74,7 @@ def _fgs(guide: np.ndarray, values: np.ndarray, confidence: np.ndarray, lam: flo
 def _guided(image: np.ndarray, values: np.ndarray, confidence: np.ndarray, radius: int, eps: float):
     """Confidence-weighted guided filter: per window, the affine colour model fitted to c-weighted
     targets (``guided_fills.masked_guided_filter``), averaged over the windows covering a pixel."""
-    from ..classical.guided_fills import masked_guided_filter
+    from .guided_fills import masked_guided_filter
     q, _ = masked_guided_filter(image, values, confidence, int(radius), float(eps))
     return q
 
@@ -84,7 +84,7 @@ def _bilateral_system(image: np.ndarray, lam: float, sigma_xy: float, sigma_luma
     (S vertices × pixels, lam · the bistochastic grid Laplacian); one per image and setting, for every solve on it."""
     from scipy import sparse
 
-    from ..classical.guided_fills import bilateral_grid, bistochastic
+    from .guided_fills import bilateral_grid, bistochastic
     S, blur = bilateral_grid(np.clip(image, 0.0, 1.0), sigma_xy, sigma_luma, sigma_chroma)
     _, n = bistochastic(S, blur)
     Dn = sparse.diags(n)
