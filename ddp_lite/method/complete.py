@@ -70,6 +70,7 @@ def complete_depth(rgb, depth, camera: Camera | None = None, neighbors=(), varia
         (32, 32)
     """
     options = check_run(options, callback, init)
+    config = FitConfig.for_profile(variant=variant) if config is None else config
     inputs, config = check_fit_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth, transform)
     target = inputs.transform.to_disparity(inputs.depth)  # (H, W), NaN holes: what held-out pixels are judged by
     # what the fits see: the input less the valid pixels held out to choose the fill's share and a blend's weight

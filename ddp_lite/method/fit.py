@@ -59,6 +59,7 @@ def fit_once(rgb, depth, camera, neighbors, variant, config, *, options=None, gt
     """One fit (no ensemble, blend or fill): :func:`check_run` and
     :func:`~ddp_lite.method.input_checks.check_fit_inputs`, then :func:`run_fit`."""
     options = check_run(options, callback, init)
+    config = FitConfig.for_profile(variant=variant) if config is None else config
     inputs, config = check_fit_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth, transform)
     return run_fit(inputs, config, options, callback=callback, init=init, noise=noise)
 

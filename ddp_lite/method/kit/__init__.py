@@ -5,7 +5,8 @@ into one warp term the paper's loss takes as an argument (``warp_terms``), extra
 colour image, a classical fill: ``net_inputs``), blends with a fill or the paper recipe's fit
 (``blend``: their weights, shares and held-out pixels), ensembles (``ensemble``), the combinations of
 whole fits built from them (``combine``) and the method switch (``recipes``). Each addition's settings
-are a section of the fit's config defined beside its code and checked there: ``HoleConfig``
+are a section of the fit's config defined beside its code, checked there and described there (its
+part of a recipe's one-line description, ``describe()``, and of the equation, ``equation()``): ``HoleConfig``
 (``hole_terms``), ``WarpConfig`` (``warp_terms``), ``NetInputConfig`` (``net_inputs``),
 ``CombinationConfig`` (``blend``, an ensemble's size included).
 
