@@ -76,8 +76,9 @@ def refined(result: DepthResult, depth: np.ndarray, rgb: np.ndarray, source: str
     ``rgb`` (H, W, 3) in [0, 1], averaged over four smoothness settings (``refine_over_smoothness``;
     ``SOLVE_SETTINGS[source]``). A ``"stereo"`` ``source``'s rim is not read (``kit.blend.rim_width``).
     The fit is first clipped to the valid input's depth range: a fit can run off to the end of its
-    disparity range inside a hole while it matches every valid pixel (one rgbd fit of 83 on the real suite),
-    and the solve would keep that. The valid input comes back as given; ``history`` gets ``refined``.
+    disparity range inside a hole while it matches every valid pixel (seen on the real suite:
+    ``docs/studies/real_suite.md``), and the solve would keep that. The valid input comes back as given;
+    ``history`` gets ``refined``.
     A fit blurs depth edges a few pixels wide; the solve puts them on the image's colour edges."""
     transform = result.transform
     target = np.clip(result.depth, np.nanmin(depth), np.nanmax(depth))  # (H, W) metres

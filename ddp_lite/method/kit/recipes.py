@@ -104,9 +104,8 @@ KIT_AT = {
     "paper": {},  # at the paper's size, the paper's method
 }
 
-# on real scenes the kit's hole terms, chosen on rendered ones, hold the fit flatter than the scenes are: without
-# them photo's answer is 2.0 % better over 61 cases × seeds 0-2 (lower on 123 of 183; chosen on half A among off,
-# curvature off and half weight, confirmed on half B), though a border hole may now run away (docs/studies/real_suite.md)
+# on real scenes the kit's hole terms, chosen on rendered ones, hold the fit flatter than the scenes are: photo's
+# answer is better without them, though a border hole may now run away (the study: docs/studies/real_suite.md)
 PHOTO_HOLE_TERMS = dict(smoothness=0.0, flatness=0.0)
 
 RECIPES = {
