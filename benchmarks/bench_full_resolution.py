@@ -1,5 +1,5 @@
 """`ddp-lite complete` at a photo's own resolution: DDP fitted at the working size, brought back to full
-size (a) by up-sampling alone and (b) by the full-resolution refinement (``method.full_resolution``), against
+size (a) by up-sampling alone and (b) by the full-resolution refinement (``classical.full_resolution``), against
 every classical fill of ``baselines.BASELINES`` computed at that full size.
 
     python benchmarks/bench_full_resolution.py --data DIR --isa avx2 --out benchmarks/results/full_resolution.jsonl
@@ -299,7 +299,7 @@ def evaluate(case: Case, small, sweep: dict, fills: dict | None = None) -> dict:
     and the default refinement mixed, in disparity, with a share of a full-size fill of ``fills`` ({name:
     (depth or None, seconds)}): the bilateral solver alone, and its mean with colorization (the fill the
     ``kit`` recipe mixes in at the working size) → ``row["mixed"]["<fill> <share>"]``."""
-    from ddp_lite.method.full_resolution import refine_full_resolution, refine_over_smoothness
+    from ddp_lite.classical.full_resolution import refine_full_resolution, refine_over_smoothness
     from ddp_lite.sequences.working_size import fill_holes_at_full_size
     upsampled = fill_holes_at_full_size(case.depth, small)
     target = fill_holes_at_full_size(case.depth, small, raw=True)

@@ -35,7 +35,7 @@ f·fill``):
 - ``chosen fill``: the fill that best predicts the held-out blobs, alone (no DDP);
 - ``chosen fill + share``: that fill, and the share of it that best predicts the blobs;
 - ``refined c=…``: DDP's fit as the target of the edge-aware solve ``complete`` runs at a photo's full size
-  (``method.full_resolution``: the bilateral solver guided by the image, confidence 1 on the valid input
+  (``classical.full_resolution``: the bilateral solver guided by the image, confidence 1 on the valid input
   and c on the fit in the holes, after the fit's own error on the valid pixels is carried into them);
   ``refined + f``: that (c = 0.01) with f of the mean fill mixed in after; ``f, refined``: f of the mean fill
   mixed into the fit first, then refined;
@@ -72,7 +72,7 @@ from ddp_lite.core.files import atomic_path, write_bytes_atomic  # noqa: E402
 from ddp_lite.method.complete import complete_depth  # noqa: E402
 from ddp_lite.method.config import FitConfig  # noqa: E402
 from ddp_lite.method.runtime.options import RunOptions  # noqa: E402
-from ddp_lite.method.full_resolution import SMOOTHNESS_STEREO, refine_full_resolution, refine_over_smoothness  # noqa: E402
+from ddp_lite.classical.full_resolution import SMOOTHNESS_STEREO, refine_full_resolution, refine_over_smoothness  # noqa: E402
 from ddp_lite.method.kit.blend import FILL_MEMBERS, best_fill_share, fill_holdout, trusted_depth  # noqa: E402
 from bench_real import table6_fills  # noqa: E402
 from ddp_lite.studies.real_suite import SUITE_HOLES, make_suite_case, suite_case_names  # noqa: E402
@@ -319,7 +319,7 @@ def stereo_grid(data, names, seeds, fits: Path, variant: str, size: str, out: Pa
     """How a stereo matcher's depth was chosen for: on the cases whose input is SGBM's, the solves of
     ``STEREO_GRID`` on the input without a rim of ``RIMS`` px (the fill read likewise), then ¼ of that fill;
     each over the best fill of the case, per half. Rows to ``out``."""
-    from ddp_lite.method.full_resolution import SMOOTHNESS_MEAN
+    from ddp_lite.classical.full_resolution import SMOOTHNESS_MEAN
     rows = []
     for seed in seeds:
         for name in names:

@@ -20,7 +20,7 @@ import: ``core`` (the data model and shared checks), ``world`` (synthetic scenes
 # documents) it. ``from ddp_lite import *`` gives exactly these; every other name is imported from its
 # own module (``from ddp_lite.method.paper.losses import ssim``).
 _FRONT_DOOR = {
-    "complete_depth": "method.complete", "DepthResult": "method.fit", "merge": "method.fit",
+    "complete_depth": "method.complete", "DepthResult": "method.result", "merge": "method.result",
     "FitConfig": "method.config", "RunOptions": "method.runtime.options", "VARIANTS": "method.paper.variants",
     "fit_image": "method.dip", "ImageResult": "method.dip",
     "get_profile": "method.profiles", "Profile": "method.profiles", "PROFILES": "method.profiles",

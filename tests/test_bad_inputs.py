@@ -48,7 +48,7 @@ from ddp_lite.method.coarse_to_fine import complete_depth_coarse_to_fine  # noqa
 from ddp_lite.method.config import FitConfig  # noqa: E402
 from ddp_lite.method.dip import fit_image  # noqa: E402
 from ddp_lite.method.complete import complete_depth  # noqa: E402
-from ddp_lite.method.fit import merge  # noqa: E402
+from ddp_lite.method.result import merge  # noqa: E402
 from ddp_lite.method.runtime.options import RunOptions  # noqa: E402
 from ddp_lite.core.views import View  # noqa: E402
 

@@ -34,7 +34,7 @@ from ddp_lite.method.paper.disparity import DisparityTransform  # noqa: E402
 from ddp_lite.method.config import FitConfig  # noqa: E402
 from ddp_lite.method.dip import fit_image  # noqa: E402
 from ddp_lite.method.complete import complete_depth  # noqa: E402
-from ddp_lite.method.fit import merge  # noqa: E402
+from ddp_lite.method.result import merge  # noqa: E402
 from ddp_lite.data.colmap import read_colmap, write_colmap  # noqa: E402
 from ddp_lite.data.formats import read_scene  # noqa: E402
 from ddp_lite.data.tum import read_tum, write_tum  # noqa: E402

@@ -128,7 +128,7 @@ def test_a_blend_of_the_kit_fit_the_paper_fit_and_the_fill_is_their_weighted_mea
 
 
 def test_the_photo_recipe_is_the_kit_fit_refined_then_the_kits_share_of_the_fill():
-    from ddp_lite.method.full_resolution import SMOOTHNESS_MEAN, refine_full_resolution
+    from ddp_lite.classical.full_resolution import SMOOTHNESS_MEAN, refine_full_resolution
     depth = tilted_plane(32, 40, slope=0.05)
     depth[8:20, 10:28] = np.nan
     rgb = np.random.default_rng(2).random(depth.shape + (3,)).astype(np.float32)
@@ -204,7 +204,7 @@ def test_a_stereo_photo_does_not_carry_a_wrong_rim_into_the_hole():
     # a matcher's rim: the valid pixels around the hole hold a nearer surface's depth (1.5 m on a 2 m
     # plane), as a stereo matcher's foreground fattening leaves them; the stereo photo reads past that rim
     # (the solves of SMOOTHNESS_STEREO and the fill on the trusted depth) and gives the rim back as given
-    from ddp_lite.method.full_resolution import SMOOTHNESS_STEREO, refine_full_resolution
+    from ddp_lite.classical.full_resolution import SMOOTHNESS_STEREO, refine_full_resolution
     truth = tilted_plane(28, 36, slope=0.02) + 1.0
     depth = truth.copy()
     depth[8:20, 10:26] = np.nan
@@ -238,7 +238,7 @@ def test_refine_does_not_keep_a_fit_that_ran_off_its_range_inside_a_hole():
     # disparity range): the solve starts from the fit clipped to the valid input's range, so the hole
     # comes back within the valid depth's range (unclipped, it stays at the far end of the disparity range)
     from dataclasses import replace
-    from ddp_lite.method.complete import refined
+    from ddp_lite.method.kit.combine import refined
     truth = tilted_plane(28, 36, slope=0.03) + 0.5
     depth = truth.copy()
     depth[8:20, 10:26] = np.nan

@@ -10,7 +10,7 @@ from ddp_lite.method.paper.nets import SkipNet, UNet
 from ddp_lite.method.complete import complete_depth
 from ddp_lite.method.paper.losses import disparity_loss, warp_loss
 from ddp_lite.method.dip import fit_image
-from ddp_lite.method.fit import merge
+from ddp_lite.method.result import merge
 from ddp_lite.method.runtime.options import RunOptions
 from ddp_lite.method.paper.warp import warp_to_reference
 from ddp_lite.method.stopping import PlateauStopper

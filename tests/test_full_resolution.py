@@ -1,11 +1,11 @@
-"""The full-resolution refinement (``ddp_lite.method.full_resolution``): valid pixels kept exactly, a blurred
+"""The full-resolution refinement (``ddp_lite.classical.full_resolution``): valid pixels kept exactly, a blurred
 target sharpened at a depth edge that is also a colour edge (judged against the analytic truth), inputs
 untouched, bad arguments refused. No DDP fit: the target is made here."""
 import numpy as np
 import pytest
 from scipy import ndimage
 
-from ddp_lite.method.full_resolution import REFINEMENTS, refine_full_resolution
+from ddp_lite.classical.full_resolution import REFINEMENTS, refine_full_resolution
 
 H, W, EDGE = 60, 80, 40  # two fronto-parallel planes meeting at column EDGE
 
@@ -114,7 +114,7 @@ def test_bad_arrays_refused():
 
 
 def test_the_mean_over_smoothness_is_the_disparity_mean_of_the_solves_and_keeps_the_input():
-    from ddp_lite.method.full_resolution import SMOOTHNESS_MEAN, refine_over_smoothness
+    from ddp_lite.classical.full_resolution import SMOOTHNESS_MEAN, refine_over_smoothness
     rgb, depth, truth, target = two_planes()
     depth[3, 5] = 1.2345678
     before = depth.copy()
@@ -130,7 +130,7 @@ def test_the_mean_over_smoothness_is_the_disparity_mean_of_the_solves_and_keeps_
 
 
 def test_the_mean_over_smoothness_of_one_plane_is_that_plane():
-    from ddp_lite.method.full_resolution import refine_over_smoothness
+    from ddp_lite.classical.full_resolution import refine_over_smoothness
     depth = np.full((40, 60), 2.5, np.float32)  # a fronto-parallel plane; the fit knows it too
     depth[10:30, 20:40] = np.nan
     rgb = np.random.default_rng(1).random((40, 60, 3)).astype(np.float32)
@@ -141,7 +141,7 @@ def test_the_mean_over_smoothness_of_one_plane_is_that_plane():
 @pytest.mark.parametrize("settings, match", [([], "settings"), ("abc", "settings"), ([(4.0,)], "settings"),
                                              ([(4.0, 0.0)], "lam"), ([(-1.0, 4.0)], "sigma_xy")])
 def test_the_mean_over_smoothness_refuses_bad_settings(settings, match):
-    from ddp_lite.method.full_resolution import refine_over_smoothness
+    from ddp_lite.classical.full_resolution import refine_over_smoothness
     rgb, depth, _, target = two_planes()
     with pytest.raises(ValueError, match=match):
         refine_over_smoothness(depth, rgb, target, settings=settings)

@@ -202,18 +202,21 @@ def test_each_part_of_the_method_imports_only_what_its_docstring_allows():
     assert breaches == []
 
 
+BELOW_THE_KIT = {"ddp_lite.method.stopping", "ddp_lite.method.result"}  # the fit's files the kit may use
+
+
 def test_the_methods_rooms_import_only_downward():
     """paper below runtime below kit below the fit's own files: the paper imports none of the rest, the
-    runtime only the paper, the kit of ``method/`` itself only the held-out pixels (``stopping``), which
-    import nothing of the kit and nothing of the fit above them."""
+    runtime only the paper, the kit of ``method/`` itself only the held-out pixels (``stopping``) and the
+    result type (``result``), which import nothing of the kit and nothing of the fit above them."""
     edges = graph()
     up = {"paper": {"runtime", "kit", "method"}, "runtime": {"kit", "method"}, "kit": {"method"}}
     breaches = [f"{importer} imports {target}" for importer, out in edges.items() for target in out
                 if part_of_method(importer) in up and part_of_method(target) in up[part_of_method(importer)]
-                and target != "ddp_lite.method.stopping"]
+                and target not in BELOW_THE_KIT]
     assert breaches == []
-    below_kit = {"ddp_lite.method.stopping"} | set(edges["ddp_lite.method.stopping"])
-    assert all(part_of_method(module) in ("paper", "runtime", None) for module in below_kit - {"ddp_lite.method.stopping"})
+    below_kit = set().union(*(edges[module] for module in BELOW_THE_KIT))
+    assert all(part_of_method(module) in ("paper", "runtime", None) for module in below_kit)
 
 
 def _ddp_lite_imports(source: str, importer: str | None = None, is_package: bool = False):
@@ -331,7 +334,8 @@ def test_the_fit_does_not_import_its_combiner():
     edges = graph()
     assert "ddp_lite.method.fit" in edges["ddp_lite.method.complete"]
     assert "ddp_lite.method.complete" not in edges["ddp_lite.method.fit"]
-    assert not {"ddp_lite.method.kit.blend", "ddp_lite.method.kit.ensemble"} & set(edges["ddp_lite.method.fit"])
+    assert not {"ddp_lite.method.kit.blend", "ddp_lite.method.kit.ensemble", "ddp_lite.method.kit.combine"} \
+        & set(edges["ddp_lite.method.fit"])
 
 
 def test_the_package_never_imports_the_downloader():

@@ -175,3 +175,35 @@ def test_a_config_and_its_fields_by_name_make_each_other(key):
     config = FitConfig.for_profile(profile, variant=variant, recipe=recipe, net=net)
     assert FitConfig(**config.flat()) == config
     assert list(config.flat()) == list(DEFAULTS)  # one flat order, section by section
+
+
+def test_a_profile_names_each_config_field_it_sets():
+    """The profile → config table is explicit: each field it names is a config field, and each value is the
+    profile's own (a rename on either side fails here, not in a copy that silently stops)."""
+    import dataclasses
+
+    from ddp_lite.method.config import SECTIONS
+    config_fields = {f.name for cls in SECTIONS.values() for f in dataclasses.fields(cls)}
+    for profile in PROFILES.values():
+        settings = profile.fit_settings("rgbd", "skip")
+        assert set(settings) <= config_fields
+        assert (settings["lr"], settings["lr_gamma"], settings["auto_stop"], settings["patience"],
+                settings["plateau_decays"], settings["eval_every"]) == (
+            profile.lr, profile.lr_gamma, profile.auto_stop, profile.patience, profile.plateau_decays, profile.eval_every)
+        assert settings["channels"] == profile.skip_channels and settings["net"] == "skip"
+
+
+def test_checking_a_fits_inputs_reads_no_environment(monkeypatch):
+    """A check is given its config; only the entry points read DDP_PROFILE / DDP_RECIPE (for config=None)."""
+    import numpy as np
+
+    from ddp_lite.method.input_checks import check_fit_inputs
+    depth = np.full((32, 32), 2.0, np.float32)
+    depth[8:16, 8:16] = np.nan
+    config = FitConfig(channels=(8, 16), lr=1e-2, iterations=2)
+    monkeypatch.setenv("DDP_PROFILE", "no-such-profile")
+    monkeypatch.setenv("DDP_RECIPE", "no-such-recipe")
+    inputs, checked = check_fit_inputs(None, depth, None, (), "d", config, None, None)
+    assert checked is config and inputs.depth.shape == (32, 32)
+    with pytest.raises(TypeError, match="config must be a FitConfig"):
+        check_fit_inputs(None, depth, None, (), "d", None, None, None)

@@ -16,7 +16,7 @@ from ..core.camera import Camera
 from ..method.paper.disparity import DisparityTransform
 from ..method.config import FitConfig
 from ..method.complete import complete_depth
-from ..method.fit import DepthResult
+from ..method.result import DepthResult
 from ..method.runtime.options import RunOptions
 from ..method.runtime.side_by_side import run_fits
 from .fusion import points_from_depth

@@ -12,7 +12,7 @@ The fit runs at a working size (``--max-side``, default the profile's longer sid
 completed depth is brought back to full size in disparity, in the holes only: the valid input
 pixels keep their exact values (``--raw``: the net's own output everywhere, without the share of a
 colour-guided fill the ``kit`` recipe mixes in), see ``ddp_lite.sequences.working_size``. The
-up-sampled fill is then sharpened at full size (``ddp_lite.method.full_resolution``): an edge-aware
+up-sampled fill is then sharpened at full size (``ddp_lite.classical.full_resolution``): an edge-aware
 solve guided by the full-size photo, pulled to the valid input (confidence 1) and to the fit in the
 holes (lower confidence), so that depth edges inside the holes follow the photo's edges instead of the
 working size's blur (``--no-refine``: up-sampling alone; ``--raw`` implies it). ``--depth-source stereo``
@@ -289,7 +289,7 @@ def _complete(args, writers, staged, start) -> int:
     from ..method.time_left import earliest_share, expected_share
     from ..core.checks import check_depth, check_same_units
     from ..method.paper.nets import check_input_size
-    from ..method.full_resolution import FULL_SIZE_SOLVE, refine_full_resolution
+    from ..classical.full_resolution import FULL_SIZE_SOLVE, refine_full_resolution
     from ..method.kit.blend import rim_width
     from ..sequences.working_size import fill_holes_at_full_size, shrink, working_shape
     from ..method.kit.recipes import get_recipe

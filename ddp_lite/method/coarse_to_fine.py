@@ -13,11 +13,13 @@ import torch
 from ..core.camera import Camera
 from .config import FitConfig
 from .paper.disparity import DisparityTransform
-from .complete import fill_heldout, held_out, refined, with_fill_share
-from .fit import DepthResult, check_run, fit_once, run_fit
+from .complete import fill_heldout, held_out, with_fill_share
+from .fit import check_run, fit_once, run_fit
 from .input_checks import check_fit_inputs
+from .kit.combine import refined
 from .paper.nets import make_input
 from .misplaced_arguments import names_misplaced_arguments
+from .result import DepthResult
 from .runtime.options import RunOptions
 
 __all__ = ["complete_depth_coarse_to_fine"]
@@ -102,6 +104,7 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
     if not 0.0 < float(coarse_fraction) < 1.0:
         raise ValueError(f"coarse_fraction must lie in (0, 1), got {coarse_fraction!r}")
     options = check_run(options)
+    config = FitConfig.for_profile(variant=variant) if config is None else config
     inputs, config = check_fit_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth, transform)
     blobs = fill_heldout(inputs.depth, config)  # held out of both stages to choose the fill's share
     seen = held_out(inputs, blobs)

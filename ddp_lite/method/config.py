@@ -22,7 +22,8 @@ recipes pass fields by their own names: ``FitConfig(lr=1e-2, smoothness=1.0)``, 
 Defaults are the paper's (supplement). A profile's sizes and schedules come from
 :meth:`FitConfig.for_profile`, the one place a :class:`~ddp_lite.method.profiles.Profile` becomes a config;
 what differs between the DDP variants comes from :mod:`ddp_lite.method.paper.variants`. The rules that
-tie two sections together are :meth:`FitConfig.validate`'s.
+tie two sections together are :meth:`FitConfig.validate`'s. The environment (``DDP_PROFILE``, ``DDP_RECIPE``)
+is read only where a profile or recipe is None (:meth:`FitConfig.for_profile`), never by a check.
 """
 from __future__ import annotations
 
@@ -40,7 +41,7 @@ from .kit.recipes import get_recipe
 from .kit.warp_terms import WarpConfig
 from .paper.config import MAX_SEED, PaperConfig
 from .paper.variants import get_variant
-from .profiles import Profile, get_profile
+from .profiles import get_profile
 from .runtime.device import Precision
 from .runtime.options import RUN_OPTIONS
 from .stopping import StoppingConfig
@@ -112,14 +113,15 @@ class FitConfig:
 
     @classmethod
     def for_profile(cls, profile=None, variant: str = "rgbd+warp", recipe=None, **overrides) -> "FitConfig":
-        """The config of a profile (name, :class:`Profile` or None for ``DDP_PROFILE``) for ``variant``,
-        running ``recipe`` (name, :class:`~ddp_lite.method.kit.recipes.Recipe` or None for ``DDP_RECIPE``; ``"kit"``,
-        the default, is the paper's losses plus the kit's additions at that profile, ``"paper"`` the
-        paper's method), then ``overrides``.
+        """The config of a profile (name, :class:`~ddp_lite.method.profiles.Profile` or None for
+        ``DDP_PROFILE``) for ``variant``, running ``recipe`` (name, :class:`~ddp_lite.method.kit.recipes.Recipe`
+        or None for ``DDP_RECIPE``; ``"kit"``, the default, is the paper's losses plus the kit's additions at
+        that profile, ``"paper"`` the paper's method), then ``overrides``.
 
-        The profile gives size and budget: every :class:`Profile` field that is also a FitConfig field
-        is copied, and three are derived: ``channels`` (the UNet's or the SkipNet's widths, by ``net``),
-        ``iterations`` (the variant's count) and ``lr_milestones`` (those the variant's run reaches).
+        The profile gives size and budget, the fields its :meth:`~ddp_lite.method.profiles.Profile.fit_settings`
+        names: its schedule and auto-stop as they are, and three derived: ``channels`` (the UNet's or the
+        SkipNet's widths, by ``net``), ``iterations`` (the variant's count) and ``lr_milestones`` (those the
+        variant's run reaches).
         The recipe gives the method: its :meth:`~ddp_lite.method.kit.recipes.Recipe.settings` at the profile's name.
 
         Example:
@@ -128,11 +130,7 @@ class FitConfig:
             (0.0, 'noise', 0.0)
         """
         profile = get_profile(profile)
-        iterations = profile.iterations_for(get_variant(variant))
-        net = overrides.get("net", "unet")
-        values = {name: getattr(profile, name) for name in _COPIED_FROM_PROFILE}
-        values.update(net=net, channels=profile.channels if net == "unet" else profile.skip_channels,
-                      iterations=iterations, lr_milestones=profile.milestones(iterations))
+        values = profile.fit_settings(get_variant(variant), overrides.get("net", "unet"))
         values.update(get_recipe(recipe).settings(profile.name))
         if not get_variant(variant).uses_rgb:  # a colour-guided fill or solve would bring colour into a depth-only result
             if values.get("refine") and "refine" not in overrides:  # the recipe's own solve: say that it is dropped
@@ -187,7 +185,3 @@ def _not_a_field(name: str, message: str) -> str:
         return message + f"; did you mean the run option {close[0]!r}? (options=RunOptions({close[0]}=...))"
     return message + f"; did you mean {close[0]!r}?"
 
-
-# the Profile fields for_profile copies as they are (channels, iterations, lr_milestones are derived)
-_COPIED_FROM_PROFILE = tuple(sorted({f.name for f in dataclasses.fields(Profile)} & set(FIELDS)
-                                    - {"channels", "iterations", "lr_milestones"}))

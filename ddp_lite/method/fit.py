@@ -5,30 +5,30 @@ arguments, :func:`check_run`): :func:`run_fit` builds the paper's loss
 (:mod:`ddp_lite.method.paper.total_loss`) with, when the config asks for them, the kit's hole terms
 (:mod:`ddp_lite.method.kit.hole_terms`) and warp term (:mod:`ddp_lite.method.kit.warp_terms`) as its
 arguments, joins the kit's net inputs (:mod:`ddp_lite.method.kit.net_inputs`), and hands it to the
-loop (:func:`ddp_lite.method.loop.run`). :func:`fit_once` is the two steps in one call. The kit's
-combinations of fits (an ensemble, the blend with the paper recipe's fit, a share of a classical fill)
-and :func:`~ddp_lite.method.complete.complete_depth`, the entry point, live in :mod:`ddp_lite.method.complete`,
-which calls this module, never the reverse.
+loop (:func:`ddp_lite.method.loop.run`). :func:`fit_once` is the two steps in one call. It returns a
+:class:`~ddp_lite.method.result.DepthResult`. The entry point,
+:func:`~ddp_lite.method.complete.complete_depth`, calls this module, never the reverse, and combines its fits
+(an ensemble, the blend with the paper recipe's fit, a share of a classical fill) with
+:mod:`ddp_lite.method.kit.combine`.
 """
 from __future__ import annotations
 
 import time
 import warnings
-from dataclasses import dataclass, field
 
 import numpy as np
 import torch
 
 from . import loop
-from ..core.checks import MIN_VALID_PIXELS, check_callback, check_depth, check_finite_output, unmask
+from ..core.checks import MIN_VALID_PIXELS, check_callback, check_finite_output
 from ..core.progress import FitBar
 from .config import FitConfig
 from .input_checks import FitInputs, check_fit_inputs
 from .kit.hole_terms import HoleTerms
 from .kit.net_inputs import fill_channel, image_channels, start_at
 from .kit.warp_terms import kit_warp_arguments
-from .paper.disparity import DisparityTransform
 from .paper.total_loss import PaperLoss
+from .result import DepthResult
 from .runtime.device import resolve_device
 from .runtime.memory import check_memory
 from .misplaced_arguments import names_misplaced_arguments
@@ -36,47 +36,8 @@ from .runtime.options import RunOptions, run_options
 from .runtime.tensors import to_tensor
 from .stopping import heldout_error_fn, holdout_mask
 
-__all__ = ["DepthResult", "merge", "check_run", "run_fit", "fit_once", "hole_errors_fn"]
+__all__ = ["check_run", "run_fit", "fit_once", "hole_errors_fn"]
 
-
-@dataclass
-class DepthResult:
-    """What :func:`~ddp_lite.method.complete.complete_depth` returns. Arrays are NumPy, (H, W) or (H, W, 3).
-
-    For the mean of several fits (``config.combination.ensemble > 1``, ``fits`` of them) ``iterations`` and
-    ``seconds`` are totals over the fits; ``history``, ``best_iteration`` and ``state`` are the
-    first fit's.
-    """
-
-    depth: np.ndarray  # metres, holes filled
-    disparity: np.ndarray  # [0, 1], see ``transform``
-    rgb: np.ndarray | None  # the net's colour output (None for depth only)
-    history: dict  # per-iteration loss terms; per-evaluation held-out and hole errors; lr_decay_iteration
-    transform: DisparityTransform
-    iterations: int  # iterations run
-    best_iteration: int  # the iteration whose output is returned
-    seconds: float
-    state: dict | None = field(default=None, repr=False)  # the net's final weights (CPU), for warm starts
-    fits: int = 1  # how many fits' disparities were averaged (config.combination.ensemble)
-
-    def merged(self, input_depth) -> np.ndarray:
-        """"SGM+DDP": the input where it is valid, this result in its holes."""
-        return merge(input_depth, self.depth)
-
-
-def merge(input_depth, ddp_depth) -> np.ndarray:
-    """(H, W) metres: ``input_depth`` where it is finite, ``ddp_depth`` in its holes ("SGM+DDP").
-
-    ``input_depth`` follows the kit's convention (NaN holes, a masked array's mask = holes); a 0 or
-    negative "hole" marker, or inf, is refused rather than kept as a depth."""
-    input_depth = check_depth(input_depth, "input_depth", min_valid=0)
-    ddp_depth = np.asarray(unmask(ddp_depth, "ddp_depth", holes=True))
-    if not (np.issubdtype(ddp_depth.dtype, np.floating) or np.issubdtype(ddp_depth.dtype, np.integer)):
-        raise TypeError(f"ddp_depth must be an (H, W) array of metres, got dtype {ddp_depth.dtype}")
-    ddp_depth = ddp_depth.astype(np.float32)
-    if input_depth.shape != ddp_depth.shape:
-        raise ValueError(f"input_depth {input_depth.shape} and ddp_depth {ddp_depth.shape} must have the same shape")
-    return np.where(np.isfinite(input_depth), input_depth, ddp_depth).astype(np.float32)
 
 def check_run(options, callback=None, init=None) -> RunOptions:
     """A run's own arguments, checked before any work: ``options`` (None → ``RunOptions()``), the ``callback``
@@ -98,6 +59,7 @@ def fit_once(rgb, depth, camera, neighbors, variant, config, *, options=None, gt
     """One fit (no ensemble, blend or fill): :func:`check_run` and
     :func:`~ddp_lite.method.input_checks.check_fit_inputs`, then :func:`run_fit`."""
     options = check_run(options, callback, init)
+    config = FitConfig.for_profile(variant=variant) if config is None else config
     inputs, config = check_fit_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth, transform)
     return run_fit(inputs, config, options, callback=callback, init=init, noise=noise)
 

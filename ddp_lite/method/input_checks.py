@@ -53,9 +53,10 @@ def _check_neighbors(neighbors) -> list[tuple[np.ndarray, Camera]]:
 def check_fit_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth, transform
                      ) -> tuple[FitInputs, FitConfig]:
     """Validate a depth fit's inputs before any work: (:class:`FitInputs`, the config), the checked and
-    converted values (``config`` None → the profile's; ``transform`` None → derived from the valid depth)."""
+    converted values (``transform`` None → derived from the valid depth). ``config`` must be a
+    :class:`FitConfig`: a check reads no environment, so an entry point that takes None builds the
+    profile's (``FitConfig.for_profile``, which reads ``DDP_PROFILE`` and ``DDP_RECIPE``) before calling this."""
     spec = get_variant(variant)
-    config = FitConfig.for_profile(variant=variant) if config is None else config
     if not isinstance(config, FitConfig):
         raise TypeError(f"config must be a FitConfig, got {type(config).__name__}")
     config.validate()

@@ -32,9 +32,8 @@ class Profile:
 
     The learning-rate schedule and auto-stop are budget, not method: they decide how many iterations a
     fit spends and are tuned to that count (the paper's 5e-5 schedule is for 16000; 1e-2 fills in a few
-    hundred), while what a fit optimises is the recipe's. A field named like a ``FitConfig`` field is
-    copied into the configs :meth:`FitConfig.for_profile` builds (``channels``, ``iterations`` and
-    ``lr_milestones`` are derived per variant and net); the others size scenes, tables and DIP."""
+    hundred), while what a fit optimises is the recipe's. :meth:`fit_settings` names the ``FitConfig``
+    fields it sets (the configs :meth:`FitConfig.for_profile` builds); the others size scenes, tables and DIP."""
 
     name: str
     # how big
@@ -62,6 +61,18 @@ class Profile:
     def milestones(self, iterations: int) -> tuple[int, ...]:
         """The learning-rate decay iterations a run of ``iterations`` reaches (paper depth-only: none)."""
         return tuple(m for m in self.lr_milestones if m < iterations)
+
+    def fit_settings(self, variant, net: str = "unet") -> dict:
+        """The ``FitConfig`` fields this profile sets for ``variant`` (a name or
+        :class:`~ddp_lite.method.paper.variants.Variant`) and ``net``, each named here, field by field: a
+        field renamed on either side fails loudly (here, or as ``FitConfig``'s unexpected field), never by a
+        copy that stops in silence. ``channels``, ``iterations`` and ``lr_milestones`` are derived: the
+        net's widths, the variant's count, the milestones that count reaches."""
+        iterations = self.iterations_for(variant)
+        return {"lr": self.lr, "lr_gamma": self.lr_gamma, "auto_stop": self.auto_stop, "patience": self.patience,
+                "plateau_decays": self.plateau_decays, "eval_every": self.eval_every,
+                "net": net, "channels": self.channels if net == "unet" else self.skip_channels,
+                "iterations": iterations, "lr_milestones": self.milestones(iterations)}
 
     def describe(self, recipe=None) -> str:
         """One line for a notebook's first cell: the size and budget. With ``recipe`` (a name or

@@ -13,7 +13,7 @@ and the views are fused into one point cloud (Fusibile; here ``fusion.fuse_depth
 2. **skip** the views the manifest records as done under the same key whose files are all there;
    everything else (never started, started but not finished, inputs or config changed) is redone;
 3. **fit** the rest through :func:`runner.run_jobs`: in-process (one-thread fits side by side, as
-   many as torch has threads: ``method.side_by_side``), or on Dask workers;
+   many as torch has threads: ``method.runtime.side_by_side``), or on Dask workers;
 4. **write**, per finished view, ``depth/<view>.npy`` (float32 metres, NaN where nothing is
    known), ``depth/<view>.png`` (16-bit millimetres, 0 = none; beyond 65.535 m → 0, counted in
    the manifest) and ``preview/<view>.png`` (colour, input, completed), each atomically, and only

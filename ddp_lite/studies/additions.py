@@ -14,7 +14,8 @@ import torch
 from ..classical.baselines import BASELINES
 from ..classical.stereo import pixel_disparity
 from ..method.config import FitConfig
-from ..method.complete import complete_depth, mixed_with_fill
+from ..method.complete import complete_depth
+from ..method.kit.combine import mixed_with_fill
 from ..method.runtime.options import RunOptions
 from ..method.runtime.side_by_side import run_side_by_side
 from ..method.profiles import get_profile

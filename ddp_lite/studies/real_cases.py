@@ -31,7 +31,8 @@ from scipy import ndimage
 from ..classical.baselines import BASELINES
 from ..evaluation.experiments import Case
 from ..method.config import FitConfig
-from ..method.complete import blend_members, blended_result, complete_depth, mixed_with_fill, refined
+from ..method.complete import complete_depth
+from ..method.kit.combine import blend_members, blended_result, mixed_with_fill, refined
 from ..classical.holes import random_holes
 from ..data.middlebury import load_middlebury, load_motorcycle
 from ..method.profiles import get_profile

@@ -87,7 +87,7 @@ class CombinationConfig(Settings):
     blend_fill: float | None = 0.0  # share of the input's colour-guided fill in the final disparity (0: none;
     # None: chosen on held-out blobs of the valid input)
     refine: bool = False  # the fit made sharp by an image-guided edge-aware solve toward it, before the fill's
-    # share is mixed in (method.full_resolution.refine_over_smoothness at the fit's own size; variants with colour)
+    # share is mixed in (classical.full_resolution.refine_over_smoothness at the fit's own size; variants with colour)
     depth_source: str = "clean"  # "stereo": a matcher's depth, the rim of its holes not read after the fit
 
     def validate(self) -> None:
@@ -102,6 +102,48 @@ class CombinationConfig(Settings):
             check_real(self.blend_weight, "config.blend_weight", 0.0, 1.0)
         if self.blend_fill is not None:
             check_real(self.blend_fill, "config.blend_fill", 0.0, 1.0, high_open=True)  # 1 would be the fill alone
+
+    def describe(self) -> str:
+        """What goes into the answer, as part of a recipe's one-line description (``kit.recipes.describe_method``);
+        "" for one fit."""
+        weight, fill = self.blend_weight, self.blend_fill
+        return ((f", mean of {self.ensemble} fits" if self.ensemble > 1 else "")
+                + (", made sharp by an image-guided bilateral solve toward the fit" if self.refine else "")
+                + ((", blended with the paper recipe's fit, " + ("weight from a held-out ring" if weight is None
+                   else f"weight {weight:g}")) if self.blend_paper else "")
+                + (", and with the input's colour-guided fill (colorization and bilateral solver, averaged), " + (
+                    "its share (0–0.5) chosen on held-out blobs of the valid depth" if fill is None
+                    else f"share {fill:.3g}") + " (not for depth-only)"
+                   if fill != 0 else ""))
+
+    def equation(self) -> str:
+        """The answer Ẑ from the fit Z in the equation a config optimises (``method.equation``), LaTeX: fits
+        and a fill blended, the fit made sharp first (:math:`\\mathcal{R}_I`, ``refine``); "" where Ẑ is Z."""
+        paper_fit, fill, refine = self.blend_paper, self.blend_fill, self.refine
+        if not (paper_fit or fill != 0 or refine):
+            return ""
+        w = self.blend_weight if paper_fit else 1.0
+        z, z_paper = "Z", "Z_{\\mathrm{paper}}"
+        if fill is None:  # the share chosen on held-out depth
+            fits = z if w == 1.0 else (f"(w^* {z} + (1 - w^*)\\,{z_paper})" if w is None else
+                                       f"({w:.3g}\\,{z} + {1 - w:.3g}\\,{z_paper})")
+            fits = f"\\mathcal{{R}}_I({fits})" if refine else fits
+            mix = f"(1 - f^*)\\,{fits} + f^*\\,\\mathrm{{fill}}(Z_{{\\mathrm{{in}}}})"
+        elif w is None:
+            mix = f"w^* {z} + (1 - w^*)\\,{z_paper}"
+            mix = f"\\mathcal{{R}}_I({mix})" if refine else mix
+            if fill > 0:
+                mix = f"{1 - fill:.3g}\\,({mix}) + {fill:.3g}\\,\\mathrm{{fill}}(Z_{{\\mathrm{{in}}}})"
+        elif refine:  # the solve acts on the fits' blend, then the fill is mixed in
+            fits = z if w == 1.0 else f"{w:.3g}\\,{z} + {1 - w:.3g}\\,{z_paper}"
+            mix = f"\\mathcal{{R}}_I({fits})"
+            if fill > 0:
+                mix = f"{1 - fill:.3g}\\,{mix} + {fill:.3g}\\,\\mathrm{{fill}}(Z_{{\\mathrm{{in}}}})"
+        else:
+            mix = " + ".join(f"{share:.3g}\\,{term}" for share, term in
+                             (((1 - fill) * w, z), ((1 - fill) * (1 - w), z_paper),
+                              (fill, "\\mathrm{fill}(Z_{\\mathrm{in}})")) if share > 0)
+        return mix
 
 
 def rim_width(source: str = "clean", scale: float = 1.0) -> int:

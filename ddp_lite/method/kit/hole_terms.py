@@ -39,6 +39,22 @@ class HoleConfig(Settings):
             if getattr(self, name) is not None:
                 check_real(getattr(self, name), f"config.{name}", 0.0)
 
+    def describe(self) -> str:
+        """These terms' part of a recipe's one-line description (``kit.recipes.describe_method``); "" if off."""
+        guide = {"grey": "|∇grey|", "rgb": "max over R, G, B of |∇I|", "structure": "|∇ structure of grey|"}
+        return ((f", hole curvature weight {self.smoothness:g}" if self.smoothness else "")
+                + (f", hole flatness weight {self.flatness:g}" if self.flatness else "")
+                + (f" (in enclosed holes only within {self.flatness_reach:g} px of valid depth)"
+                   if self.flatness and self.flatness_reach is not None else "")
+                + (f" (relaxed at colour edges by exp(-{self.smoothness_edge:g}·" + guide[self.edge_guide] + "))"
+                   if self.smoothness or self.flatness else ""))
+
+    def equation(self) -> list[str]:
+        """These terms of the loss a config optimises (``method.equation``), weighted, LaTeX; [] if off."""
+        return [f"{weight:g}\\,{term}" for weight, term in ((self.smoothness, "L^{\\mathrm{curv}}_{w}"),
+                                                           (self.flatness, "L^{\\mathrm{flat}}_{w}"),
+                                                           (self.affinity, "L^{\\mathrm{aff}}")) if weight > 0]
+
 
 class HoleTerms:
     """The kit's hole terms of one fit: ``add(disparity, total, terms)`` adds each that is on.

@@ -39,6 +39,26 @@ class NetInputConfig(Settings):
             check_real(getattr(self, name), f"config.{name}", 0.0)
         check_bool(self.fill_start, "config.fill_start")
 
+    def describe(self, noise_channels: int = 16) -> str:
+        """These inputs' part of a recipe's one-line description (``kit.recipes.describe_method``), with the
+        paper's ``noise_channels`` beside them; "" for the paper's input."""
+        parts = ["the pixel coordinates" + (" + noise" if noise_channels > 2 else "")
+                 if self.net_input == "meshgrid" else "noise"]
+        if self.image_input:
+            parts.append(f"the colour image (blurred, σ {self.image_blur:g} px; not for depth-only)")
+        return ", net input: " + " + ".join(parts) if parts != ["noise"] else ""
+
+    def equation(self, noise_channels: int, uses_rgb: bool) -> tuple[list[str], list[str]]:
+        """(the paper's inputs that stay, the kit's added ones) of the net in the equation a config optimises
+        (``method.equation``), LaTeX, with the paper's ``noise_channels``, for a variant that sees colour or not."""
+        in_paper = ["\\text{noise}"] if self.net_input != "meshgrid" or noise_channels > 2 else []
+        added = ["u, v"] if self.net_input == "meshgrid" else []
+        if uses_rgb and self.image_input > 0:
+            added.append(f"G_{{{self.image_blur:g}}} * I_{{\\mathrm{{in}}}}")
+        if self.fill_input > 0:
+            added.append("\\text{fill}(Z_{\\mathrm{in}})")
+        return in_paper, added
+
 
 def image_channels(image: torch.Tensor, scale: float = 1.0, blur: float = 1.0) -> torch.Tensor:
     """The colour image as extra input channels: ``scale ×`` ``image`` (1, 3, H, W) in [0, 1],

@@ -14,7 +14,7 @@ A profile (``ci``, ``class``, ``paper``; ``DDP_PROFILE``) sets the size and the 
   paper's method.
 - ``photo``: for real photographs, the ``kit`` fit without its hole terms (:data:`PHOTO_HOLE_TERMS`),
   made sharp by an image-guided edge-aware solve toward it (``refine``: the fast bilateral solver of
-  :mod:`ddp_lite.method.full_resolution` at the fit's own size, averaged over four smoothness settings),
+  :mod:`ddp_lite.classical.full_resolution` at the fit's own size, averaged over four smoothness settings),
   with the kit's share of the colour-guided fill: one fit, 0.92× the best fill of each case on the mean
   of the real suite's 61 cases over seeds 0-2, SGBM's depth declared a stereo matcher's
   (``docs/results.md``; how it was chosen: ``docs/studies/real_suite.md``). ``ddp-lite complete`` runs one such solve at the photo's full size instead.
@@ -29,9 +29,15 @@ what each addition bought on the quality suite (``benchmarks/bench_quality.py``)
 """
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 from ...core.checks import env_choice, named_choice
+from ..paper.config import PaperConfig
+from .blend import CombinationConfig
+from .hole_terms import HoleConfig
+from .net_inputs import NetInputConfig
+from .warp_terms import WarpConfig
 
 __all__ = ["Recipe", "RECIPES", "KIT_AT", "PHOTO_HOLE_TERMS", "ENV_VAR", "DEFAULT", "current_recipe_name",
            "get_recipe", "describe_method"]
@@ -98,9 +104,8 @@ KIT_AT = {
     "paper": {},  # at the paper's size, the paper's method
 }
 
-# on real scenes the kit's hole terms, chosen on rendered ones, hold the fit flatter than the scenes are: without
-# them photo's answer is 2.0 % better over 61 cases × seeds 0-2 (lower on 123 of 183; chosen on half A among off,
-# curvature off and half weight, confirmed on half B), though a border hole may now run away (docs/studies/real_suite.md)
+# on real scenes the kit's hole terms, chosen on rendered ones, hold the fit flatter than the scenes are: photo's
+# answer is better without them, though a border hole may now run away (the study: docs/studies/real_suite.md)
 PHOTO_HOLE_TERMS = dict(smoothness=0.0, flatness=0.0)
 
 RECIPES = {
@@ -136,50 +141,11 @@ def get_recipe(name: str | Recipe | None = None) -> Recipe:
     return named_choice(name, RECIPES, "recipe", current_recipe_name)
 
 
-def _describe_input(settings: dict) -> str:
-    """The net's input where it is not the paper's noise alone: ", net input: ..." or ""."""
-    parts = []
-    if settings.get("net_input", "noise") == "meshgrid":
-        parts.append("the pixel coordinates" + (" + noise" if settings.get("noise_channels", 16) > 2 else ""))
-    else:
-        parts.append("noise")
-    if settings.get("image_input", 0.0):
-        parts.append(f"the colour image (blurred, σ {settings.get('image_blur', 1.0):g} px; not for depth-only)")
-    return ", net input: " + " + ".join(parts) if parts != ["noise"] else ""
-
-
 def describe_method(settings: dict) -> str:
-    """What ``settings`` (as :meth:`Recipe.settings` gives) add to the paper's method, for one line
-    of a notebook's first cell: "" for the paper's method."""
-    smoothness, flatness = settings.get("smoothness", 0.0), settings.get("flatness", 0.0)
-    reach, edge = settings.get("flatness_reach"), settings.get("smoothness_edge", 10.0)
-    ensemble = settings.get("ensemble", 1)
-    return ((f", hole curvature weight {smoothness:g}" if smoothness else "")
-            + (f", hole flatness weight {flatness:g}" if flatness else "")
-            + (f" (in enclosed holes only within {reach:g} px of valid depth)"
-               if flatness and reach is not None else "")
-            + (f" (relaxed at colour edges by exp(-{edge:g}·"
-               + {"grey": "|∇grey|", "rgb": "max over R, G, B of |∇I|", "structure": "|∇ structure of grey|"}[
-                   settings.get("edge_guide", "grey")] + "))"
-               if smoothness or flatness else "")
-            + _describe_input(settings)
-            + (", the warp term only where the neighbour can see" if settings.get("warp_occlusion") else "")
-            + (", the warp term only where the images single out one depth" if settings.get("warp_confidence") else "")
-            + (f", the warp term only in the holes and within {settings['warp_reach']:g} px of them"
-               if settings.get("warp_reach") is not None else "")
-            + ({"census": ", the warp term on a soft census of 7×7 patches (not L1 + SSIM on intensities)",
-                "gradient": ", the warp term's L1 on the images' differences (not on intensities)",
-                "census+intensity": ", the warp term half L1 + SSIM on intensities, half a soft census of 7×7 patches at its size"}.get(
-                settings.get("warp_cost", "intensity"), ""))
-            + (", the warp term weighted by the image's change along each pixel's epipolar line"
-               if settings.get("warp_texture") else "")
-            + (", the warp term per pixel from the neighbour that agrees best (not their mean)"
-               if settings.get("warp_combine", "mean") == "min" else "")
-            + (f", mean of {ensemble} fits" if ensemble > 1 else "")
-            + (", made sharp by an image-guided bilateral solve toward the fit" if settings.get("refine") else "")
-            + ((", blended with the paper recipe's fit, " + ("weight from a held-out ring" if settings.get("blend_weight", 0.5) is None
-               else f"weight {settings.get('blend_weight', 0.5):g}")) if settings.get("blend_paper") else "")
-            + (", and with the input's colour-guided fill (colorization and bilateral solver, averaged), " + (
-                "its share (0–0.5) chosen on held-out blobs of the valid depth" if settings["blend_fill"] is None
-                else f"share {settings['blend_fill']:.3g}") + " (not for depth-only)"
-               if settings.get("blend_fill", 0.0) != 0 else ""))
+    """What ``settings`` (``FitConfig`` fields by name, as :meth:`Recipe.settings` gives) add to the paper's
+    method, for one line of a notebook's first cell: "" for the paper's method. Each kit section describes
+    itself (its ``describe()``), the fields ``settings`` leaves out at their defaults."""
+    def section(cls):
+        return cls(**{f.name: settings[f.name] for f in dataclasses.fields(cls) if f.name in settings})
+    return (section(HoleConfig).describe() + section(NetInputConfig).describe(section(PaperConfig).noise_channels)
+            + section(WarpConfig).describe() + section(CombinationConfig).describe())

@@ -67,6 +67,34 @@ class WarpConfig(Settings):
         if self.warp_reach is not None:
             check_real(self.warp_reach, "config.warp_reach", 0.0)
 
+    def describe(self) -> str:
+        """These changes' part of a recipe's one-line description (``kit.recipes.describe_method``); "" for
+        the paper's warp term."""
+        costs = {"census": ", the warp term on a soft census of 7×7 patches (not L1 + SSIM on intensities)",
+                 "gradient": ", the warp term's L1 on the images' differences (not on intensities)",
+                 "census+intensity": ", the warp term half L1 + SSIM on intensities, half a soft census of 7×7 "
+                                     "patches at its size"}
+        return ((", the warp term only where the neighbour can see" if self.warp_occlusion else "")
+                + (", the warp term only where the images single out one depth" if self.warp_confidence else "")
+                + (f", the warp term only in the holes and within {self.warp_reach:g} px of them"
+                   if self.warp_reach is not None else "")
+                + costs.get(self.warp_cost, "")
+                + (", the warp term weighted by the image's change along each pixel's epipolar line"
+                   if self.warp_texture else "")
+                + (", the warp term per pixel from the neighbour that agrees best (not their mean)"
+                   if self.warp_combine == "min" else ""))
+
+    def equation(self) -> list[str]:
+        """These changes as the marks on L_warp in the equation a config optimises (``method.equation``);
+        [] for the paper's warp term."""
+        return [name for name, on in (("visible", self.warp_occlusion),  # kit.visibility
+                                      ("confident", self.warp_confidence),  # kit.warp_confidence
+                                      ("holes", self.warp_reach is not None),  # warp_region
+                                      (self.warp_cost, self.warp_cost != "intensity"),  # kit.warp_cost
+                                      ("textured", self.warp_texture),
+                                      ("min over views", self.warp_combine == "min"))
+                if on]
+
 
 def warp_region(fit_mask: torch.Tensor, reach: float) -> torch.Tensor:
     """(1, 1, H, W) bool: the pixels the warp term keeps with ``WarpConfig.warp_reach`` (the kit's, not the

@@ -1,6 +1,6 @@
 """One fit-cache entry on disk: a result as an ``.npz`` that cannot run code, and the checks made on reading it.
 
-A result (a :class:`~ddp_lite.method.fit.DepthResult`, an :class:`~ddp_lite.method.dip.ImageResult`,
+A result (a :class:`~ddp_lite.method.result.DepthResult`, an :class:`~ddp_lite.method.dip.ImageResult`,
 the arrays, tensors, histories and transform inside them) is split into its arrays, stored as the
 ``.npz`` members ``a0``, ``a1``, ..., and its structure, stored as JSON in the member ``meta`` next to
 the key of the call that made it. Reading uses ``np.load(allow_pickle=False)``: an object array or a

@@ -13,10 +13,9 @@ with t = the valid input where it is valid (confidence c = 1) and the up-sampled
 surfaces of one colour and stops at colour edges, while the fit still decides where no valid pixel of
 the same surface is near. The valid input pixels are returned exactly as given; only the holes change.
 
-Solvers (``method``), chosen by ``benchmarks/bench_full_resolution.py`` (``class``, seed 0, hole RMSE in
-disparity px over Motorcycle's blob and SGBM holes and six Middlebury HalfSize scenes: the default is
-0.78–1.07× the best classical fill of each case, mean 0.95, and 0.75–0.96× the plain up-sampled fit; the
-residual step is what takes it below the best fill; ``fgs`` and ``guided-filter`` reach 1.03 and 1.04):
+Solvers (``method``), chosen by ``benchmarks/bench_full_resolution.py`` on Motorcycle's blob and SGBM
+holes and six Middlebury HalfSize scenes (the figures: ``docs/studies/real_suite.md``; the residual step
+is what takes the default below the best classical fill):
 
 - ``bilateral-solver`` (default, c = 0.01 in the holes): Barron & Poole's fast bilateral solver with the
   confidence c, on the kit's bilateral grid (``classical.guided_fills``).
@@ -26,18 +25,17 @@ residual step is what takes it below the best fill; ``fgs`` and ``guided-filter`
   window's affine colour model (``classical.guided_fills``): local (window ``radius``).
 
 :func:`refine_over_smoothness` averages the bilateral solver's solve over four (``sigma_xy``, ``lam``)
-settings: the ``refine`` of the ``photo`` recipe at a fit's own size, where it is 1.6 % better than the
-one default solve over the real suite (three seeds). At a photo's full size the one solve is as good
-(0.95× against 0.96× the best fill on the eight cases above), at a quarter of the time, and ``complete``
-runs it.
+settings: the ``refine`` of the ``photo`` recipe at a fit's own size, where it beats the one default
+solve on the real suite. At a photo's full size the one solve is as good, at a quarter of the time, and
+``complete`` runs it (the studies: ``docs/studies/real_suite.md``).
 """
 from __future__ import annotations
 
 import cv2
 import numpy as np
 
-from ..classical.depth_fills import check_fill_input, nearest_values
-from ..classical.holes import hole_rim
+from .depth_fills import check_fill_input, nearest_values
+from .holes import hole_rim
 from ..core.checks import check_int
 
 __all__ = ["REFINEMENTS", "SMOOTHNESS_MEAN", "SMOOTHNESS_STEREO", "FULL_SIZE_SOLVE", "refine_full_resolution",
@@ -74,7 +72,7 @@ def _fgs(guide: np.ndarray, values: np.ndarray, confidence: np.ndarray, lam: flo
 def _guided(image: np.ndarray, values: np.ndarray, confidence: np.ndarray, radius: int, eps: float):
     """Confidence-weighted guided filter: per window, the affine colour model fitted to c-weighted
     targets (``guided_fills.masked_guided_filter``), averaged over the windows covering a pixel."""
-    from ..classical.guided_fills import masked_guided_filter
+    from .guided_fills import masked_guided_filter
     q, _ = masked_guided_filter(image, values, confidence, int(radius), float(eps))
     return q
 
@@ -84,7 +82,7 @@ def _bilateral_system(image: np.ndarray, lam: float, sigma_xy: float, sigma_luma
     (S vertices × pixels, lam · the bistochastic grid Laplacian); one per image and setting, for every solve on it."""
     from scipy import sparse
 
-    from ..classical.guided_fills import bilateral_grid, bistochastic
+    from .guided_fills import bilateral_grid, bistochastic
     S, blur = bilateral_grid(np.clip(image, 0.0, 1.0), sigma_xy, sigma_luma, sigma_chroma)
     _, n = bistochastic(S, blur)
     Dn = sparse.diags(n)
@@ -208,8 +206,7 @@ SMOOTHNESS_MEAN = ((4.0, 4.0), (4.0, 16.0), (8.0, 4.0), (8.0, 16.0))
 # (textureless, occluded) and whose rim is often off: twice the reach (chosen and confirmed likewise)
 SMOOTHNESS_STEREO = ((8.0, 4.0), (8.0, 16.0), (16.0, 4.0), (16.0, 16.0))
 # the one solve `ddp-lite complete` runs at a photo's full size, by the depth's source: twice the reach for a
-# stereo matcher's (on Motorcycle's SGBM depth at full size, with its rim not read: 0.945x the best full-size fill,
-# against 1.002x for the default solve on all of it)
+# stereo matcher's, its rim not read (the study on Motorcycle's SGBM depth: docs/studies/real_suite.md)
 FULL_SIZE_SOLVE = {"clean": {}, "stereo": {"sigma_xy": 16.0}}
 
 
