@@ -229,8 +229,9 @@ FULL_SIZE_SOLVE = {"clean": {"sigma_xy": 8.0}, "stereo": {"sigma_xy": 16.0}}
 
 def smoothness_at(settings, shape, tuned_short_side: int = SMOOTHNESS_TUNED_SHORT_SIDE) -> tuple:
     """(sigma_xy, lam) ``settings`` stated at the size they were tuned on (short side up to ``tuned_short_side``
-    px) → the same for an image of ``shape`` (H, W, ...): each reach a :class:`~ddp_lite.core.pixel_lengths.PixelLength`,
-    the tuned px up to that size, in proportion to the short side above it.
+    px) → the same for an image of ``shape`` (H, W, ...): each reach a
+    :class:`~ddp_lite.core.pixel_lengths.PixelLength`, the tuned px up to that size, in proportion to the short
+    side above it.
 
     Example:
         >>> smoothness_at(((4.0, 4.0), (8.0, 16.0)), (276, 346))

@@ -124,8 +124,8 @@ def rim_width(source: str = "clean", scale: float = 1.0, shape=None) -> int:
     the short side above it (None: the tuned px), × ``scale`` for an image ``scale`` times that size, rounded.
 
     Example:
-        >>> rim_width("stereo", shape=(138, 173)), rim_width("stereo", shape=(276, 346)), rim_width("clean", shape=(276, 346))
-        (1, 2, 0)
+        >>> rim_width("stereo", shape=(138, 173)), rim_width("stereo", shape=(276, 346))
+        (1, 2)
     """
     pixels = RIM_DISTRUST[check_choice(source, "source", DEPTH_SOURCES)]
     at = PixelLength(float(pixels), TUNED_SHORT_SIDE).at(shape) if shape is not None else pixels
