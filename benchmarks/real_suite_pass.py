@@ -10,15 +10,15 @@ eighth size holds at twice it.
         --variants rgbd --out /tmp/smoke.jsonl                      # a smoke slice: one case
 
 ``DIR``: a folder of Middlebury scenes with ground truth (``python -m data_fetch fetch middlebury2005|2006|2014q``).
-The cases are ``ddp_lite.studies.real_suite``'s at ``--size``: every hole kind (``--kinds``: some) (the 20 % blobs, a sensor's
-small dropouts, SGBM's holes, the truth's occlusions) on each scene of the half (``SUITE_HALF_A``, or the rest), and
-DepthComp's strokes on Plastic, that kind's one case, whichever the half. It prints the expected wall time first
-(from the recorded time of a quarter-size fit, then from its own fits as they finish), fits a case's recipes side
-by side (one torch thread each; ``--threads``), appends one JSON row per fill or fit to ``--out`` (default
-``benchmarks/results/real_suite_quarter.jsonl``, as the eighth size's ``real_suite_eighth.jsonl``; at the eighth
-size ``real_suite_eighth_kit_photo.jsonl``) and skips what
-is there, so a stopped run resumes where it stopped; then ``bench_real.py``'s per-scene table and means per hole
-kind. Asserts nothing.
+The cases are ``ddp_lite.studies.real_suite``'s at ``--size``: every hole kind (the 20 % blobs, a sensor's small
+dropouts, SGBM's holes, the truth's occlusions; ``--kinds``: some of them) on each scene of the half
+(``SUITE_HALF_A``, or the rest), and DepthComp's strokes on Plastic, that kind's one case, whichever the half. It
+prints the expected wall time first (from the recorded time of a quarter-size fit, then from its own fits as they
+finish), fits a case's recipes side by side (one torch thread each; ``--threads``), appends one JSON row per fill
+or fit to ``--out`` (default ``benchmarks/results/real_suite_quarter.jsonl``, as the eighth size's
+``real_suite_eighth.jsonl``; at the eighth size ``real_suite_eighth_kit_photo.jsonl``) and skips what is there, so
+a stopped run resumes where it stopped; then ``bench_real.py``'s per-scene table and means per hole kind. Asserts
+nothing.
 """
 from __future__ import annotations
 
@@ -50,7 +50,8 @@ def pass_cases(data, half: str, kinds=SUITE_HOLES) -> list[str]:
 def default_out(size: str) -> Path:
     """Where a pass at ``size`` keeps its rows: ``real_suite_quarter.jsonl``; at the eighth size a file of its own
     (``real_suite_eighth.jsonl`` holds the earlier recipes' rows)."""
-    return bench_real.RESULTS / ("real_suite_quarter.jsonl" if size == "quarter" else f"real_suite_{size}_kit_photo.jsonl")
+    name = "real_suite_quarter.jsonl" if size == "quarter" else f"real_suite_{size}_kit_photo.jsonl"
+    return bench_real.RESULTS / name
 
 
 def main() -> None:

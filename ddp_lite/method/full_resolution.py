@@ -213,7 +213,8 @@ def refine_full_resolution(depth, rgb, target, method: str = "bilateral-solver",
 # suite (115-138 rows); a larger image gets their reach in proportion (core.pixel_lengths)
 SMOOTHNESS_TUNED_SHORT_SIDE = 138
 # the bilateral solver's (sigma_xy px at that size, lam) whose solves `refine_over_smoothness` averages: chosen on
-# half the real suite's scenes at its working size (~160×140) and confirmed on the other half (docs/studies/real_suite.md)
+# half the real suite's scenes at its working size (~160×140) and confirmed on the other half
+# (docs/studies/real_suite.md)
 SMOOTHNESS_MEAN = ((4.0, 4.0), (4.0, 16.0), (8.0, 4.0), (8.0, 16.0))
 # ... for a stereo matcher's depth, whose holes lie where the image gave the matcher too little to go on
 # (textureless, occluded) and whose rim is often off: twice the reach (chosen and confirmed likewise)
