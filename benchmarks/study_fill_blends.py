@@ -517,6 +517,8 @@ def per_case(warp_rows: Path, rgbd_rows: Path, photo_rows: tuple[Path, Path] | N
               f"{best6[5:] + f' {fills[best6]:.3f}':<22}" + "".join(cells))
     for kind in list(SUITE_HOLES) + ["all"]:
         overs = [means[recipe, v][kind] for recipe, v, _ in columns]  # per column: (over best, over Table 6) per case
+        if not overs[0]:  # a hole kind these rows do not have
+            continue
         cells = [f"{np.mean([o[0] for o in over]):.2f} ({np.mean([o[1] for o in over]):.2f})".rjust(22) for over in overs]
         print(f"{'mean: ' + kind + f' (n={len(overs[0])})':<87}" + "".join(cells))
 
