@@ -31,6 +31,7 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import torch  # noqa: E402
 
 import bench_real  # noqa: E402
+from _common import check_rows_out, data_root, parse_args, positive_int, seed_int  # noqa: E402
 from ddp_lite.method.profiles import PROFILES  # noqa: E402
 from ddp_lite.studies.real_suite import SUITE_HOLES, SUITE_SIZES, suite_case_names, suite_half  # noqa: E402
 
@@ -54,9 +55,10 @@ def default_out(size: str) -> Path:
     return bench_real.RESULTS / name
 
 
-def main() -> None:
+def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--data", required=True, metavar="DIR", help="a folder of Middlebury scenes with ground truth")
+    parser.add_argument("--data", required=True, type=data_root, metavar="DIR",
+                        help="a folder of Middlebury scenes with ground truth")
     parser.add_argument("--half", choices=("A", "B", "all"), default="A",
                         help="the scenes: half A (chosen on), half B (confirmed on) or all of them")
     parser.add_argument("--size", choices=sorted(SUITE_SIZES), default="quarter", help="the pooled size of the scenes")
@@ -64,37 +66,34 @@ def main() -> None:
     parser.add_argument("--cases", nargs="+", metavar="SCENE/HOLES", help="only these cases of the pass")
     parser.add_argument("--recipes", nargs="+", default=list(RECIPES), metavar="RECIPE")
     parser.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=VARIANTS)
-    parser.add_argument("--seeds", nargs="+", type=int, default=list(SEEDS))
+    parser.add_argument("--seeds", nargs="+", type=seed_int, default=list(SEEDS))
     parser.add_argument("--profile", default="class", choices=sorted(PROFILES))
-    parser.add_argument("--threads", type=int, default=2, help="torch threads: fits side by side, one thread each")
+    parser.add_argument("--threads", type=positive_int, default=2,
+                        help="torch threads: fits side by side, one thread each")
     parser.add_argument("--out", type=Path, help="the rows file (default: results/real_suite_quarter.jsonl, or "
                         "real_suite_eighth_kit_photo.jsonl)")
     parser.add_argument("--report", action="store_true", help="print the tables of --out and stop")
-    args = parser.parse_args()
-    args.out = args.out or default_out(args.size)
-    if args.threads < 1:
-        parser.error(f"--threads must be a positive integer, got {args.threads}")
-    if any(seed < 0 for seed in args.seeds):
-        parser.error(f"--seeds must be non-negative integers, got {args.seeds}")
-    if args.out.is_dir():
-        parser.error(f"--out must be a file (JSON lines), got the folder {args.out}")
-    if not args.report:
+    def check(args):  # every argument before any work: a ValueError naming the option is a usage error
+        args.out = args.out or default_out(args.size)
+        check_rows_out(args.out)
+        if args.report:
+            return
         for recipe in args.recipes:
             try:
-                bench_real.recipe_config(args.profile, VARIANTS[0], recipe, 0)
-            except (ValueError, TypeError, SyntaxError) as error:
-                parser.error(f"--recipes: {recipe!r}: {error}")
-        try:
-            names = pass_cases(args.data, args.half, args.kinds)
-        except ValueError as error:
-            parser.error(f"--data: {error}")
+                bench_real.recipe_config(args.profile, VARIANTS[0], recipe, 0).validate()
+            except (ValueError, TypeError) as error:
+                raise ValueError(f"--recipes: {recipe!r}: {error}") from None
+        args.names = pass_cases(args.data, args.half, args.kinds)
         if args.cases:
-            unknown = sorted(set(args.cases) - set(names))
+            unknown = sorted(set(args.cases) - set(args.names))
             if unknown:
-                parser.error(f"--cases: not in the {args.half} pass under {args.data}: {unknown}")
-            names = [n for n in names if n in set(args.cases)]
+                raise ValueError(f"--cases: not in the half {args.half} pass under {args.data}: {unknown}")
+            args.names = [n for n in args.names if n in set(args.cases)]
+    args = parse_args(parser, argv, check)
+    if not args.report:
         torch.set_num_threads(args.threads)
-        bench_real.run(args.data, args.size, args.recipes, args.variants, args.seeds, args.out, args.profile, names)
+        bench_real.run(args.data, args.size, args.recipes, args.variants, args.seeds, args.out, args.profile,
+                       args.names)
     bench_real.report(args.out)
 
 

@@ -27,9 +27,10 @@ def test_a_half_holds_its_scenes_on_every_kind_and_the_one_case_kind(tmp_path):
 
 def test_the_expected_time_counts_the_fits_left_two_at_a_time_at_the_measured_seconds():
     names = ["Art/blobs", "Art/sgbm", "Dolls/blobs"]
-    rows = [dict(case="Art/blobs", method="linear", variant=None, seed=None, size="quarter", px=1.0, seconds=30.0),
-            dict(case="Art/blobs", method="DDP kit", variant="rgbd", seed=0, size="quarter", px=1.0, seconds=100.0),
-            dict(case="Art/blobs", method="DDP photo", variant="rgbd", seed=0, size="quarter", px=1.0, seconds=100.0)]
+    fit = dict(case="Art/blobs", variant="rgbd", seed=0, size="quarter", profile="class", px=1.0, seconds=100.0)
+    rows = [dict(case="Art/blobs", method="linear", variant=None, seed=None, size="quarter", profile=None, px=1.0,
+                 seconds=30.0), dict(fit, method="DDP kit"), dict(fit, method="DDP photo"),
+            dict(fit, method="DDP kit", seed=1, profile="ci", seconds=5.0)]  # another profile's fit: not reused
     line = bench_real.expected_time(names, "quarter", ["kit", "photo"], ["rgbd"], [0, 1], rows, "class")
     # by hand: 6 case-seeds less the one done = 5 runs of 2 plain fits (photo fits on its own), side by side at
     # 100 s a fit (this pass's own median) = 1000 s; fills of the 2 cases not filled at 30 s = 60 s; 1060 s
