@@ -3,7 +3,7 @@
 eighth size holds at twice it.
 
     python benchmarks/real_suite_pass.py --data DIR                 # quarter size, half A (the scenes chosen on)
-    python benchmarks/real_suite_pass.py --data DIR --half B        # the other half, to confirm on
+    python benchmarks/real_suite_pass.py --data DIR --half b        # the other half, to confirm on
     python benchmarks/real_suite_pass.py --data DIR --report        # the tables from the rows so far
     python benchmarks/real_suite_pass.py --data DIR --size eighth --half all --kinds dropouts   # the new kind, eighth
     python benchmarks/real_suite_pass.py --data DIR --profile ci --threads 1 --cases Art/dropouts --seeds 0 \\
@@ -59,8 +59,9 @@ def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", required=True, type=data_root, metavar="DIR",
                         help="a folder of Middlebury scenes with ground truth")
-    parser.add_argument("--half", choices=("A", "B", "all"), default="A",
-                        help="the scenes: half A (chosen on), half B (confirmed on) or all of them")
+    parser.add_argument("--half", type=lambda text: {"a": "A", "b": "B"}.get(text.lower(), text),
+                        choices=("A", "B", "all"), default="A",
+                        help="the scenes: half a (chosen on), half b (confirmed on) or all of them")
     parser.add_argument("--size", choices=sorted(SUITE_SIZES), default="quarter", help="the pooled size of the scenes")
     parser.add_argument("--kinds", nargs="+", choices=SUITE_HOLES, default=list(SUITE_HOLES), help="the hole kinds")
     parser.add_argument("--cases", nargs="+", metavar="SCENE/HOLES", help="only these cases of the pass")
