@@ -32,12 +32,16 @@ import numpy as np
 from ddp_lite.classical import baselines
 from ddp_lite.method.config import FitConfig
 from ddp_lite.method.runtime.options import RunOptions
-from ddp_lite.studies.real_cases import _fit_reusing, _plain_fits
+from ddp_lite.studies.real_cases import _fit_reusing, _plain_fits, _planned
 from ddp_lite.studies.real_suite import SUITE_HOLES, make_suite_case, suite_case_names
 from _common import RowsFile, read_rows, recipe_overrides
 
 RESULTS = Path(__file__).resolve().parent / "results"
-SECONDS_PER_FIT = {"eighth": 45.0, "quarter": 240.0}  # one class fit on one core, nothing else running (Xeon, AMX; eighth measured, quarter estimated)
+SECONDS_PER_FIT = {"eighth": 45.0, "quarter": 240.0}  # one class fit on one core, when no fit of that size is recorded
+# two fits side by side on two cores, one thread each, against one alone: a case's pair 80 s, one fit 45 s (eighth
+# size, docs/studies/real_suite.md)
+SIDE_BY_SIDE = 80.0 / 45.0
+FILLS_PER_CASE = 5.0  # s, every fill of one eighth-size case (median of the 61 cases of real_suite_eighth.jsonl: 4.8)
 _TABLE6_FALLBACK = ("linear", "cubic", "telea", "guided-filter")
 
 
@@ -82,12 +86,7 @@ def run(data, size: str, recipes, variants, seeds, out: Path, profile: str = "cl
     fill_key = lambda name, method: dict(case=name, method=method, variant=None, seed=None, size=size, profile=None)  # noqa: E731
     fit_key = lambda name, recipe, variant, seed: dict(case=name, method=f"DDP {recipe}", variant=variant,  # noqa: E731
                                                        seed=seed, size=size, profile=profile)
-    fits_left = sum(1 for n in names for v in variants for s in seeds
-                    if any(not rows.done(fit_key(n, r, v, s)) for r in recipes))
-    plain = len([r for r in recipes if not (r == "photo" and "kit" in recipes)])  # photo refines the kit fit
-    expected = fits_left * plain * SECONDS_PER_FIT[size] / max(1, min(2, plain))
-    print(f"{len(names)} cases, {fits_left} case-variant-seed runs of {plain} fits left: expect about "
-          f"{expected / 60:.0f} min on 2 cores ({profile}, {size}); rows to {out}", flush=True)
+    print(expected_time(names, size, recipes, variants, seeds, rows.rows, profile) + f"; rows to {out}", flush=True)
     start = time.perf_counter()
     try:
         for name in names:
@@ -120,6 +119,54 @@ def run(data, size: str, recipes, variants, seeds, out: Path, profile: str = "cl
     finally:
         rows.close()
     print(f"done in {(time.perf_counter() - start) / 60:.1f} min", flush=True)
+
+
+def _recorded_fit_seconds(size: str) -> list[float]:
+    """The seconds of the single ``class`` fits recorded at ``size`` (``study_fill_blends.py fit``: one kit fit
+    alone on one thread, rows ``results/fill_blends_<size>*.jsonl``)."""
+    seconds = []
+    for path in sorted(RESULTS.glob(f"fill_blends_{size}*.jsonl")):
+        seconds += [r["fit_seconds"] for r in map(json.loads, path.read_text().splitlines()) if r.get("fit_seconds")]
+    return seconds
+
+
+def expected_time(names, size: str, recipes, variants, seeds, rows: list[dict], profile: str = "class") -> str:
+    """One line: the cases, the runs and fits left (not in ``rows``), and the wall time they should take on two
+    cores: per case-variant-seed its plain fits (``real_cases._planned``: ``photo`` fits on its own) two at a
+    time, each as long as the median fit of ``rows`` at this size (this pass's own, as it ran) or, before there
+    is one, of the single fits recorded at ``size`` (:func:`_recorded_fit_seconds`) slowed by ``SIDE_BY_SIDE``;
+    plus every fill of a case not yet filled, as long as the median case's fills in ``rows``, or ``FILLS_PER_CASE``
+    at eighth size (4× the pixels, 4× the time, at quarter)."""
+    done = {(r["case"], r["method"], r["variant"], r["seed"]) for r in rows
+            if r.get("size") == size and r.get("profile") == profile}  # what run reuses (ROW_FIELDS)
+    plain = {v: len(_planned([recipe_config(profile, v, r, 0) for r in recipes])) for v in variants}
+    runs = [(n, v, s) for n in names for v in variants for s in seeds
+            if any((n, f"DDP {r}", v, s) not in done for r in recipes)]
+    fits = sum(plain[v] for _, v, _ in runs)
+    own = [r["seconds"] for r in rows if r["variant"] is not None and (r["case"], r["method"], r["variant"], r["seed"])
+           in done and r.get("seconds")]
+    recorded = _recorded_fit_seconds(size)
+    if own:  # bench_real's rows hold a run's wall time over its fits: per fit, side by side
+        per_fit, source = float(np.median(own)), f"the median of this pass's {len(own)} fits"
+    elif recorded:
+        per_fit = float(np.median(recorded)) * SIDE_BY_SIDE / 2
+        source = f"{np.median(recorded):.0f} s a {size}-size class fit alone (median of {len(recorded)} recorded)"
+    else:
+        per_fit, source = SECONDS_PER_FIT[size] * SIDE_BY_SIDE / 2, f"{SECONDS_PER_FIT[size]:.0f} s a fit (assumed)"
+    pairs = sum(-(-plain[v] // 2) for _, v, _ in runs)  # each run's fits two at a time
+    fit_seconds = pairs * 2 * per_fit
+    filled = {r["case"] for r in rows if r["variant"] is None and r.get("size") == size}
+    fill_case = defaultdict(float)
+    for r in rows:
+        if r["variant"] is None and r.get("size") == size:
+            fill_case[r["case"]] += r.get("seconds", 0.0)
+    per_case = (float(np.median(list(fill_case.values()))) if fill_case
+                else FILLS_PER_CASE * (4 if size == "quarter" else 1))
+    fill_seconds = per_case * sum(1 for n in names if n not in filled)
+    hours = (fit_seconds + fill_seconds) / 3600
+    return (f"{len(names)} cases, {len(runs)} case-variant-seed runs ({fits} fits) left: expect about {hours:.1f} h on "
+            f"2 cores ({profile}, {size}; {per_fit:.0f} s a fit side by side, from {source}; "
+            f"{fill_seconds / 60:.0f} min of fills)")
 
 
 def refill(data, size: str, out: Path) -> None:

@@ -75,12 +75,13 @@ from ddp_lite.method.runtime.options import RunOptions  # noqa: E402
 from ddp_lite.classical.full_resolution import SMOOTHNESS_STEREO, refine_full_resolution, refine_over_smoothness  # noqa: E402
 from ddp_lite.method.kit.blend import FILL_MEMBERS, best_fill_share, fill_holdout, trusted_depth  # noqa: E402
 from bench_real import table6_fills  # noqa: E402
-from ddp_lite.studies.real_suite import SUITE_HOLES, make_suite_case, suite_case_names  # noqa: E402
+from ddp_lite.studies.real_suite import (SUITE_HALF_A, SUITE_HOLES, make_suite_case, suite_case_names,  # noqa: E402
+                                         suite_half)
 from _common import (check_configs, check_output_folder, check_rows_out, data_root, existing_file,  # noqa: E402
                      parse_args, positive_int, read_rows, seed_int)
 
 RESULTS = Path(__file__).resolve().parent / "results"
-HALF_A = ("Art", "Dolls", "Moebius", "Baby1", "Baby3", "Bowling2", "Adirondack", "Jadeplant", "Pipes", "Playtable")
+HALF_A = SUITE_HALF_A  # the scenes rules are chosen on (ddp_lite.studies.real_suite)
 SHARES = tuple(round(0.1 * k, 1) for k in range(11))
 KIT_SHARE = 0.25
 REFINE_CONFIDENCES = (0.01, 0.1)
@@ -94,7 +95,7 @@ SOLVE_MEANS = {"mean of 4 solves": ((4.0, 4.0), (4.0, 16.0), (8.0, 4.0), (8.0, 1
 
 def half(case: str) -> str:
     """"A" or "B": the half of the suite the case's scene is in."""
-    return "A" if case.split("/")[0] in HALF_A else "B"
+    return suite_half(case)
 
 
 def held_out_input(case, seed: int) -> tuple[np.ndarray, np.ndarray]:
@@ -516,6 +517,8 @@ def per_case(warp_rows: Path, rgbd_rows: Path, photo_rows: tuple[Path, Path] | N
               f"{best6[5:] + f' {fills[best6]:.3f}':<22}" + "".join(cells))
     for kind in list(SUITE_HOLES) + ["all"]:
         overs = [means[recipe, v][kind] for recipe, v, _ in columns]  # per column: (over best, over Table 6) per case
+        if not overs[0]:  # a hole kind these rows do not have
+            continue
         cells = [f"{np.mean([o[0] for o in over]):.2f} ({np.mean([o[1] for o in over]):.2f})".rjust(22) for over in overs]
         print(f"{'mean: ' + kind + f' (n={len(overs[0])})':<87}" + "".join(cells))
 

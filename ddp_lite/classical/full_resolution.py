@@ -28,6 +28,12 @@ is what takes the default below the best classical fill):
 settings: the ``refine`` of the ``photo`` recipe at a fit's own size, where it beats the one default
 solve on the real suite. At a photo's full size the one solve is as good, at a quarter of the time, and
 ``complete`` runs it (the studies: ``docs/studies/real_suite.md``).
+
+The solves' reach (``sigma_xy``) is tuned in pixels at one size: at a fit's own size on the eighth-size real
+suite (``SMOOTHNESS_TUNED_SHORT_SIDE``), at a photo's full size on ≤ 555-row photos
+(``FULL_SIZE_TUNED_SHORT_SIDE``). On a larger image the kit's steps scale it with the short side
+(:func:`smoothness_at`, :func:`full_size_solve`), so the solve reaches as far across the surfaces there;
+:func:`refine_full_resolution` itself takes pixels as given.
 """
 from __future__ import annotations
 
@@ -37,8 +43,10 @@ import numpy as np
 from .depth_fills import check_fill_input, nearest_values
 from .holes import hole_rim
 from ..core.checks import check_int
+from ..core.pixel_lengths import PixelLength
 
-__all__ = ["REFINEMENTS", "SMOOTHNESS_MEAN", "SMOOTHNESS_STEREO", "FULL_SIZE_SOLVE", "refine_full_resolution",
+__all__ = ["REFINEMENTS", "SMOOTHNESS_MEAN", "SMOOTHNESS_STEREO", "SMOOTHNESS_TUNED_SHORT_SIDE", "FULL_SIZE_SOLVE",
+           "FULL_SIZE_TUNED_SHORT_SIDE", "smoothness_at", "full_size_solve", "refine_full_resolution",
            "refine_over_smoothness", "hole_confidence_map"]
 
 REFINEMENTS = ("fgs", "bilateral-solver", "guided-filter")
@@ -199,15 +207,47 @@ def refine_full_resolution(depth, rgb, target, method: str = "bilateral-solver",
     return np.where(kept, array, 1.0 / solved).astype(np.float32)
 
 
-# the bilateral solver's (sigma_xy px, lam) whose solves `refine_over_smoothness` averages: chosen on half the
-# real suite's scenes at its working size (~160×140) and confirmed on the other half (docs/studies/real_suite.md)
+# the largest short side (px) of the images the solves at a fit's own size were chosen on: the eighth-size real
+# suite (115-138 rows); a larger image gets their reach in proportion (core.pixel_lengths)
+SMOOTHNESS_TUNED_SHORT_SIDE = 138
+# the bilateral solver's (sigma_xy px at that size, lam) whose solves `refine_over_smoothness` averages: chosen on
+# half the real suite's scenes at its working size (~160×140) and confirmed on the other half
+# (docs/studies/real_suite.md)
 SMOOTHNESS_MEAN = ((4.0, 4.0), (4.0, 16.0), (8.0, 4.0), (8.0, 16.0))
 # ... for a stereo matcher's depth, whose holes lie where the image gave the matcher too little to go on
 # (textureless, occluded) and whose rim is often off: twice the reach (chosen and confirmed likewise)
 SMOOTHNESS_STEREO = ((8.0, 4.0), (8.0, 16.0), (16.0, 4.0), (16.0, 16.0))
-# the one solve `ddp-lite complete` runs at a photo's full size, by the depth's source: twice the reach for a
-# stereo matcher's, its rim not read (the study on Motorcycle's SGBM depth: docs/studies/real_suite.md)
-FULL_SIZE_SOLVE = {"clean": {}, "stereo": {"sigma_xy": 16.0}}
+# the largest short side (px) of the photos the full-size solve was chosen on (bench_full_resolution.py:
+# Motorcycle 500×741, the 2005/2006 scenes at HalfSize, 555 rows)
+FULL_SIZE_TUNED_SHORT_SIDE = 555
+# the one solve `ddp-lite complete` runs at a photo's full size, by the depth's source (sigma_xy px at that size):
+# twice the reach for a stereo matcher's, its rim not read (the study on Motorcycle's SGBM depth:
+# docs/studies/real_suite.md)
+FULL_SIZE_SOLVE = {"clean": {"sigma_xy": 8.0}, "stereo": {"sigma_xy": 16.0}}
+
+
+def smoothness_at(settings, shape, tuned_short_side: int = SMOOTHNESS_TUNED_SHORT_SIDE) -> tuple:
+    """(sigma_xy, lam) ``settings`` stated at the size they were tuned on (short side up to ``tuned_short_side``
+    px) → the same for an image of ``shape`` (H, W, ...): each reach a
+    :class:`~ddp_lite.core.pixel_lengths.PixelLength`, the tuned px up to that size, in proportion to the short
+    side above it.
+
+    Example:
+        >>> smoothness_at(((4.0, 4.0), (8.0, 16.0)), (276, 346))
+        ((8.0, 4.0), (16.0, 16.0))
+    """
+    return tuple((PixelLength(float(sigma_xy), tuned_short_side).at(shape), lam) for sigma_xy, lam in settings)
+
+
+def full_size_solve(source: str, shape) -> dict:
+    """The bilateral solver's settings ``ddp-lite complete`` runs at a photo's full size ``shape`` (H, W, ...) for
+    a ``source``'s depth (``FULL_SIZE_SOLVE``; its reach scaled by :func:`smoothness_at` above the size it was
+    tuned on, ``FULL_SIZE_TUNED_SHORT_SIDE``)."""
+    if source not in FULL_SIZE_SOLVE:
+        raise ValueError(f"source must be one of {tuple(FULL_SIZE_SOLVE)}, got {source!r}")
+    settings = FULL_SIZE_SOLVE[source]
+    (sigma_xy, _), = smoothness_at(((settings["sigma_xy"], None),), shape, FULL_SIZE_TUNED_SHORT_SIDE)
+    return {**settings, "sigma_xy": sigma_xy}
 
 
 def refine_over_smoothness(depth, rgb, target, settings=SMOOTHNESS_MEAN, rim: int = 0) -> np.ndarray:

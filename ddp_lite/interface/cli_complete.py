@@ -18,7 +18,8 @@ holes (lower confidence), so that depth edges inside the holes follow the photo'
 working size's blur (``--no-refine``: up-sampling alone; ``--raw`` implies it). ``--depth-source stereo``
 (a stereo matcher's depth): the fill and the solves do not read the rim of its holes (1 px at the working
 size, as many at full size as it is times larger; ``kit.blend.rim_width``) and the solve reaches twice as
-far (``full_resolution.FULL_SIZE_SOLVE``). The ``photo`` recipe's own
+far (``full_resolution.FULL_SIZE_SOLVE``; its reach grows with a photo's short side above 555 px,
+``full_resolution.full_size_solve``). The ``photo`` recipe's own
 solve (``refine``) is this one, so it runs once, at full size, not also at the working size (on six
 Middlebury scenes and Motorcycle at full size that costs: 1.05× the best fill against 0.95×), and ``complete``
 keeps the ``kit`` recipe by default: without its hole terms, as ``photo`` fits on the real suite, the full-size
@@ -289,7 +290,7 @@ def _complete(args, writers, staged, start) -> int:
     from ..method.time_left import earliest_share, expected_share
     from ..core.checks import check_depth, check_same_units
     from ..method.paper.nets import check_input_size
-    from ..classical.full_resolution import FULL_SIZE_SOLVE, refine_full_resolution
+    from ..classical.full_resolution import full_size_solve, refine_full_resolution
     from ..method.kit.blend import rim_width
     from ..sequences.working_size import fill_holes_at_full_size, shrink, working_shape
     from ..method.kit.recipes import get_recipe
@@ -352,8 +353,8 @@ def _complete(args, writers, staged, start) -> int:
               flush=True)
         started = time.perf_counter()
         filled = refine_full_resolution(depth, rgb, fill_holes_at_full_size(depth, result.depth, raw=True),
-                                        rim=rim_width(args.depth_source, scale=depth.shape[1] / shape[1]),
-                                        **FULL_SIZE_SOLVE[args.depth_source])  # a matcher's rim not read
+                                        rim=rim_width(args.depth_source, scale=depth.shape[1] / shape[1], shape=shape),
+                                        **full_size_solve(args.depth_source, depth.shape))  # a matcher's rim not read
         refine_seconds = time.perf_counter() - started
     else:
         filled = fill_holes_at_full_size(depth, result.depth, raw=args.raw)

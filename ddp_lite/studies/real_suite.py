@@ -7,6 +7,9 @@ in it adds the paper's own holes on Plastic. Hole kinds (``SUITE_HOLES``):
 
 - ``depthcomp``: DepthComp's own Table 6 holes (Plastic only);
 - ``blobs``: DepthComp-style smooth blobs, 20 % of the pixels, one fixed pattern (seed 1);
+- ``dropouts``: a depth sensor's dropouts, many small blobs (:func:`dropout_holes`): 2–5 % of the pixels (the
+  share drawn per scene, seeded by its name), each blob blurred over 1 % of the short side, cut at the scene's
+  own size and pooled like every mask, so each size sees the same holes, as large a share of the image;
 - ``sgbm``: the input is OpenCV SGBM's own depth on the scene's stereo pair (view1–view5, im0–im1), holes
   where it gives no answer: the real stereo holes;
 - ``occlusion``: the ground truth with holes where the stereo partner does not see the reference
@@ -15,21 +18,30 @@ in it adds the paper's own holes on Plastic. Hole kinds (``SUITE_HOLES``):
 Each scene is pooled by the integer factor that brings it nearest a size's pixel count (``SUITE_SIZES``:
 ``eighth`` ≈ 140×160 of a 2005/2006 scene, to iterate on; ``quarter`` ≈ 280×320, to confirm). The warp
 loss's neighbours are view0 and view2 of the rail (the paper's N = 2), or the right view of a 2014 pair.
+Studies choose on one half of the scenes and confirm on the other (``SUITE_HALF_A``, :func:`suite_half`).
 """
 from __future__ import annotations
 
+import zlib
 from pathlib import Path
 
 import numpy as np
 
 from ..data.middlebury_rail import ground_truth_occlusion, is_2014_folder, is_rail_folder, load_middlebury_scene
+from ..classical.holes import random_holes
 from ..data.samples import read_depthcomp_holes
 from .real_cases import RealCase, make_real_case
 
-__all__ = ["SUITE_HOLES", "SUITE_SIZES", "MOTORCYCLE", "find_scenes", "suite_case_names", "make_suite_case",
-           "pooling_factor"]
+__all__ = ["SUITE_HOLES", "SUITE_SIZES", "SUITE_HALF_A", "MOTORCYCLE", "DROPOUT_SHARES", "DROPOUT_BLOB",
+           "find_scenes", "suite_case_names", "suite_half", "make_suite_case", "pooling_factor", "dropout_holes"]
 
-SUITE_HOLES = ("depthcomp", "blobs", "sgbm", "occlusion")
+SUITE_HOLES = ("depthcomp", "blobs", "dropouts", "sgbm", "occlusion")
+# the scenes studies choose on; the rest (Books, Laundry, Reindeer, Baby2, Bowling1, Plastic, ArtL, Piano, Playroom,
+# Motorcycle) confirm: each half holds 2005, 2006 and 2014 scenes
+SUITE_HALF_A = ("Art", "Dolls", "Moebius", "Baby1", "Baby3", "Bowling2", "Adirondack", "Jadeplant", "Pipes",
+                "Playtable")
+DROPOUT_SHARES = (0.02, 0.05)  # the share of the pixels a sensor's dropouts cover: drawn in this range per scene
+DROPOUT_BLOB = 0.01  # their blobs' blur scale, a fraction of the short side (a few px across at the eighth size)
 SUITE_SIZES = {"eighth": 160 * 140, "quarter": 320 * 280}  # target pixels of a pooled scene
 MOTORCYCLE = "Motorcycle"  # scikit-image's pair, always in the suite
 DEPTHCOMP_FILE = "plastic-disp-hole.png"
@@ -62,7 +74,8 @@ def _depthcomp_file(root) -> Path | None:
 
 def suite_case_names(root) -> list[str]:
     """The suite's case names ``scene/holes``, hole kind by hole kind: Plastic with ``depthcomp`` when the
-    hole file is under ``root``, then every scene of ``root`` and Motorcycle with ``blobs``, ``sgbm``, ``occlusion``."""
+    hole file is under ``root``, then every scene of ``root`` and Motorcycle with ``blobs``, ``dropouts``, ``sgbm``,
+    ``occlusion``."""
     scenes = list(find_scenes(root)) + [MOTORCYCLE]
     names = []
     for holes in SUITE_HOLES:  # hole kind by hole kind: a run stopped part-way has covered every scene once
@@ -71,6 +84,29 @@ def suite_case_names(root) -> list[str]:
                 continue
             names.append(f"{scene}/{holes}")
     return names
+
+
+def suite_half(name: str) -> str:
+    """"A" or "B": the half of the suite a case ``scene/holes`` (or a scene's name) is in (``SUITE_HALF_A``)."""
+    return "A" if name.split("/")[0] in SUITE_HALF_A else "B"
+
+
+def dropout_holes(shape, scene_name: str) -> np.ndarray:
+    """(H, W) bool, True = hole: a depth sensor's dropouts on a scene of full size ``shape`` (H, W): small smooth
+    blobs (``classical.holes.random_holes``, blur ``DROPOUT_BLOB`` of the short side) covering a share in
+    ``DROPOUT_SHARES`` drawn for ``scene_name``, seeded by the name (the same holes on every run and machine).
+
+    Example:
+        >>> holes = dropout_holes((555, 695), "Art")
+        >>> 0.02 <= float(holes.mean()) <= 0.05, dropout_holes((555, 695), "Art").tolist() == holes.tolist()
+        (True, True)
+    """
+    H, W = (int(n) for n in shape)
+    seed = zlib.crc32(scene_name.encode())
+    low, high = DROPOUT_SHARES
+    share = low + (high - low) * float(np.random.default_rng(seed).random())
+    cut, _ = random_holes(np.ones((H, W), np.float32), fraction=share, seed=seed, blob_size=DROPOUT_BLOB * min(H, W))
+    return np.isnan(cut)
 
 
 def pooling_factor(shape, size: str = "eighth") -> int:
@@ -94,7 +130,12 @@ def make_suite_case(root, name: str, size: str = "eighth") -> RealCase:
         kind = {"blobs": "blobs-1"}.get(holes, holes)
         if holes == "depthcomp":
             raise ValueError("name: DepthComp's holes exist for Plastic only")
-        case = make_real_case(kind, factor=factor, scene=load_motorcycle())
+        motorcycle = load_motorcycle()
+        if holes == "dropouts":
+            case = make_real_case(holes, factor, motorcycle,
+                                  hole_mask=dropout_holes(motorcycle[0].depth.shape, scene_name))
+        else:
+            case = make_real_case(kind, factor=factor, scene=motorcycle)
     else:
         folders = find_scenes(root)
         if scene_name not in folders:
@@ -110,6 +151,8 @@ def make_suite_case(root, name: str, size: str = "eighth") -> RealCase:
             case = make_real_case(holes, factor, scene, hole_mask=read_depthcomp_holes(hole_file, scene.size))
         elif holes == "occlusion":
             case = make_real_case(holes, factor, scene, hole_mask=ground_truth_occlusion(folder))
+        elif holes == "dropouts":
+            case = make_real_case(holes, factor, scene, hole_mask=dropout_holes(scene[0].depth.shape, scene_name))
         else:
             case = make_real_case({"blobs": "blobs-1"}.get(holes, holes), factor, scene)
     case.name = name

@@ -48,6 +48,12 @@ cannot tell. With ``"stereo"`` the steps after the fit (the fill mixed in, the `
 read the valid pixels within :data:`RIM_DISTRUST` px of a hole (:func:`trusted_depth`); the answer keeps
 them as given.
 
+Lengths scale with the image: every pixel setting here was tuned on images whose short side was at most
+:data:`TUNED_SHORT_SIDE` px (the eighth-size real suite, the ``class`` profile), holds there and grows with the
+short side above it (:class:`~ddp_lite.core.pixel_lengths.PixelLength`): the rim's width (:func:`rim_width`) and
+the bilateral solver's reach in the fill mixed in (:func:`fill_member_settings`). The held-out ring and blobs
+are fractions of the image already (width min(H, W)/48, blobs blurred over min(H, W)/24, 5 % of the pixels).
+
 Their settings, with the size of an ensemble (:mod:`ddp_lite.method.kit.ensemble`), the other way to
 combine fits, are :class:`CombinationConfig`; :mod:`ddp_lite.method.complete` applies them.
 """
@@ -59,9 +65,11 @@ import numpy as np
 from scipy import ndimage
 
 from ...core.checks import check_bool, check_choice, check_int, check_real
+from ...core.pixel_lengths import PixelLength
 from ...core.settings import Settings
 
-__all__ = ["CombinationConfig", "DEPTH_SOURCES", "RIM_DISTRUST", "rim_width", "trusted_depth", "BLEND_WEIGHTS", "FILL_SHARES",
+__all__ = ["CombinationConfig", "DEPTH_SOURCES", "RIM_DISTRUST", "TUNED_SHORT_SIDE", "FILL_MEMBER_LENGTHS",
+           "fill_member_settings", "rim_width", "trusted_depth", "BLEND_WEIGHTS", "FILL_SHARES",
            "validation_ring", "best_weight", "ring_width", "fill_disparity", "FILL_MEMBERS", "fill_holdout", "best_fill_share"]
 
 BLEND_WEIGHTS = (0.0, 0.25, 0.5, 0.75, 1.0)  # the kit fit's weight; 0 is the paper's fit alone
@@ -72,9 +80,15 @@ FILL_HOLDOUT = 0.05  # the share of the valid pixels held out to choose it
 # in three of five cases and colorization in two, and their mean lets the share grow without costing the
 # rendered scenes (docs/studies/real_data.md)
 FILL_MEMBERS = ("colorization", "bilateral-solver")
+# the largest short side (px) of the images the steps after the fit were tuned on (the eighth-size real suite,
+# 115-138 rows; the class profile's 96×128): their pixel settings below hold there and scale with the short side
+# above it (core.pixel_lengths)
+TUNED_SHORT_SIDE = 138
 # where the input depth came from → the px of valid rim around each hole the steps after the fit do not read
 RIM_DISTRUST = {"clean": 0, "stereo": 1}
 DEPTH_SOURCES = tuple(RIM_DISTRUST)
+# the px settings of the fills in FILL_MEMBERS when the kit mixes them in (their own defaults as classical fills)
+FILL_MEMBER_LENGTHS = {"bilateral-solver": {"sigma_xy": 8.0}}
 
 
 @dataclass(frozen=True)
@@ -146,17 +160,25 @@ class CombinationConfig(Settings):
         return mix
 
 
-def rim_width(source: str = "clean", scale: float = 1.0) -> int:
-    """The px of valid rim around each hole that the steps after the fit do not read of a ``source``'s depth:
-    ``RIM_DISTRUST[source]``, × ``scale`` rounded for an image ``scale`` times the working size."""
-    return int(round(RIM_DISTRUST[check_choice(source, "source", DEPTH_SOURCES)] * check_real(scale, "scale", 1.0)))
+def rim_width(source: str = "clean", scale: float = 1.0, shape=None) -> int:
+    """The px of valid rim around each hole that the steps after the fit do not read of a ``source``'s depth
+    on an image of ``shape`` (H, W, ...): ``RIM_DISTRUST[source]`` up to ``TUNED_SHORT_SIDE``, in proportion to
+    the short side above it (None: the tuned px), × ``scale`` for an image ``scale`` times that size, rounded.
+
+    Example:
+        >>> rim_width("stereo", shape=(138, 173)), rim_width("stereo", shape=(276, 346))
+        (1, 2)
+    """
+    pixels = RIM_DISTRUST[check_choice(source, "source", DEPTH_SOURCES)]
+    at = PixelLength(float(pixels), TUNED_SHORT_SIDE).at(shape) if shape is not None else pixels
+    return int(round(at * check_real(scale, "scale", 1.0)))
 
 
 def trusted_depth(depth: np.ndarray, source: str = "clean", scale: float = 1.0) -> np.ndarray:
     """``depth`` (H, W) metres, NaN holes, with the valid pixels within :func:`rim_width` px of a hole
     (4-connected steps; ``classical.holes.hole_rim``) made holes too: what the steps after the fit read of a
-    ``source``'s depth. A copy; ``depth`` itself where nothing is distrusted, or where too little valid depth
-    would be left.
+    ``source``'s depth (the rim's width for ``depth``'s own size, × ``scale``). A copy; ``depth`` itself where
+    nothing is distrusted, or where too little valid depth would be left.
 
     Example:
         >>> depth = np.ones((5, 5), np.float32); depth[2, 2] = np.nan
@@ -164,7 +186,7 @@ def trusted_depth(depth: np.ndarray, source: str = "clean", scale: float = 1.0) 
         (5, 1)
     """
     from ...classical.holes import hole_rim
-    rim = hole_rim(np.isfinite(depth), rim_width(source, scale))
+    rim = hole_rim(np.isfinite(depth), rim_width(source, scale, np.shape(depth)))
     return np.where(rim, np.nan, depth).astype(depth.dtype) if rim.any() else depth
 
 
@@ -236,8 +258,21 @@ def fill_disparity(depth: np.ndarray, rgb: np.ndarray, transform) -> np.ndarray:
     from ...classical.baselines import BASELINES
 
     inverse = 1.0 / np.asarray(depth, np.float64)  # (H, W) 1/m, NaN in the holes
-    filled = np.mean([BASELINES[name](inverse, rgb) for name in FILL_MEMBERS], axis=0, dtype=np.float64)
+    filled = np.mean([BASELINES[name](inverse, rgb, **fill_member_settings(name, inverse.shape))
+                      for name in FILL_MEMBERS], axis=0, dtype=np.float64)
     return np.asarray(transform.to_disparity(1.0 / filled), np.float32)
+
+
+def fill_member_settings(name: str, shape) -> dict:
+    """The px settings of the fill ``name`` (one of ``FILL_MEMBERS``) mixed in on an image of ``shape`` (H, W, ...):
+    ``FILL_MEMBER_LENGTHS`` up to ``TUNED_SHORT_SIDE``, in proportion to the short side above it.
+
+    Example:
+        >>> fill_member_settings("bilateral-solver", (276, 346)), fill_member_settings("colorization", (276, 346))
+        ({'sigma_xy': 16.0}, {})
+    """
+    return {key: PixelLength(pixels, TUNED_SHORT_SIDE).at(shape)
+            for key, pixels in FILL_MEMBER_LENGTHS.get(name, {}).items()}
 
 
 def fill_holdout(valid: np.ndarray, seed: int = 0) -> np.ndarray:

@@ -18,7 +18,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ...classical.full_resolution import SMOOTHNESS_MEAN, SMOOTHNESS_STEREO, refine_over_smoothness
+from ...classical.full_resolution import SMOOTHNESS_MEAN, SMOOTHNESS_STEREO, refine_over_smoothness, smoothness_at
 from ...core.checks import MIN_VALID_PIXELS
 from ..result import DepthResult
 from .blend import best_weight, fill_disparity, rim_width, trusted_depth, validation_ring
@@ -74,7 +74,8 @@ def refined(result: DepthResult, depth: np.ndarray, rgb: np.ndarray, source: str
     fast bilateral solver: confidence 1 on the valid input ``depth`` (H, W) metres, NaN holes, and 0.01 on
     the fit in the holes, after the fit's own error on the valid pixels is carried into them), guided by
     ``rgb`` (H, W, 3) in [0, 1], averaged over four smoothness settings (``refine_over_smoothness``;
-    ``SOLVE_SETTINGS[source]``). A ``"stereo"`` ``source``'s rim is not read (``kit.blend.rim_width``).
+    ``SOLVE_SETTINGS[source]``, their reach scaled to ``depth``'s size: ``full_resolution.smoothness_at``). A
+    ``"stereo"`` ``source``'s rim is not read (``kit.blend.rim_width``, for ``depth``'s size).
     The fit is first clipped to the valid input's depth range: a fit can run off to the end of its
     disparity range inside a hole while it matches every valid pixel (seen on the real suite:
     ``docs/studies/real_suite.md``), and the solve would keep that. The valid input comes back as given;
@@ -82,7 +83,8 @@ def refined(result: DepthResult, depth: np.ndarray, rgb: np.ndarray, source: str
     A fit blurs depth edges a few pixels wide; the solve puts them on the image's colour edges."""
     transform = result.transform
     target = np.clip(result.depth, np.nanmin(depth), np.nanmax(depth))  # (H, W) metres
-    sharp = refine_over_smoothness(depth, rgb, target, SOLVE_SETTINGS[source], rim=rim_width(source))  # (H, W) metres
+    sharp = refine_over_smoothness(depth, rgb, target, smoothness_at(SOLVE_SETTINGS[source], depth.shape),
+                                   rim=rim_width(source, shape=depth.shape))  # (H, W) metres
     disparity = np.asarray(transform.to_disparity(sharp), np.float32)
     return replace(result, disparity=disparity, depth=transform.to_depth(disparity).astype(np.float32),
                    history={**result.history, "refined": True})
