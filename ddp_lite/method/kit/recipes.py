@@ -39,11 +39,14 @@ from .hole_terms import HoleConfig
 from .net_inputs import NetInputConfig
 from .warp_terms import WarpConfig
 
-__all__ = ["Recipe", "RECIPES", "KIT_AT", "PHOTO_HOLE_TERMS", "ENV_VAR", "DEFAULT", "current_recipe_name",
-           "get_recipe", "describe_method"]
+__all__ = ["Recipe", "RECIPES", "KIT_AT", "PHOTO_HOLE_TERMS", "ENV_VAR", "DEFAULT", "FOR_PHOTOGRAPHS",
+           "current_recipe_name", "get_recipe", "describe_method"]
 
 ENV_VAR = "DDP_RECIPE"
 DEFAULT = "kit"
+# The recipe the kit recommends for real photographs: the best of the recipes on the real suite's cases
+# (docs/real_suite.md). What shows the kit's answer on real scenes (notebook 06's Table 6) reads it here.
+FOR_PHOTOGRAPHS = "photo"
 
 
 @dataclass(frozen=True)
