@@ -37,19 +37,21 @@ $(PY):
 	$(PYTHON) -m venv $(VENV)
 
 # torch goes first and pinned: anything that pulls a newer torch downloads a multi-GB CUDA build.
-# Byte-compiling the 2.6 GB stack is about half of the install; pip does it on one core, so it is
-# skipped there and done on all cores afterwards. It must be done: with PYTHONDONTWRITEBYTECODE set
-# (as on our machines) nothing imported would ever be cached, and every test process and notebook
-# kernel would compile torch again. A few files written for newer Pythons do not compile; pip
-# skips them silently, hence the `|| true`.
+# pip does not byte-compile (--no-compile): of the 2.6 GB stack the tests and notebooks import about a fifth
+# of the files, and Python compiles each on its first import and caches it (below), so compiling all of
+# site-packages at install time spent about 4x the CPU on files nothing imports.
 PIP := $(PY) -m pip install --disable-pip-version-check -q --no-compile
 
 $(STAMP): $(PY) environment.txt pyproject.toml
 	$(PIP) "$$(grep -E '^torch==' environment.txt)"
 	$(PIP) -r environment.txt
 	$(PIP) --no-deps -e .
-	$(PY) -m compileall -qq -j 0 "$$($(PY) -c 'import sysconfig; print(sysconfig.get_path("purelib"))')" || true
 	touch $(STAMP)
+
+# Python caches the bytecode of what it imports (in .venv and the checkout's __pycache__) unless
+# PYTHONDONTWRITEBYTECODE is set, as it is on some machines: then every test process and notebook kernel
+# would compile torch again. The commands below let it cache.
+unexport PYTHONDONTWRITEBYTECODE
 
 lab: $(STAMP)
 	$(LAB_CMD)
@@ -66,8 +68,18 @@ lab-command:
 # everything in one process (torch then takes 2 threads).
 TEST_WORKERS ?= 2
 
+TEST_CMD := DDP_PROFILE=ci MPLBACKEND=Agg $(if $(filter 0,$(TEST_WORKERS)),,OMP_NUM_THREADS=1) $(PY) -m pytest tests --nbval-lax --nbval-current-env notebooks -p no:cacheprovider -n $(TEST_WORKERS) --dist loadfile --no-loadscope-reorder
+
+# `make test` ends with its time in all, counted from make's start, the install (when it ran) included.
+ifneq ($(filter test,$(MAKECMDGOALS)),)
+TEST_START := $(shell date +%s)
+endif
+
 test: $(STAMP)
-	DDP_PROFILE=ci MPLBACKEND=Agg $(if $(filter 0,$(TEST_WORKERS)),,OMP_NUM_THREADS=1) $(PY) -m pytest tests --nbval-lax --nbval-current-env notebooks -p no:cacheprovider -n $(TEST_WORKERS) --dist loadfile --no-loadscope-reorder
+	@installed=$$(date +%s); echo '$(TEST_CMD)'; $(TEST_CMD); status=$$?; end=$$(date +%s); \
+	span() { printf '%d min %02d s' $$(($$1 / 60)) $$(($$1 % 60)); }; \
+	echo "make test: $$(span $$((end - $(TEST_START)))) in all (install $$(span $$((installed - $(TEST_START)))), tests $$(span $$((end - installed)))), exit $$status"; \
+	exit $$status
 
 # The classroom kit (README, "For instructors"). notebooks/ is the instructor version; `student`
 # strips solutions and outputs, `solutions` executes every notebook at $(SOLUTIONS_PROFILE) (class:

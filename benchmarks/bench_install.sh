@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# The install's time, two ways, in fresh venvs: the Makefile's own `make install` (pip --no-compile,
-# then `compileall -j 0` on all cores) vs pip byte-compiling as it installs (one core; the kit's
-# earlier install). Prints seconds and the .pyc count of each. Alternates the two
+# The install's time, two ways, in fresh venvs: the Makefile's own `make install` (pip --no-compile;
+# Python then compiles and caches what the tests and notebooks import, on first import) vs pip
+# byte-compiling all of it as it installs (one core). Prints seconds and the .pyc count of each. Alternates the two
 # ROUNDS times; run it with nothing else on the machine.
 #     bash benchmarks/bench_install.sh [ROUNDS]
 set -uo pipefail
