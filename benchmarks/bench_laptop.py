@@ -3,7 +3,11 @@
 ``--notebooks`` every notebook at `class`; on this CPU and held to AVX2, as most laptops are.
 
     python benchmarks/bench_laptop.py                        # native and AVX2 rows, no notebooks
-    python benchmarks/bench_laptop.py --isa avx2 --notebooks # the README's time column on AVX2 (~40 min)
+    python benchmarks/bench_laptop.py --isa avx2 --notebooks --skip loop fit complete              # README, class
+    python benchmarks/bench_laptop.py --isa avx2 --notebooks --skip loop fit complete --profile ci # README, ci
+
+With ``--notebooks`` each notebook's time is appended to ``results/notebook_times.jsonl`` and the README's
+notebook table is rendered from that file (``notebook_table.py``; ``--no-readme`` leaves the README alone).
 
 Each part runs in a fresh process with the ISA's environment (``benchmarks/isa.py``) and the
 thread count of a student's machine (2 by default). Run it alone: two processes sharing the 2
@@ -26,6 +30,7 @@ from _common import parse_args, positive_int, check_output_folder
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 from isa import ISA_ENV  # noqa: E402
+import notebook_table  # noqa: E402
 
 NOTEBOOKS = HERE.parent / "notebooks"
 
@@ -142,9 +147,13 @@ def main(argv=None) -> None:
     parser.add_argument("--only", nargs="+", metavar="NAME", help="notebooks whose name contains NAME")
     parser.add_argument("--keep", type=Path, metavar="DIR", help="write the executed notebooks (outputs included) here")
     parser.add_argument("--skip", nargs="+", default=[], choices=["loop", "fit", "complete"], help="parts to skip")
+    parser.add_argument("--note", default="", help="with --notebooks: a note the README prints beside each figure")
+    parser.add_argument("--no-readme", action="store_true",
+                        help="with --notebooks: record the times, leave README.md's table as it is")
     args = parse_args(parser, argv, lambda a: check_output_folder(a.keep, "--keep") if a.keep else None)
     for isa in args.isa:
-        print(f"\n== {isa}: {summary(isa)}; {args.threads} threads", flush=True)
+        line = summary(isa)
+        print(f"\n== {isa}: {line}; {args.threads} threads", flush=True)
         if "loop" not in args.skip:
             for channels in ("32-64-128-256-512", "16-32-64-128-256"):
                 r = loop_ratio(isa, args.threads, channels)
@@ -166,6 +175,13 @@ def main(argv=None) -> None:
                     continue
                 seconds = notebook_seconds(isa, args.threads, path, args.profile, args.keep)
                 print(f"notebook {path.stem} at {args.profile}: {seconds:.0f} s ({seconds / 60:.1f} min)", flush=True)
+                row = dict(notebook=path.stem, profile=args.profile, isa=isa, seconds=round(seconds, 1),
+                           threads=args.threads, cpu=line, when=time.strftime("%Y-%m-%d"), note=args.note)
+                with open(notebook_table.RESULTS, "a") as out:  # one line per notebook: a run stopped keeps the rest
+                    out.write(json.dumps(row, ensure_ascii=False) + "\n")
+    if args.notebooks and not args.no_readme:
+        for change in notebook_table.write_readme():
+            print("README.md:", change)
 
 
 if __name__ == "__main__":
