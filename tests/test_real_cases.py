@@ -152,7 +152,7 @@ def test_compare_fills_fits_each_distinct_method_once_and_matches_each_recipe_ru
     from ddp_lite.method.config import FitConfig
     from ddp_lite.method.profiles import get_profile
 
-    case = make_real_case("blobs-1", factor=8)
+    case = make_real_case("blobs-1", factor=16)  # 31×46: what is counted and compared does not depend on the size
     profile = dataclasses.replace(get_profile("ci"), iterations=8)
     fits, real = [], real_cases.complete_depth
     monkeypatch.setattr(real_cases, "complete_depth", lambda *a, **k: fits.append(k["config"]) or real(*a, **k))
@@ -183,7 +183,7 @@ def test_compare_fills_tells_the_fit_a_stereo_matchers_depth():
     from ddp_lite.method.config import FitConfig
     from ddp_lite.method.profiles import get_profile
 
-    case = make_real_case("sgbm", factor=8)
+    case = make_real_case("sgbm", factor=16)
     profile = dataclasses.replace(get_profile("ci"), iterations=6)
     out = real_cases.compare_fills(case, profile, recipes=("kit",))
 
@@ -206,7 +206,7 @@ def test_compare_fills_on_pools_the_fits_of_several_cases_and_gives_each_case_it
     from ddp_lite.method.config import FitConfig
     from ddp_lite.method.profiles import get_profile
 
-    cases = [make_real_case("blobs-1", factor=8), make_real_case("sgbm", factor=16)]
+    cases = [make_real_case("blobs-1", factor=16), make_real_case("sgbm", factor=32)]
     profile = dataclasses.replace(get_profile("ci"), iterations=6)
     shapes, real = [], real_cases.complete_depth
     monkeypatch = pytest.MonkeyPatch()
