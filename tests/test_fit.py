@@ -235,7 +235,7 @@ def test_warm_start_begins_where_the_previous_fit_ended():
 def test_bfloat16_and_channels_last_still_fill_the_hole():
     gt, depth = slanted_plane()
     holes = np.isnan(depth)
-    config = FitConfig(iterations=150, bf16=True, **TINY)
+    config = FitConfig(iterations=60, bf16=True, **TINY)  # fills the hole to ~0.2x nearest by then
     result = complete_depth(np.zeros((32, 48, 3), np.float32), depth, variant="d", config=config,
                             options=RunOptions(channels_last=True))
     rmse = float(np.sqrt(np.mean((result.depth[holes] - gt[holes]) ** 2)))
