@@ -45,7 +45,7 @@ __all__ = ["Recipe", "RECIPES", "KIT_AT", "PHOTO_HOLE_TERMS", "ENV_VAR", "DEFAUL
 ENV_VAR = "DDP_RECIPE"
 DEFAULT = "kit"
 # The recipe the kit recommends for real photographs: the best of the recipes on the real suite's cases
-# (docs/real_suite.md). What shows the kit's answer on real scenes (notebook 06's Table 6) reads it here.
+# (docs/results.md). What shows the kit's answer on real scenes (notebook 06's Table 6) reads it here.
 FOR_PHOTOGRAPHS = "photo"
 
 
