@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import ast
 import re
+from functools import lru_cache
 from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parents[1] / "ddp_lite"
@@ -16,8 +17,24 @@ def module_name(path: Path) -> str:
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
+@lru_cache(maxsize=None)
+def _package_files() -> tuple[Path, ...]:
+    return tuple(sorted(PACKAGE.rglob("*.py")))
+
+
 def modules() -> dict[str, Path]:
-    return {module_name(p): p for p in sorted(PACKAGE.rglob("*.py"))}
+    return {module_name(p): p for p in _package_files()}
+
+
+@lru_cache(maxsize=None)
+def _parsed(source: str) -> ast.Module:
+    """``source`` parsed once per session: the checks below read the same files and cells again and again
+    (the trees are only read, never changed)."""
+    return ast.parse(source)
+
+
+def _parsed_file(path: Path) -> ast.Module:
+    return _parsed(path.read_text(encoding="utf-8"))
 
 
 def resolve(importer: str, is_package: bool, level: int, target: str | None) -> str:
@@ -34,7 +51,7 @@ def imports(name: str, path: Path, known: dict[str, Path]):
     """(imported module, names taken from it) for every import of a package module in ``path``,
     at any depth (imports inside functions count too), and every ``"ddp_lite.module:name"`` string
     (a handler the command line imports by name)."""
-    tree = ast.parse(path.read_text(encoding="utf-8"))
+    tree = _parsed_file(path)
     is_package = path.name == "__init__.py"
     for node in ast.walk(tree):
         if isinstance(node, ast.Constant) and isinstance(node.value, str) and HANDLER.fullmatch(node.value):
@@ -106,7 +123,7 @@ def cycles(edges: dict[str, dict[str, set[str]]]) -> list[list[str]]:
 def defined_names(path: Path) -> set[str]:
     """Names a module defines at its top level (functions, classes, assignments), not those it imports."""
     names = set()
-    for node in ast.parse(path.read_text(encoding="utf-8")).body:
+    for node in _parsed_file(path).body:
         if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
             names.add(node.name)
         elif isinstance(node, (ast.Assign, ast.AnnAssign)):
@@ -221,7 +238,7 @@ def test_the_methods_rooms_import_only_downward():
 
 def _ddp_lite_imports(source: str, importer: str | None = None, is_package: bool = False):
     """(line, absolute module name) of every import of ``ddp_lite`` or one of its modules in ``source``."""
-    for node in ast.walk(ast.parse(source)):
+    for node in ast.walk(_parsed(source)):
         if isinstance(node, ast.Import):
             for alias in node.names:
                 if alias.name.split(".")[0] == "ddp_lite":
@@ -254,7 +271,7 @@ def _names_taken(source: str):
     """(line, module, name) of every ``from ddp_lite... import name`` in ``source`` (a module taken as a
     name is left out), and (line, "ddp_lite", name) of every ``ddp.name`` after ``import ddp_lite as ddp``."""
     known = modules()
-    tree = ast.parse(source)
+    tree = _parsed(source)
     aliases = set()
     for node in ast.walk(tree):
         if isinstance(node, ast.ImportFrom) and not node.level and (node.module or "").split(".")[0] == "ddp_lite":
@@ -308,7 +325,7 @@ def test_no_module_hands_on_a_name_it_does_not_define():
     for name, path in modules().items():
         if name == "ddp_lite":
             continue
-        for node in ast.parse(path.read_text(encoding="utf-8")).body:
+        for node in _parsed_file(path).body:
             if isinstance(node, ast.Assign) and any(isinstance(t, ast.Name) and t.id == "__all__" for t in node.targets):
                 handed_on += [f"{name}: {n}" for n in ast.literal_eval(node.value) if n not in defined_names(path)]
     assert handed_on == []
@@ -344,7 +361,7 @@ def test_the_package_never_imports_the_downloader():
     root = PACKAGE.parent
     found = []
     for path in sorted(PACKAGE.rglob("*.py")):
-        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        for node in ast.walk(_parsed_file(path)):
             names = [a.name for a in node.names] if isinstance(node, ast.Import) else \
                 [node.module or ""] if isinstance(node, ast.ImportFrom) and node.level == 0 else []
             found += [f"{path.relative_to(root)}:{node.lineno}: {n}" for n in names if n.split(".")[0] == "data_fetch"]
