@@ -8,7 +8,7 @@ from scipy import ndimage
 from ddp_lite.classical.holes import hole_rim, random_holes
 from ddp_lite.core.pixel_lengths import PixelLength
 from ddp_lite.method.kit.combine import mixed_with_fill, refined
-from ddp_lite.method.fit import DepthResult
+from ddp_lite.method.result import DepthResult
 from ddp_lite.classical.full_resolution import SMOOTHNESS_MEAN, full_size_solve, smoothness_at
 from ddp_lite.method.kit.blend import fill_member_settings, rim_width, trusted_depth
 from ddp_lite.method.paper.disparity import DisparityTransform
