@@ -86,7 +86,7 @@ def check_args(args) -> None:
 def check_scene(data, entry: str) -> tuple[str, str, list]:
     """``entry`` (``name`` or ``name/holes``) of ``--scenes``: (its folder under ``data``, the holes, DepthComp's
     hole files); ``ValueError`` naming ``--scenes`` otherwise."""
-    from ddp_lite.studies.real_suite import DEPTHCOMP_FILE
+    from ddp_lite.data.installed import DEPTHCOMP_FILE
     name, _, holes = entry.partition("/")
     matches = [f for f in sorted(os.listdir(data)) if f.split("-", 1)[-1] == name]
     if not matches:

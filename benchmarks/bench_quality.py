@@ -14,7 +14,8 @@ The suite is fixed (cases are never dropped because DDP loses on them):
 - the real Middlebury Motorcycle pair (``ddp_lite.studies.real_cases``) pooled to 125×185 (``motorcycle-4``)
   and 250×370 (``motorcycle-2``): three blob patterns, real SGBM holes, left-right-check (occlusion)
   holes; the right view as the warp loss's neighbour. These keep their own size whatever the profile.
-- with ``--suite middlebury --data DIR``, every Middlebury scene with ground truth under DIR and Motorcycle
+- with ``--suite middlebury [--data DIR]``, every Middlebury scene with ground truth under DIR (default: the data
+  root data_fetch installs into, else the shipped samples) and Motorcycle
   (``benchmarks/bench_real.py``: DepthComp's holes, blobs, SGBM holes, the truth's occlusions; eighth or quarter size);
 - with ``--middlebury FOLDER ...``, the same five hole kinds on other Middlebury 2014 pairs (``data_fetch``
   fetches them; ``middlebury:FOLDER-F/holes``), pooled by F to about twice the profile's pixels.
@@ -429,7 +430,8 @@ def build_parser() -> argparse.ArgumentParser:
                         help="which cases (the real ones: the Middlebury Motorcycle pair at 125×185 or 250×370; "
                              "none: only --cases and --middlebury; middlebury: every scene under --data and "
                              "Motorcycle, benchmarks/bench_real.py)")
-    parser.add_argument("--data", metavar="DIR", help="with --suite middlebury: the folder of Middlebury scenes")
+    parser.add_argument("--data", metavar="DIR", help="with --suite middlebury: the folder of Middlebury scenes "
+                                                      "(default: the data root, else the shipped samples)")
     parser.add_argument("--real-size", choices=("eighth", "quarter"), default="eighth",
                         help="with --suite middlebury: ≈ 160×140 to iterate on, ≈ 320×280 to confirm")
     parser.add_argument("--refill", action="store_true",
@@ -458,7 +460,8 @@ def _middlebury_rows_path(args) -> Path:
 
     if isinstance(args.report, str):
         return Path(args.report)
-    return Path(args.out or bench_real.RESULTS / f"real_suite_{args.real_size}.jsonl")
+    samples = not args.data and bench_real.suite_data()[2]  # the shipped samples' rows: a file of their own
+    return Path(args.out or bench_real.RESULTS / f"real_suite_{args.real_size}{'_samples' if samples else ''}.jsonl")
 
 
 def check_args(args) -> None:
@@ -498,15 +501,13 @@ def _check_middlebury(args) -> None:
     import bench_real
     from ddp_lite.studies.real_suite import suite_case_names
 
-    if not args.data:
-        raise ValueError("--suite middlebury needs --data DIR (a folder of Middlebury scenes)")
     for given, flag in ((args.size, "--size"), (args.quick, "--quick"), (args.lane != (0, 1), "--lane"),
                         (args.middlebury, "--middlebury"), (args.save_fits, "--save-fits")):
         if given:
             raise ValueError(f"{flag} acts on nothing with --suite middlebury (its sizes are --real-size eighth or "
                              f"quarter; its cases --data's and --cases)")
     try:
-        root = data_root(args.data)
+        root = data_root(args.data) if args.data else bench_real.suite_data()[0]  # default: the data root, else samples
     except argparse.ArgumentTypeError as error:
         raise ValueError(f"--data: {error}") from None
     if args.cases:
@@ -527,15 +528,17 @@ def main(argv=None) -> None:
     if args.suite == "middlebury":
         import bench_real
 
+        data, line, _ = bench_real.suite_data(args.data)  # default: the data root, else the shipped samples
+        print(line, flush=True)
         out = _middlebury_rows_path(args)
         if not args.report:
             torch_threads = max(2, args.threads)  # the recipes of a case fit side by side, one thread each
             profile_from_args(argparse.Namespace(threads=torch_threads, profile=args.profile, size=None))
             recipes = [r for r in args.recipes if r != "default"] or ["kit", "paper", "photo"]
             if args.refill:
-                bench_real.refill(args.data, args.real_size, out)
+                bench_real.refill(data, args.real_size, out)
             else:
-                bench_real.run(args.data, args.real_size, recipes, args.variants, args.seeds, out, args.profile,
+                bench_real.run(data, args.real_size, recipes, args.variants, args.seeds, out, args.profile,
                                args.cases)
             bench_real.report(out, args.real_size, args.profile)  # this run's rows, not another size's or profile's
         else:

@@ -6,8 +6,9 @@
     python benchmarks/bench_quality.py --suite middlebury --data DIR --variants rgbd+warp \
         --recipes kit kit:warp_combine=min --cases Art/sgbm Art/occlusion                  # a lever, on some cases
 
-``DIR`` is a folder of Middlebury scenes with ground truth (what ``python -m data_fetch fetch
-middlebury2006 --from …`` and its siblings install, or a folder laid out like it); the cases are
+``DIR`` is a folder of Middlebury scenes with ground truth (default: the data root, where ``python -m data_fetch
+fetch middlebury2006 …`` and its siblings install them, else the kit's shipped samples; the first line says
+which), or any folder laid out like it; the cases are
 ``ddp_lite.studies.real_suite``'s: DepthComp's own holes on Plastic, seeded blobs, OpenCV SGBM's holes and
 the truth's occlusions on every scene, and Motorcycle. ``--real-size eighth`` (≈ 160×140, about 40 s a fit on
 one core) is for iterating, ``quarter`` (≈ 320×280, minutes a fit) for confirming.
@@ -33,7 +34,9 @@ from ddp_lite.classical import baselines
 from ddp_lite.method.config import FitConfig
 from ddp_lite.method.runtime.options import RunOptions
 from ddp_lite.studies.real_cases import _fit_reusing, _plain_fits, _planned
-from ddp_lite.studies.real_suite import SUITE_HOLES, make_suite_case, suite_case_names
+from ddp_lite.data.installed import data_line, data_root, installed_scenes
+from ddp_lite.data.samples import SAMPLES, sample_scene
+from ddp_lite.studies.real_suite import SUITE_HOLES, find_scenes, make_suite_case, suite_case_names
 from _common import RowsFile, read_rows, recipe_overrides
 
 RESULTS = Path(__file__).resolve().parent / "results"
@@ -49,6 +52,22 @@ def table6_fills() -> tuple[str, ...]:
     """The kit's fills that are rows of the paper's Table 6."""
     names = tuple(getattr(baselines, "PAPER_TABLE6", {}).values()) or _TABLE6_FALLBACK
     return tuple(n for n in names if n in baselines.BASELINES)
+
+
+def suite_data(data=None) -> tuple[Path, str, bool]:
+    """The folder of scenes the suite reads: ``data`` if given, else the data root when ``data_fetch`` installed a
+    Middlebury scene there, else the kit's shipped samples → (folder, the line that says which, and for the
+    samples the command that installs the real scenes, whether it is the samples)."""
+    if data:
+        scenes = find_scenes(data)
+        return Path(data), data_line([f"{len(scenes)} scenes under {data} ({', '.join(scenes)})"]), False
+    installed = installed_scenes()
+    if installed:
+        listed = ", ".join(f"{name} ({copy.dataset} {copy.size})" for name, copy in installed.items())
+        return data_root(), data_line([f"{len(installed)} scenes installed in {data_root()}: {listed}"]), False
+    return sample_scene(SAMPLES[0]).parent, data_line(
+        [], f"the shipped quarter-size samples ({', '.join(SAMPLES)}; rows go to a file of their own)",
+        "middlebury2006", why=f"no Middlebury scene installed in {data_root()}"), True
 
 
 # what changes a row's numbers: a resumed run reuses a row only when all of these match (a fill's profile is None)

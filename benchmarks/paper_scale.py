@@ -35,7 +35,7 @@ from ddp_lite.method.config import FitConfig  # noqa: E402
 from ddp_lite.method.kit import recipes  # noqa: E402
 from ddp_lite.classical import baselines  # noqa: E402
 from ddp_lite.studies.real_cases import REAL_HOLES, factor_for_profile  # noqa: E402
-from ddp_lite.studies.table6 import TABLE6_SCENES, table6_case  # noqa: E402
+from ddp_lite.studies.table6 import TABLE6_SCENES, table6_case, table6_data_line, table6_sources  # noqa: E402
 from ddp_lite.method.runtime.device import resolve_device  # noqa: E402
 from ddp_lite.method.runtime.options import RunOptions  # noqa: E402
 from _common import (add_profile_args, check_rows_out, existing_folder, parse_args, positive_float, positive_int,  # noqa: E402
@@ -127,7 +127,10 @@ def run(args) -> None:
     if args.table6:  # the paper's own Table 6 scenes, pooled to the profile's size
         names = [f"table6/{scene}" for scene in TABLE6_SCENES]
         cases = [(case, case.fb) for case in (table6_case(s, profile, args.seed, args.data) for s in TABLE6_SCENES)]
-        where = f"Table 6 scenes ({'from ' + args.data if args.data else 'shipped, quarter size'})"
+        shipped = all(copy.dataset == "shipped" for copy in table6_sources(profile).values())
+        if not args.data:
+            print(table6_data_line(profile), flush=True)  # installed (data_fetch), else shipped
+        where = f"Table 6 scenes ({'from ' + args.data if args.data else 'shipped, quarter size' if shipped else 'installed'})"
     else:
         names = [f"motorcycle-{factor}/{holes}" for holes in args.holes]  # bench_quality's case names
         cases = [build_case(name, profile) for name in names]

@@ -1,12 +1,16 @@
 """data_fetch: get the paper's real datasets onto disk, verified (``python -m data_fetch ...``).
 
     python -m data_fetch list                                   # what exists, size, licence, use
+    python -m data_fetch list middlebury2006                    # its scenes, sizes, files, pins; what is installed
     python -m data_fetch fetch middlebury2014 --only 'Adirondack-*' --trust-first-download
     python -m data_fetch fetch kitti2015                        # prints what to download by hand
-    python -m data_fetch fetch middlebury2006 --from DIR --only 'HalfSize/Plastic/*'   # from a local copy
+    python -m data_fetch fetch middlebury2006 --only HalfSize/Plastic                # one scene, one size
+    python -m data_fetch fetch middlebury2006 --from DIR --only Plastic   # from a local copy, every size it has
 
 Where data goes: ``--dest DIR``, else ``$DDP_DATA``, else platformdirs' ``user_data_dir("ddp-lite")``;
-each dataset in its own folder. Loaders in ``ddp_lite.data.datasets`` read what lands there.
+each dataset in its own folder (``ddp_lite.data.installed.data_root``). ``ddp_lite.data.installed`` finds what
+landed there for every reader (notebooks, ``ddp-lite complete --scene``, the benchmarks); the loaders in
+``ddp_lite.data`` read it. ``--only`` takes a scene name, a folder or a glob (``data_fetch.select``).
 
 How files are trusted (the honest part). The kit was written on machines that cannot reach the
 dataset servers, so no byte hash of a downloaded file could be measured and none is invented:
@@ -64,7 +68,10 @@ __all__ = ["fetch", "data_dir", "DATASETS", "Dataset", "RemoteFile", "get_datase
 
 def describe() -> str:
     """The text ``python -m data_fetch list`` prints: a README-style preamble, then one block per dataset."""
-    lines = ["ddp-lite datasets (python -m data_fetch fetch NAME [--dest DIR] [--only GLOB] [--trust-first-download])",
+    lines = ["ddp-lite datasets (python -m data_fetch fetch NAME [--dest DIR] [--only SCENE|FOLDER|GLOB] "
+             "[--trust-first-download])",
+             "python -m data_fetch list NAME: a dataset's scenes, sizes and files, which are pixel-pinned, and what "
+             "of it is installed",
              "",
              f"Data root: --dest, else ${ENV_VAR}, else {data_dir()}",
              "Hashes: no byte SHA-256 could be measured (the servers were unreachable when the registry was",

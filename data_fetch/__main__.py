@@ -1,10 +1,11 @@
-"""``python -m data_fetch list`` / ``python -m data_fetch fetch NAME [--dest ROOT] [--from DIR] ...``."""
+"""``python -m data_fetch list [NAME]`` / ``python -m data_fetch fetch NAME [--dest ROOT] [--from DIR] ...``."""
 from __future__ import annotations
 
 import argparse
 import sys
 
 from . import DATASETS, FetchError, ManualDownloadRequired, describe, fetch
+from .listing import describe_dataset
 from .local import install_from
 
 
@@ -12,7 +13,11 @@ def main(argv=None) -> int:
     """Command-line entry point; returns the exit code (0 ok, 1 error, 2 manual step needed)."""
     parser = argparse.ArgumentParser(prog="python -m data_fetch", description="Fetch the paper's datasets, verified.")
     sub = parser.add_subparsers(dest="command", required=True)
-    sub.add_parser("list", help="every dataset with its size, licence and what the kit uses it for")
+    listing = sub.add_parser("list", help="every dataset with its size, licence and what the kit uses it for; "
+                                          "with NAME, its scenes, sizes and files, which are pixel-pinned, and "
+                                          "what of it is installed")
+    listing.add_argument("name", nargs="?", choices=sorted(DATASETS), help="one dataset (default: all, in brief)")
+    listing.add_argument("--dest", help="data root (default: $DDP_DATA, else the user data dir)")
     get = sub.add_parser("fetch", help="download (or take a manual download), verify and unpack a dataset")
     get.add_argument("name", choices=sorted(DATASETS))
     get.add_argument("--dest", help="data root (default: $DDP_DATA, else the user data dir)")
@@ -25,7 +30,11 @@ def main(argv=None) -> int:
     get.add_argument("--no-progress", action="store_true", help="no progress bar")
     args = parser.parse_args(argv)
     if args.command == "list":
-        print(describe())
+        try:
+            print(describe() if args.name is None else describe_dataset(args.name, args.dest))
+        except ValueError as error:  # a blank $DDP_DATA or --dest
+            print(f"error: {error}", file=sys.stderr)
+            return 1
         return 0
     if args.retries < 0:
         print(f"error: --retries must be 0 or more, got {args.retries}", file=sys.stderr)

@@ -12,26 +12,25 @@ Layout under the data root (``--dest``, else ``$DDP_DATA``, else platformdirs'
 from __future__ import annotations
 
 import datetime
-import fnmatch
 import itertools
 import json
 import os
 from pathlib import Path
 
-import platformdirs
 import pooch
 
 from ddp_lite.core.files import regular_file, write_bytes_atomic
+from ddp_lite.data.installed import ENV_VAR, data_root
 from .download import (ChecksumError, FetchError, ResumableDownloader, check_fetch_numbers, content_problem,
                        entry_path, normal_sha256)
 from .install_lock import TEMP_PREFIX, check_say, install_lock, remove_spent_parts, remove_stale_temporaries
 from .pixels import text_sha256
 from .registry import Dataset, RemoteFile, get_dataset
+from .select import select_names
 from .unpack import archive_files, safe_extract
 
 __all__ = ["fetch", "data_dir", "ManualDownloadRequired", "UnpinnedFileError", "ENV_VAR", "REGISTRY_FILE"]
 
-ENV_VAR = "DDP_DATA"
 REGISTRY_FILE = "registry.json"
 
 
@@ -44,17 +43,9 @@ class UnpinnedFileError(FetchError):
 
 
 def data_dir(dest=None) -> Path:
-    """The data root: ``dest`` if given, else ``$DDP_DATA``, else ``user_data_dir('ddp-lite')``."""
-    if dest is not None:
-        if not str(dest).strip():
-            raise ValueError("dest must name a folder, got an empty string")
-        return Path(dest).expanduser()
-    if ENV_VAR in os.environ:
-        if not os.environ[ENV_VAR].strip():  # set but blank: a typo'd export, not a wish for the default
-            raise ValueError(f"{ENV_VAR} is set but blank; name a folder (export {ENV_VAR}=/path/to/data) or unset "
-                             f"it to use {platformdirs.user_data_dir('ddp-lite')}")
-        return Path(os.environ[ENV_VAR]).expanduser()
-    return Path(platformdirs.user_data_dir("ddp-lite"))
+    """The data root: ``dest`` if given, else ``$DDP_DATA``, else ``user_data_dir('ddp-lite')``
+    (``ddp_lite.data.installed.data_root``: the one rule every reader of the data follows too)."""
+    return data_root(dest)
 
 
 def _check_writable(folder: Path) -> None:
@@ -191,11 +182,16 @@ def _select(dataset: Dataset, only) -> list[RemoteFile]:
     if not only:
         return list(dataset.files)
     patterns = [only] if isinstance(only, str) else list(only)
-    chosen = [f for f in dataset.files if any(fnmatch.fnmatchcase(f.name, p) for p in patterns)]
+    chosen = set(select_names([f.name for f in dataset.files], patterns))
     if not chosen:
-        raise ValueError(f"only={patterns!r} matches none of {dataset.name}'s files: "
-                         f"{', '.join(f.name for f in dataset.files)}")
-    return chosen
+        inside = [f.name for f in dataset.files if select_names([m for m, _ in f.members], patterns)]
+        if inside:  # a scene of an archive: the archive holds every scene
+            raise ValueError(f"only={patterns!r} names files inside the archive(s) {', '.join(inside)}, which hold "
+                             f"every scene: fetch {dataset.name} without --only, or install from a local copy "
+                             f"(--from DIR --only ...)")
+        raise ValueError(f"only={patterns!r} matches none of {dataset.name}'s files (python -m data_fetch list "
+                         f"{dataset.name} lists its scenes and files; --only takes a scene, a folder or a glob)")
+    return [f for f in dataset.files if f.name in chosen]
 
 
 def _download(folder: Path, entry: RemoteFile, known: str | None, retries: int, progressbar: bool,

@@ -16,7 +16,6 @@ recorded in ``registry.json`` as ``fetch`` records a first download.
 """
 from __future__ import annotations
 
-import fnmatch
 import os
 import re
 import shutil
@@ -32,6 +31,7 @@ from .fetch import (REGISTRY_FILE, UnpinnedFileError, _check_writable, _read_rec
 from .install_lock import TEMP_PREFIX, check_say, install_lock, remove_spent_parts, remove_stale_temporaries
 from .pixels import pixel_sha256, text_sha256
 from .registry import Dataset, get_dataset
+from .select import select_names
 
 __all__ = ["install_from", "LocalInstall", "shared_to_registry", "source_names", "installable"]
 
@@ -144,9 +144,12 @@ def install_from(dataset, source, dest=None, only=None, trust_first_download: bo
     targets = installable(dataset)
     if only:
         patterns = [only] if isinstance(only, str) else list(only)
-        targets = [t for t in targets if any(fnmatch.fnmatchcase(t[0], p) for p in patterns)]
+        chosen = set(select_names([t[0] for t in targets], patterns))
+        targets = [t for t in targets if t[0] in chosen]
         if not targets:
-            raise ValueError(f"only={patterns!r} matches none of {dataset.name}'s files")
+            raise ValueError(f"only={patterns!r} matches none of the {dataset.name} files --from can install "
+                             f"(python -m data_fetch list {dataset.name} lists them; --only takes a scene, a folder "
+                             f"or a glob)")
     for name, _, _ in targets:  # the one guard: every name stays inside the dataset folder
         entry_path(folder, name, f"{dataset.name} entry {name!r}")
     _check_writable(folder)

@@ -36,6 +36,18 @@ def pytest_unconfigure(config):
             os.environ["DDP_CACHE"] = config._ddp_cache_saved
 
 
+@pytest.fixture(scope="session")
+def _empty_data_root(tmp_path_factory):
+    return tmp_path_factory.mktemp("empty-data-root")
+
+
+@pytest.fixture(autouse=True)
+def _no_installed_data(_empty_data_root, monkeypatch):
+    # the tests read the data a fresh clone has: nothing the user installed in their data root (a test that
+    # installs something sets DDP_DATA to its own folder)
+    monkeypatch.setenv("DDP_DATA", str(_empty_data_root))
+
+
 @pytest.fixture(autouse=True)
 def _fit_cache_only_where_marked(request, monkeypatch):
     if request.node.get_closest_marker("fit_cache") is None:

@@ -37,30 +37,18 @@ import numpy as np
 from ..core.camera import Camera
 from ..core.views import Scene, View
 from .fileio import existing_path, read_image_file, read_rgb, read_text_file
+from .installed import is_2014_folder, is_rail_folder
 from .middlebury import check_scene_depth, load_middlebury, require_valid_depth
 from .resample import check_optional_size, resize_scene, scene_depth_range
 
 __all__ = ["FULL_FOCAL", "PAIR_BASELINE", "RAIL_STEP", "RAIL_VIEWS", "load_rail_scene", "load_middlebury_scene",
-           "ground_truth_occlusion", "size_scale", "load_middlebury2006", "scene_disparity", "is_rail_folder", "is_2014_folder"]
+           "ground_truth_occlusion", "size_scale", "load_middlebury2006", "scene_disparity"]
 
 FULL_FOCAL = 3740.0  # px, at full size
 PAIR_BASELINE = 0.160  # m, view1 to view5
 RAIL_STEP = PAIR_BASELINE / 4  # m between neighbouring views
 RAIL_VIEWS = tuple(range(7))
 _SIZE_SCALES = {1: (1100, 1500), 2: (550, 750), 3: (370, 549), 4: (270, 369)}  # scale: image widths (px) it covers
-
-
-def is_rail_folder(folder) -> bool:
-    """Whether ``folder`` holds a 2005/2006 scene (``view1.png``, ``disp1.png``, ``dmin.txt``)."""
-    folder = Path(folder)
-    return all((folder / name).is_file() for name in ("view1.png", "disp1.png", "dmin.txt"))
-
-
-def is_2014_folder(folder) -> bool:
-    """Whether ``folder`` holds a 2014 scene (``im0.png``, ``calib.txt`` and ``disp0GT.pfm`` or ``disp0.pfm``)."""
-    folder = Path(folder)
-    return ((folder / "im0.png").is_file() and (folder / "calib.txt").is_file()
-            and any((folder / name).is_file() for name in ("disp0GT.pfm", "disp0.pfm")))
 
 
 def size_scale(width: int) -> int:

@@ -56,7 +56,10 @@ EXAMPLES = {
   ddp-lite complete --rgb rgb.png --depth depth.pfm --out filled.pfm --max-side 256 --raw
   ddp-lite complete --rgb left.png --depth sgbm.pfm --out filled.pfm --depth-source stereo  # a matcher's depth
   ddp-lite complete --rgb rgb.png --depth depth.png --depth-scale 0.001 --out filled.npy \\
-                    --intrinsics 615.2,615.0,320.5,240.1                  # + filled.ply, one RGB-D frame""",
+                    --intrinsics 615.2,615.0,320.5,240.1                  # + filled.ply, one RGB-D frame
+  ddp-lite complete --scene Plastic --out plastic.pfm          # DepthComp's holes on a Middlebury scene, scored
+  ddp-lite complete --scene Art --holes sgbm --out art.pfm     # SGBM's depth on the scene's own stereo pair
+  ddp-lite complete --scene ~/data/HalfSize/Baby1 --holes blobs --variant rgbd --out baby.npy""",
     "sequence": """examples:
   ddp-lite sequence rgbd_dataset_freiburg1_desk --format tum --out desk --every 10 --max-frames 5
   ddp-lite sequence capture --format tum --depth-scale 0.001 --out out   # millimetre PNGs
@@ -162,17 +165,28 @@ def build_parser() -> argparse.ArgumentParser:
 
     _subparser(sub, "scenes", "list the built-in synthetic scenes", "ddp_lite.interface.cli_demo:scenes_command")
 
-    complete = _subparser(sub, "complete", "fill the holes of your own RGB-D image (no neighbours)",
+    complete = _subparser(sub, "complete", "fill the holes of your own RGB-D image, or of a Middlebury scene",
                           "ddp_lite.interface.cli_complete:complete_command")
-    complete.add_argument("--rgb", required=True, help="the colour image (any file OpenCV reads), same size as --depth")
-    complete.add_argument("--depth", required=True, help=".npy (metres), .pfm, or 16-bit PNG (see --depth-scale); "
-                                                         "0, inf and NaN are holes")
+    complete.add_argument("--rgb", default=None, help="the colour image (any file OpenCV reads), same size as --depth")
+    complete.add_argument("--depth", default=None, help=".npy (metres), .pfm, or 16-bit PNG (see --depth-scale); "
+                                                        "0, inf and NaN are holes")
+    complete.add_argument("--scene", default=None, metavar="DIR|NAME",
+                          help="instead of --rgb/--depth: a Middlebury scene folder (2005/2006: view1.png, disp1.png, "
+                               "dmin.txt; 2014: im0.png, im1.png, calib.txt, disp0GT.pfm or disp0.pfm), or a scene's "
+                               "name: installed by data_fetch in the data root, else shipped (Plastic, Baby1, "
+                               "Bowling1, Art); its truth scores every fill, the output is at its size")
+    complete.add_argument("--holes", default=None, metavar="sgbm|blobs|FILE",
+                          help="with --scene, the input depth: sgbm (SGBM on the scene's own stereo pair), blobs "
+                               "(cut into the truth) or FILE (an image, 0 = hole; DepthComp's plastic-disp-hole.png); "
+                               "default: the scene's DepthComp hole file where it has one (Plastic), else sgbm")
     complete.add_argument("--depth-scale", type=_number(float, 0.0, "--depth-scale"), default=None,
                           help="metres per stored unit: required for integer files (0.001 for a mm PNG); 1 for float files")
     complete.add_argument("--out", required=True,
                           help="filled depth: .npy or .pfm (metres), .png (16-bit millimetres), .exr (if OpenCV has it)")
-    complete.add_argument("--variant", choices=("d", "rgbd"), default="rgbd",
-                          help="the net fits depth only (d) or colour and depth (rgbd, default)")
+    complete.add_argument("--variant", choices=("d", "rgbd", "rgbd+warp"), default=None,
+                          help="the net fits depth only (d), colour and depth (rgbd, the default for --rgb/--depth), "
+                               "or also warps the scene's calibrated neighbours (rgbd+warp, --scene only, its default: "
+                               "view0 and view2 of a 2005/2006 scene, im1 of a 2014 one)")
     _add_profile(complete)
     _add_recipe(complete)
     complete.add_argument("--iterations", type=_number(int, 1, "--iterations"), default=None,
@@ -187,10 +201,11 @@ def build_parser() -> argparse.ArgumentParser:
     complete.add_argument("--no-refine", action="store_true",
                           help="bring the fit back to full size by up-sampling alone, without sharpening it at "
                                "full size along the photo's edges (default: sharpened; --raw implies this)")
-    complete.add_argument("--depth-source", choices=("clean", "stereo"), default="clean",
+    complete.add_argument("--depth-source", choices=("clean", "stereo"), default=None,
                           help="where --depth came from: 'stereo' for a stereo matcher's depth, whose holes have "
                                "a rim it often got wrong: the fill and the sharpening do not read that rim and "
-                               "reach further (default 'clean': every valid pixel trusted)")
+                               "reach further (default 'clean': every valid pixel trusted; with --scene, stereo "
+                               "for --holes sgbm)")
     complete.add_argument("--preview", default=None,
                           help="preview figure: input, filled, holes, and with --gt the error map "
                                "(default: OUT's name with .preview.png)")

@@ -30,6 +30,12 @@ difference in the holes), or, with ``--gt``, prints the hole RMSE of DDP, linear
 colour-guided fills; and a preview figure (input, filled with the holes outlined, the hole mask, and
 with ``--gt`` DDP's error map and the RMSEs) is written beside ``--out``.
 
+``--scene DIR|NAME`` instead of ``--rgb``/``--depth``: a Middlebury scene (``data.installed.resolve_scene``: a
+folder, else the copy installed in the data root, else a shipped sample), its input depth made by ``--holes``
+(``data.scene_input``: SGBM on its own stereo pair, blobs, or a hole file; default the scene's DepthComp holes
+where it has them, else SGBM), its truth in place of ``--gt`` (also scored in disparity px at the scene's
+size), ``rgbd+warp`` with its calibrated neighbours by default; the first line says which data it reads.
+
 Output by the suffix of ``--out``: ``.npy``/``.pfm`` float32 metres, ``.png`` 16-bit
 millimetres (0 = none, at most ``PNG_MAX_METRES``), ``.exr`` if OpenCV has the codec. Every file
 is written atomically, and every path and input is checked before the fit (``ValueError`` naming
@@ -40,11 +46,14 @@ from __future__ import annotations
 import os
 import time
 import warnings
+from dataclasses import dataclass
 
 import cv2
 import numpy as np
 
 from ..core.files import regular_file, write_bytes_atomic
+from ..data.installed import SceneCopy, data_line, depthcomp_hole_file, resolve_scene
+from ..data.samples import SAMPLE_DATASETS
 from ..data.file_writers import depth_png_bytes, npy_bytes, pfm_bytes
 from ..data.fileio import check_plausible_depth, check_same_size, read_depth, read_image_file, read_rgb
 from ..core.outpaths import check_output_file, output_set
@@ -77,6 +86,8 @@ def _preview_path(args) -> str:
 
 
 def _ply_path(args) -> str | None:
+    if getattr(args, "scene", None) is not None:  # the scene's calibration gives the camera: a cloud when asked
+        return args.ply
     if args.intrinsics is None:
         if args.ply:
             raise ValueError("--ply needs --intrinsics fx,fy,cx,cy (the camera that turns depth into points)")
@@ -86,11 +97,16 @@ def _ply_path(args) -> str | None:
     return args.ply if args.ply else os.path.splitext(args.out)[0] + ".ply"
 
 
-def _check_outputs(args, writers: dict) -> None:
-    """Refuse a bad --out, --preview or --ply before any work: unknown suffix, a folder, an input, a
-    read-only file, an unwritable folder."""
+def _check_outputs(args, writers: dict, source=None) -> None:
+    """Refuse a bad --out, --preview or --ply before any work: unknown suffix, a folder, an input (a file of
+    the ``--scene`` folder among them), a read-only file, an unwritable folder."""
     from .cli_demo import figure_suffixes
-    inputs = {"--depth": args.depth, "--rgb": args.rgb, **({"--gt": args.gt} if args.gt else {})}
+    if source is None:
+        inputs = {"--depth": args.depth, "--rgb": args.rgb, **({"--gt": args.gt} if args.gt else {})}
+    else:
+        inputs = {f"--scene ({path.name})": path for path in sorted(source.copy.folder.iterdir()) if path.is_file()}
+        if os.path.isfile(source.holes):
+            inputs["--holes"] = source.holes
     check_output_file(args.out, "--out", suffixes=tuple(writers), inputs=inputs, force=args.force,
                       example="filled.npy")
     if args.out.lower().endswith(".exr") and not _exr_available():
@@ -112,6 +128,11 @@ def _read_depth(path: str, scale: float | None, flag: str = "--depth") -> np.nda
     except ValueError as error:
         if flag == "--depth" and _looks_like_colour(path):
             raise ValueError(f"{error}. {path!r} is a 3-channel 8-bit image, a colour picture: {SWAPPED}") from None
+        if _looks_like_disparity(path):
+            raise ValueError(f"{error}. A 1-channel 8-bit PNG is how Middlebury stores disparity (disp1.png, "
+                             f"DepthComp's hole files), which needs the scene's calibration: complete the scene with "
+                             f"--scene FOLDER (the folder holding view1.png, disp1.png and dmin.txt, or a scene's "
+                             f"name such as --scene Plastic), and --holes FILE for a hole file") from None
         raise
     valid = np.isfinite(depth)
     if not valid.any():
@@ -144,6 +165,17 @@ def _looks_like_colour(path: str) -> bool:
     except ValueError:
         return False
     return raw.dtype == np.uint8 and raw.ndim == 3 and raw.shape[2] in (3, 4)
+
+
+def _looks_like_disparity(path: str) -> bool:
+    """``path`` is a 1-channel 8-bit image: how Middlebury 2005/2006 and DepthComp store disparity."""
+    if os.path.splitext(path)[1].lower() in (".npy", ".pfm", ".bin"):
+        return False
+    try:
+        raw = read_image_file(path, "--depth")
+    except ValueError:
+        return False
+    return raw.dtype == np.uint8 and raw.ndim == 2
 
 
 def _read_rgb(path: str) -> np.ndarray:
@@ -258,7 +290,7 @@ def _inert_flags(args, config, max_side: int, shape, full_shape, refine: bool) -
                     f"--max-side {max_side}), so there is no full-size sharpening to skip"
                     + (" (the recipe's own solve at that size still runs: --recipe kit for none)"
                        if config.combination.refine else ""))
-    if args.depth_source != "clean" and not (refine or config.combination.blend_fill != 0 or config.combination.refine):
+    if getattr(args, "depth_source_given", True) and args.depth_source != "clean" and not (refine or config.combination.blend_fill != 0 or config.combination.refine):
         why = ("--raw writes the net's own output" if args.raw
                else f"--variant {args.variant} mixes in no colour-guided fill" if args.variant == "d"
                else f"recipe {get_recipe(args.recipe).name!r} mixes in no colour-guided fill")
@@ -270,18 +302,70 @@ def _inert_flags(args, config, max_side: int, shape, full_shape, refine: bool) -
     return said
 
 
+@dataclass(frozen=True)
+class _SceneSource:
+    """``--scene`` resolved before any work: the scene's copy and its holes (a kind or a file path)."""
+
+    copy: SceneCopy
+    holes: str
+
+
+def _scene_source(args) -> _SceneSource | None:
+    """Check which input the command was given (``--rgb``/``--depth``, or ``--scene``) and resolve the variant and
+    the depth source; ``--scene`` resolved to a folder and its holes. Usage errors (ValueError) before any work."""
+    scene = getattr(args, "scene", None)
+    holes = getattr(args, "holes", None)
+    args.depth_source_given = args.depth_source is not None  # --scene sets it too: only a typed one is said inert
+    if scene is None:
+        if holes is not None:
+            raise ValueError("--holes needs --scene (it says how the input depth of a Middlebury scene is made); "
+                             "with --rgb/--depth the holes are those of --depth")
+        missing = [flag for flag, value in (("--rgb", args.rgb), ("--depth", args.depth)) if value is None]
+        if missing:
+            raise ValueError(f"give --rgb and --depth (your own RGB-D image; {' and '.join(missing)} missing), or "
+                             f"--scene DIR|NAME (a Middlebury scene folder, or a scene such as Plastic)")
+        if args.variant == "rgbd+warp":
+            raise ValueError("--variant rgbd+warp needs --scene: the warp term needs calibrated neighbours, which "
+                             "--rgb/--depth do not have (use rgbd or d)")
+        args.variant = args.variant or "rgbd"
+        args.depth_source = args.depth_source or "clean"
+        return None
+    given = [flag for flag, value in (("--rgb", args.rgb), ("--depth", args.depth), ("--gt", args.gt),
+                                      ("--depth-scale", args.depth_scale), ("--intrinsics", args.intrinsics))
+             if value is not None]
+    if given:
+        raise ValueError(f"--scene takes the photo, the truth and the camera from the scene; drop {', '.join(given)} "
+                         f"(or drop --scene to complete your own files)")
+    from ..data.scene_input import HOLE_KINDS  # with the readers of the scene (they load torch): only for --scene
+
+    copy = resolve_scene(scene, what="--scene")
+    if holes is None:
+        default = depthcomp_hole_file(copy)
+        holes = str(default) if default is not None else "sgbm"
+    elif holes not in HOLE_KINDS:
+        if not os.path.isfile(os.path.expanduser(holes)):
+            raise ValueError(f"--holes must be {', '.join(HOLE_KINDS)} or a hole file (an image, 0 = hole), got "
+                             f"{holes!r}: no such file")
+        holes = os.path.expanduser(holes)
+    args.variant = args.variant or "rgbd+warp"
+    args.depth_source = args.depth_source or ("stereo" if holes == "sgbm" else "clean")
+    return _SceneSource(copy, holes)
+
+
 def complete_command(args) -> int:
-    """``ddp-lite complete``: fill the holes of one depth map from its files. Its outputs are written
-    as one set under a lock taken before the fit (``ddp_lite.core.outpaths.output_set``)."""
+    """``ddp-lite complete``: fill the holes of one depth map from its files, or of a Middlebury scene
+    (``--scene``). Its outputs are written as one set under a lock taken before the fit
+    (``ddp_lite.core.outpaths.output_set``)."""
     start = time.perf_counter()
     writers = _writers()
-    _check_outputs(args, writers)
-    outputs = [args.out, _preview_path(args)] + ([_ply_path(args)] if args.intrinsics is not None else [])
+    source = _scene_source(args)
+    _check_outputs(args, writers, source)
+    outputs = [args.out, _preview_path(args)] + ([_ply_path(args)] if _ply_path(args) else [])
     with output_set(outputs, "--out", overwrite_readonly=args.force) as staged:
-        return _complete(args, writers, staged, start)
+        return _complete(args, writers, staged, start, source)
 
 
-def _complete(args, writers, staged, start) -> int:
+def _complete(args, writers, staged, start, source=None) -> int:
     from ..method.config import FitConfig
     from ..method.complete import complete_depth
     from ..method.runtime.options import RunOptions, run_options
@@ -301,24 +385,41 @@ def _complete(args, writers, staged, start) -> int:
                                    **({"iterations": args.iterations} if args.iterations else {}),
                                    **({"blend_fill": 0.0} if args.raw else {}))  # the net's alone: no fill's share
     config.validate()
+    from ..core.views import View
+    from ..data.resample import resize_view
+    from ..data.scene_input import scene_input
     options = run_options(RunOptions(device=args.device, max_memory_gb=args.max_memory_gb))  # before the inputs are read
-    rgb = _read_rgb(args.rgb)
-    depth = _read_depth(args.depth, args.depth_scale)
-    check_same_size(rgb.shape, depth.shape, args.rgb, "--rgb", "--depth")  # names an EXIF rotation if that is why
-    gt = None
-    if args.gt:
+    scene = None
+    if source is not None:
+        shipped = source.copy.dataset == "shipped"
+        print(data_line([] if shipped else [source.copy], f"the shipped quarter-size {source.copy.describe()}" if shipped
+                        else "", SAMPLE_DATASETS.get(source.copy.name, ""), [source.copy.name],
+                        f"no {source.copy.name} installed in the data root"), flush=True)
+        scene = scene_input(source.copy.folder, source.holes, name=source.copy.name)
+        rgb, depth, gt = scene.scene[0].rgb, scene.depth, scene.truth
+        print(f"input depth: {scene.holes}; the scene's truth scores every fill; variant {args.variant}"
+              + (f" (neighbours: {', '.join(v.name for v in scene.neighbors)})" if args.variant == "rgbd+warp" else ""),
+              flush=True)
+    else:
+        rgb = _read_rgb(args.rgb)
+        depth = _read_depth(args.depth, args.depth_scale)
+        check_same_size(rgb.shape, depth.shape, args.rgb, "--rgb", "--depth")  # names an EXIF rotation if that is why
+        gt = None
+    if source is None and args.gt:
         gt = _read_depth(args.gt, args.depth_scale, "--gt")
         if gt.shape != depth.shape:
             raise ValueError(f"--gt is {gt.shape[0]}×{gt.shape[1]} but --depth is {depth.shape[0]}×{depth.shape[1]}")
         check_same_units(depth, gt, "--depth", "--gt")  # centimetres against metres would be scored as 100× errors
     camera = None
-    if args.intrinsics is not None:
+    if scene is not None:
+        camera = scene.scene[0].camera
+    elif args.intrinsics is not None:
         from ..core.camera import Camera, check_intrinsics
         K = check_intrinsics(args.intrinsics, depth.shape[1], depth.shape[0], "--intrinsics")  # K of another size bends the cloud
         camera = Camera(K, np.eye(4), depth.shape[1], depth.shape[0])
     holes = ~np.isfinite(depth)
     if not holes.any():
-        raise ValueError(f"--depth {args.depth!r} has no holes (0, inf or NaN pixels): nothing to fill")
+        raise ValueError(f"--depth {args.depth!r} has no holes (0, inf or NaN pixels): nothing to fill")  # a scene's input always has
     farthest = np.nanmax(depth, initial=0) * config.paper.disparity_margin
     if os.path.splitext(args.out)[1].lower() == ".png" and farthest > PNG_MAX_METRES:
         raise ValueError(f"--out: a 16-bit millimetre PNG holds at most {PNG_MAX_METRES} m, and this depth reaches "
@@ -327,9 +428,14 @@ def _complete(args, writers, staged, start) -> int:
     shape = working_shape(depth.shape, max_side)
     small_rgb, small_depth = shrink(rgb, depth, shape)
     # what the fit will check, checked here with the flags' names: enough valid depth, a size the net can take
-    check_depth(small_depth, f"--depth {args.depth!r} (at the working size {shape[0]}×{shape[1]})")
+    what = f"--scene {args.scene!r}" if scene is not None else f"--depth {args.depth!r}"
+    check_depth(small_depth, f"{what} (at the working size {shape[0]}×{shape[1]})")
     check_input_size(config.paper.net, config.paper.channels, shape[0], shape[1],
-                     name=f"--depth {args.depth!r} (at the working size, --max-side {max_side})")
+                     name=f"{what} (at the working size, --max-side {max_side})")
+    small_camera, small_neighbors = None, ()
+    if args.variant == "rgbd+warp":  # the scene's calibrated neighbours, resampled as the photo is
+        small_camera = camera.resized(shape[1], shape[0])
+        small_neighbors = [View(*resize_view(v.rgb, v.depth, v.camera, shape), v.name) for v in scene.neighbors]
     refine = not (args.raw or args.no_refine) and shape != depth.shape
     if refine or args.raw:  # the recipe's solve (photo) runs at the photo's full size instead: twice costs
         config = config.replace(refine=False)
@@ -346,7 +452,8 @@ def _complete(args, writers, staged, start) -> int:
     classical = _classical_fills(depth, rgb, gt)
     planned = config.resolved_iterations(args.variant) * config.fit_count()  # every fit of the command
     with command_progress(planned, expected_share(config), earliest_share(config)):
-        result = complete_depth(small_rgb, small_depth, variant=args.variant, config=config, options=options)
+        result = complete_depth(small_rgb, small_depth, small_camera, small_neighbors, variant=args.variant,
+                                config=config, options=options)
     refine_seconds = None
     if refine:
         print(f"fit done in {result.seconds:.1f} s; sharpening the fill at {depth.shape[0]}×{depth.shape[1]} ...",
@@ -365,13 +472,18 @@ def _complete(args, writers, staged, start) -> int:
                    + (f", sharpened at {depth.shape[0]}×{depth.shape[1]}" if refine else "") + ", "
                    + ("the net's output everywhere" if args.raw else "valid input kept"),
                    (gt, scores) if scores else None)
-    if camera is not None:
+    if _ply_path(args):
         from ..evaluation.fusion import fuse_depths, save_ply
         save_ply(fuse_depths([filled], [camera], [rgb], min_views=0), staged(_ply_path(args)))  # one view: every pixel once
     print(comparison)
+    if scene is not None:  # Middlebury's own unit: disparity px at the scene's size (doffs cancels in a difference)
+        scored = ~np.isfinite(depth) & np.isfinite(gt)
+        px = {name: float(np.sqrt(np.mean((scene.fb / f[scored] - scene.fb / gt[scored]) ** 2)))
+              for name, f in {"DDP": filled, **classical}.items()}
+        print("hole RMSE in disparity px at the scene's size: " + ", ".join(f"{n} {v:.3f}" for n, v in px.items()))
     share = result.history.get("blend_fill", 0.0)
     print(f"filled {holes.mean():.1%} holes in {time.perf_counter() - start:.1f} s (the fit {result.seconds:.1f} s"
           + (f", with a {share:.0%} share of a colour-guided fill" if share else "")
           + (f"; sharpening at full size {refine_seconds:.1f} s" if refine_seconds is not None else "") + ") "
-          f"→ {args.out}; preview {_preview_path(args)}" + (f"; point cloud {_ply_path(args)}" if camera else ""))
+          f"→ {args.out}; preview {_preview_path(args)}" + (f"; point cloud {_ply_path(args)}" if _ply_path(args) else ""))
     return 0

@@ -27,7 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..data.middlebury_rail import ground_truth_occlusion, is_2014_folder, is_rail_folder, load_middlebury_scene
+from ..data.installed import DEPTHCOMP_FILE, scene_folders
+from ..data.middlebury_rail import ground_truth_occlusion, load_middlebury_scene
 from ..classical.holes import random_holes
 from ..data.samples import read_depthcomp_holes
 from .real_cases import RealCase, make_real_case
@@ -44,27 +45,14 @@ DROPOUT_SHARES = (0.02, 0.05)  # the share of the pixels a sensor's dropouts cov
 DROPOUT_BLOB = 0.01  # their blobs' blur scale, a fraction of the short side (a few px across at the eighth size)
 SUITE_SIZES = {"eighth": 160 * 140, "quarter": 320 * 280}  # target pixels of a pooled scene
 MOTORCYCLE = "Motorcycle"  # scikit-image's pair, always in the suite
-DEPTHCOMP_FILE = "plastic-disp-hole.png"
 
 
 def find_scenes(root) -> dict[str, Path]:
-    """{scene name: folder} of every Middlebury scene with ground truth under ``root`` (any depth), named
-    by the folder (``2006-Plastic``, ``HalfSize/Plastic`` → ``Plastic``; ``2014-Piano-Q`` → ``Piano``)."""
-    root = Path(root)
-    if not root.is_dir():
-        raise ValueError(f"root must be a folder of Middlebury scenes (as data_fetch installs them), got {root}")
-    found = {}
-    for folder in sorted(p for p in root.rglob("*") if p.is_dir()) + [root]:
-        if is_rail_folder(folder) or is_2014_folder(folder):
-            name = folder.name.split("-", 1)[1] if folder.name[:4].isdigit() and "-" in folder.name else folder.name
-            name = name[:-2] if name.endswith("-Q") else name
-            if name in found:
-                raise ValueError(f"root: two folders hold scene {name!r}: {found[name]} and {folder}")
-            found[name] = folder
-    if not found:
-        raise ValueError(f"root: no Middlebury scene with ground truth under {root} (a scene folder holds view1.png, "
-                         f"disp1.png and dmin.txt, or im0.png, calib.txt and disp0GT.pfm)")
-    return found
+    """{scene name: folder} of every Middlebury scene with ground truth under ``root`` (any depth; a data root
+    as ``data_fetch`` fills it, or the offline copies' folder), named by the folder (``2006-Plastic``,
+    ``HalfSize/Plastic`` → ``Plastic``; ``2014-Piano-Q``, ``trainingQ/Piano`` → ``Piano``), one copy of each:
+    ``data.installed.scene_folders``."""
+    return scene_folders(root)
 
 
 def _depthcomp_file(root) -> Path | None:
@@ -76,7 +64,7 @@ def suite_case_names(root) -> list[str]:
     """The suite's case names ``scene/holes``, hole kind by hole kind: Plastic with ``depthcomp`` when the
     hole file is under ``root``, then every scene of ``root`` and Motorcycle with ``blobs``, ``dropouts``, ``sgbm``,
     ``occlusion``."""
-    scenes = list(find_scenes(root)) + [MOTORCYCLE]
+    scenes = [name for name in find_scenes(root) if name != MOTORCYCLE] + [MOTORCYCLE]  # scikit-image's pair stands for it
     names = []
     for holes in SUITE_HOLES:  # hole kind by hole kind: a run stopped part-way has covered every scene once
         for scene in scenes:

@@ -17,14 +17,15 @@ import numpy as np
 from ..classical.baselines import BASELINES, PAPER_TABLE6
 from ..classical.baselines import PAPER_TABLE6_RMSE as BASELINE_PAPER_RMSE
 from ..classical.holes import stroke_holes
+from ..data.installed import DEPTHCOMP_FILE, SceneCopy, data_line, depthcomp_hole_file, find_scene, shipped_scene
 from ..data.middlebury_rail import load_rail_scene
-from ..data.samples import depthcomp_holes, read_depthcomp_holes, sample_scene
+from ..data.samples import read_depthcomp_holes
 from ..method.kit.recipes import FOR_PHOTOGRAPHS
 from ..method.profiles import get_profile
 from .real_cases import RealCase, compare_fills_on, factor_for_profile, make_real_case
 
-__all__ = ["TABLE6_SCENES", "PAPER_TABLE6_RMSE", "PAPER_ROWS", "table6_recipes", "table6_case", "table6", "paper_ratios",
-           "our_ratios"]
+__all__ = ["TABLE6_SCENES", "PAPER_TABLE6_RMSE", "PAPER_ROWS", "table6_recipes", "table6_sources", "table6_data_line",
+           "table6_case", "table6", "paper_ratios", "our_ratios"]
 
 TABLE6_SCENES = ("Plastic", "Baby1", "Bowling1")
 # The paper's Table 6 (RMSE, full-size disparity px: Plastic, Baby, Bowling) and the kit's fill for each row
@@ -43,24 +44,47 @@ def table6_recipes(profile=None) -> tuple[str, ...]:
     return tuple(dict.fromkeys(wanted))  # in order, once each (the recommendation may be one of the others)
 
 
+def table6_sources(profile=None, dest=None) -> dict[str, SceneCopy]:
+    """{scene: the copy Table 6 reads}: the copy of each of ``TABLE6_SCENES`` that ``data_fetch`` installed
+    (``middlebury2006``, any size: ``data.installed.find_scene``), else the shipped quarter-size sample. The
+    ``ci`` profile always takes the shipped ones (seconds, the same numbers on every machine)."""
+    use_installed = get_profile(profile).name != "ci"
+    return {scene: (use_installed and find_scene(scene, dest, ("middlebury2006",))) or shipped_scene(scene)
+            for scene in TABLE6_SCENES}
+
+
+def table6_data_line(profile=None, dest=None) -> str:
+    """The line that says which data Table 6 runs on (``data.installed.data_line``: for a shipped copy, the
+    command that installs the real one)."""
+    sources = table6_sources(profile, dest)
+    shipped = [scene for scene, copy in sources.items() if copy.dataset == "shipped"]
+    installed = [copy for copy in sources.values() if copy.dataset != "shipped"]
+    if installed and sources["Plastic"].dataset != "shipped":
+        installed.append(f"DepthComp's holes from {depthcomp_hole_file(sources['Plastic'], dest)}")
+    why = "the ci profile always runs on them" if get_profile(profile).name == "ci" else "not installed"
+    return data_line(installed, f"the shipped quarter-size {', '.join(shipped)}" if shipped else "", "middlebury2006",
+                     shipped, why)
+
+
 def table6_case(scene: str, profile=None, seed: int = 0, data=None) -> RealCase:
     """A Table 6 scene (``TABLE6_SCENES``) with its holes, pooled to the profile's size → :class:`RealCase`
     (the rail's view0 and view2 as neighbours). Plastic: DepthComp's own holes; the others: strokes
     (``seed``). ``data``: a folder of Middlebury scenes (``real_suite.find_scenes``) to take the scene from
-    at its own size (HalfSize, say), DepthComp's full-size hole file with it when it is there; None: the
-    shipped quarter-size copies. Deterministic."""
+    at its own size, DepthComp's full-size hole file with it when it is there; None: the copy
+    ``table6_sources`` names (installed, else shipped). Deterministic."""
     if scene not in TABLE6_SCENES:
         raise ValueError(f"scene must be one of {TABLE6_SCENES}, got {scene!r}")
     if data is None:
-        full = load_rail_scene(sample_scene(scene), name=scene)
-        hole_file = None
+        copy = table6_sources(profile)[scene]
+        full = load_rail_scene(copy.folder, name=scene)
+        hole_file = depthcomp_hole_file(copy)
     else:
-        from .real_suite import DEPTHCOMP_FILE, find_scenes  # the suite reads folders; only this path needs it
+        from .real_suite import find_scenes  # the suite reads folders; only this path needs it
 
         full = load_rail_scene(find_scenes(data)[scene], name=scene)
-        hole_file = next(iter(sorted(Path(data).rglob(DEPTHCOMP_FILE))), None)
+        hole_file = next(iter(sorted(Path(data).rglob(DEPTHCOMP_FILE))), None) or depthcomp_hole_file(shipped_scene(scene))
     if scene == "Plastic":
-        holes = depthcomp_holes(full.size) if hole_file is None else read_depthcomp_holes(hole_file, full.size)
+        holes = read_depthcomp_holes(hole_file, full.size)
     else:
         holes = ~stroke_holes(full[0].depth, seed=seed)[1] & np.isfinite(full[0].depth)
     factor = factor_for_profile(profile, full.size)

@@ -19,9 +19,11 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["SAMPLES", "sample_scene", "depthcomp_holes", "read_depthcomp_holes"]
+__all__ = ["SAMPLES", "SAMPLE_DATASETS", "sample_scene", "depthcomp_holes", "read_depthcomp_holes"]
 
 SAMPLES = ("Plastic", "Baby1", "Bowling1", "Art")
+SAMPLE_DATASETS = {"Plastic": "middlebury2006", "Baby1": "middlebury2006", "Bowling1": "middlebury2006",
+                   "Art": "middlebury2005"}  # the data_fetch dataset each was made from (its HalfSize files)
 _HERE = Path(__file__).resolve().parent
 
 
