@@ -229,6 +229,26 @@ TABLE2_CONFIGS = {  # Table 2's rows: (network, variant)
 }
 
 
+# How many (scene, seed) cases notebook 05 runs live at each profile: ci and class the first scene's first seed
+# (one fit per row; ci checks the flow, class fits in a lab's minutes), paper every scene × seed. The full
+# table with its spread at any profile: benchmarks/bench_ablation.py.
+LIVE_ABLATION_CASES = {"ci": 1, "class": 1, "paper": None}
+
+
+def ablation_cases(scenes, profile=None) -> list[tuple[str, int]]:
+    """The (scene, seed) cases notebook 05 runs live at ``profile`` (a name, a Profile or None:
+    ``DDP_PROFILE``): every scene in ``scenes`` × the profile's seeds, cut to the first
+    ``LIVE_ABLATION_CASES[profile]`` of them (None: all), scene by scene, seed by seed."""
+    if isinstance(scenes, str):
+        raise TypeError(f"scenes must be a sequence of scene names, not one name: got {scenes!r}")
+    profile = get_profile(profile)
+    scenes = tuple(scenes)
+    if not scenes or not all(isinstance(scene, str) for scene in scenes):
+        raise ValueError(f"scenes must be a non-empty sequence of scene names, got {scenes!r}")
+    cases = [(scene, seed) for scene in scenes for seed in profile.seeds]
+    return cases[:LIVE_ABLATION_CASES.get(profile.name)]
+
+
 def ablation(cases, configs: dict | None = None, profile=None, holes: str = "edge", tau: float = 0.01, log=print,
              **config_overrides):
     """Notebook 05's ablation (Table 2): every config ``{row: (net, variant)}`` or ``{row: (net, variant,
