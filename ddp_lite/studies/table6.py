@@ -36,11 +36,11 @@ PAPER_ROWS = dict(PAPER_TABLE6)  # the paper's rows the kit has (SSI and Depthco
 def table6_recipes(profile=None) -> tuple[str, ...]:
     """The recipes DDP runs under in Table 6 at ``profile`` (a name, a Profile or None: ``DDP_PROFILE``):
     the paper's and the one the kit recommends for real photographs (``recipes.FOR_PHOTOGRAPHS``), and at
-    ``ci`` and ``paper`` the ``kit`` recipe between them. ``class`` leaves ``kit`` out to keep a laptop's
-    run of notebook 06 to minutes (one fit per recipe and scene); notebook 10 puts its additions on the
-    paper's recipe one at a time."""
+    ``paper`` the ``kit`` recipe between them. ``class`` leaves ``kit`` out to keep a laptop's run of
+    notebook 06 to minutes (one fit per recipe and scene), ``ci`` to keep ``make test`` short (the cells
+    need only the paper's recipe); notebook 10 puts its additions on the paper's recipe one at a time."""
     name = get_profile(profile).name
-    wanted = ("paper", FOR_PHOTOGRAPHS) if name == "class" else ("paper", "kit", FOR_PHOTOGRAPHS)
+    wanted = ("paper", "kit", FOR_PHOTOGRAPHS) if name == "paper" else ("paper", FOR_PHOTOGRAPHS)
     return tuple(dict.fromkeys(wanted))  # in order, once each (the recommendation may be one of the others)
 
 
