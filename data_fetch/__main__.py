@@ -21,7 +21,7 @@ def main(argv=None) -> int:
     get = sub.add_parser("fetch", help="download (or take a manual download), verify and unpack a dataset")
     get.add_argument("name", choices=sorted(DATASETS))
     get.add_argument("--dest", help="data root (default: $DDP_DATA, else the user data dir)")
-    get.add_argument("--only", action="append", metavar="GLOB", help="only files matching GLOB (repeatable)")
+    get.add_argument("--only", action="append", metavar="WHICH", help="only these files: a scene (Plastic), a folder (HalfSize, HalfSize/Plastic) or a glob (HalfSize/P*); repeatable")
     get.add_argument("--trust-first-download", action="store_true",
                      help="accept unverified files once, record their SHA-256 next to the data, verify later fetches")
     get.add_argument("--from", dest="source", metavar="DIR",
