@@ -76,7 +76,8 @@ def fit_image(image, mask=None, config: FitConfig | None = None, clean=None, cal
     clean = check_image(clean, "clean", (H, W)) if clean is not None else None
     device = resolve_device(options)
     stopping = config.stopping
-    held_out = held_out_mask(mask, stopping.held_out_fraction, config.paper.seed) if stopping.auto_stop else np.zeros_like(mask)
+    held_out = (held_out_mask(mask, stopping.held_out_fraction, config.paper.seed) if stopping.auto_stop
+                else np.zeros_like(mask))
     target = to_tensor(image, device)
     fit_mask = to_tensor(mask & ~held_out, device)
     held_out_t = to_tensor(held_out, device)

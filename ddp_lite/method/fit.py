@@ -80,8 +80,8 @@ def run_fit(inputs: FitInputs, config: FitConfig, options: RunOptions, *, callba
     check_memory(config, options, spec.out_channels, H, W, len(neighbors) if w_warp > 0 else 0, device)
     valid = np.isfinite(depth)
     stopping = config.stopping
-    held_out = (held_out_mask(valid, stopping.held_out_fraction, config.paper.seed, stopping.held_out_shape) if stopping.auto_stop
-               else np.zeros_like(valid))
+    held_out = (held_out_mask(valid, stopping.held_out_fraction, config.paper.seed, stopping.held_out_shape)
+                if stopping.auto_stop else np.zeros_like(valid))
     if (valid & ~held_out).sum() < MIN_VALID_PIXELS:
         held_out = np.zeros_like(valid)
     disparity_in = transform.to_disparity(depth)  # (H, W), NaN in the holes
@@ -94,7 +94,8 @@ def run_fit(inputs: FitInputs, config: FitConfig, options: RunOptions, *, callba
     paper_loss = PaperLoss(spec, config.paper, transform, target, fit_mask, rgb_t, camera, nbrs, device,
                            **kit_warp_arguments(config.warp, config.paper.lambda_w, transform, fit_mask, rgb_t, camera,
                                                 nbrs, device),
-                           extra_terms=[HoleTerms(config.holes, ~(valid & ~held_out), rgb_t, rgb, device, disparity_in)])
+                           extra_terms=[HoleTerms(config.holes, ~(valid & ~held_out), rgb_t, rgb, device,
+                                                  disparity_in)])
 
     def loss_fn(output):  # (1, 1 or 4, H, W): Z_out, then I_out
         disparity = output[:, :1]  # one view for every term: the gradients add up in the same order

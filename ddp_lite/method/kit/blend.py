@@ -70,7 +70,8 @@ from ...core.settings import Settings
 
 __all__ = ["CombinationConfig", "DEPTH_SOURCES", "RIM_DISTRUST", "TUNED_SHORT_SIDE", "FILL_MEMBER_LENGTHS",
            "fill_member_settings", "rim_width", "trusted_depth", "BLEND_WEIGHTS", "FILL_SHARES",
-           "validation_ring", "best_weight", "ring_width", "fill_disparity", "FILL_MEMBERS", "fill_held_out_mask", "best_fill_share"]
+           "validation_ring", "best_weight", "ring_width", "fill_disparity", "FILL_MEMBERS",
+           "fill_held_out_mask", "best_fill_share"]
 
 BLEND_WEIGHTS = (0.0, 0.25, 0.5, 0.75, 1.0)  # the kit fit's weight; 0 is the paper's fit alone
 RING_SHARE = 0.5  # the share of the ring held out: the rest keeps the holes' edges where they are
