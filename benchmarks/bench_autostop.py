@@ -39,16 +39,16 @@ from _common import add_profile_args, profile_from_args, parse_args, positive_in
 SCENES = ("house", "desk", "room", "street")
 
 
-def replay(heldout, patience: int, eval_every: int, decays: int):
+def replay(held_out, patience: int, eval_every: int, decays: int):
     """The auto-stop of ``ddp_lite.method.loop.run`` on a recorded held-out curve: (index kept, index stopped at)."""
     stopper, kept = PlateauStopper(patience, eval_every, decays), 0
-    for i, error in enumerate(heldout):
+    for i, error in enumerate(held_out):
         event = stopper.update(error)
         if event == "improved":
             kept = i
         elif event == "stop":
             return kept, i
-    return kept, len(heldout) - 1
+    return kept, len(held_out) - 1
 
 
 def main(argv=None) -> None:
@@ -77,10 +77,10 @@ def main(argv=None) -> None:
                                         config=long_config, gt_depth=case.scored_gt, transform=case.transform,
                                         options=RunOptions(progress=False))
                 h = result.history
-                its, heldout, hole = h["eval_iteration"], h["heldout"], 100 * h["hole_rmse"]
+                its, held_out, hole = h["eval_iteration"], h["held_out"], 100 * h["hole_rmse"]
                 stopping = config.stopping
-                kept, stopped = replay(heldout, stopping.patience, stopping.eval_every, stopping.plateau_decays)
-                plain, _ = replay(heldout, stopping.patience, stopping.eval_every, 0)
+                kept, stopped = replay(held_out, stopping.patience, stopping.eval_every, stopping.plateau_decays)
+                plain, _ = replay(held_out, stopping.patience, stopping.eval_every, 0)
                 oracle = int(np.argmin(hole))
                 near = 100 * np.mean(hole[its >= 100] <= 1.05 * hole[oracle])
                 rows.append(dict(scene=scene, variant=variant, seed=seed, oracle=hole[oracle], oracle_it=its[oracle],
@@ -92,7 +92,7 @@ def main(argv=None) -> None:
           f"patience {config.stopping.patience}, "
           + ("constant lr, stop at the first plateau, " if args.constant_lr else
              f"{config.stopping.plateau_decays} lr cut(s) ×{config.paper.lr_gamma:g} then stop, ") +
-          f"held-out {config.stopping.holdout_fraction:.0%} of the valid pixels")
+          f"held-out {config.stopping.held_out_fraction:.0%} of the valid pixels")
     head = (f"{'scene':<7} {'variant':<10} {'seed':>4} {'oracle':>7} {'@it':>5} {'kept':>7} {'@it':>5} {'gap %':>6} "
             f"{'stop it':>7} {'plain gap %':>11} {'final gap %':>11} {'near %':>6}")
     print(head)

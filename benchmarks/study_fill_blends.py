@@ -17,7 +17,7 @@ half of the scenes and confirmed on the other.
 The best classical fill differs from case to case (the bilateral solver on most, colorization on
 occlusions, the guided filter on Plastic's strokes), so "DDP over the best fill" compares DDP with an
 oracle. A method may only choose from what the input shows. Here every choice is made on **held-out
-valid depth**: 5 % of the valid pixels in hole-like blobs (``kit.blend.fill_holdout``) are taken out of
+valid depth**: 5 % of the valid pixels in hole-like blobs (``kit.blend.fill_held_out_mask``) are taken out of
 the input before DDP fits and before every fill runs, and the rule picks what predicts them best.
 
 ``fit``: one ``kit`` DDP fit per case and seed on the held-out input, without the fill's share
@@ -73,7 +73,7 @@ from ddp_lite.method.complete import complete_depth  # noqa: E402
 from ddp_lite.method.config import FitConfig  # noqa: E402
 from ddp_lite.method.runtime.options import RunOptions  # noqa: E402
 from ddp_lite.classical.full_resolution import SMOOTHNESS_STEREO, refine_full_resolution, refine_over_smoothness  # noqa: E402
-from ddp_lite.method.kit.blend import FILL_MEMBERS, best_fill_share, fill_holdout, trusted_depth  # noqa: E402
+from ddp_lite.method.kit.blend import FILL_MEMBERS, best_fill_share, fill_held_out_mask, trusted_depth  # noqa: E402
 from bench_real import table6_fills  # noqa: E402
 from ddp_lite.studies.real_suite import (SUITE_HALF_A, SUITE_HOLES, make_suite_case, suite_case_names,  # noqa: E402
                                          suite_half)
@@ -99,9 +99,9 @@ def half(case: str) -> str:
 
 
 def held_out_input(case, seed: int) -> tuple[np.ndarray, np.ndarray]:
-    """The case's input with ``fill_holdout``'s blobs of valid depth taken out, and those blobs (H, W) bool."""
-    heldout = fill_holdout(np.isfinite(case.depth), seed)
-    return np.where(heldout, np.nan, case.depth).astype(np.float32), heldout
+    """The case's input with ``fill_held_out_mask``'s blobs of valid depth taken out, and those blobs (H, W) bool."""
+    held_out = fill_held_out_mask(np.isfinite(case.depth), seed)
+    return np.where(held_out, np.nan, case.depth).astype(np.float32), held_out
 
 
 def fit(data, names, seeds, fits: Path, variant: str, size: str, channels: tuple | None = None,
@@ -124,7 +124,7 @@ def fit(data, names, seeds, fits: Path, variant: str, size: str, channels: tuple
                                      f"{made_with}; give another --fits folder")
                 continue
             case = make_suite_case(data, name, size)
-            depth, heldout = held_out_input(case, seed)
+            depth, held_out = held_out_input(case, seed)
             config = FitConfig.for_profile("class", variant=variant, recipe="kit", seed=seed, blend_fill=0.0,
                                            **({"channels": channels} if channels else {}), **(settings or {}))
             began = time.perf_counter()
@@ -133,7 +133,7 @@ def fit(data, names, seeds, fits: Path, variant: str, size: str, channels: tuple
                                     options=RunOptions(progress=False))
             seconds = time.perf_counter() - began
             with atomic_path(path) as temporary:
-                np.savez_compressed(temporary, depth=result.depth, heldout=heldout, seconds=seconds,
+                np.savez_compressed(temporary, depth=result.depth, held_out=held_out, seconds=seconds,
                                     made_with=np.array(made_with))
             print(f"{name:<24} seed {seed}: {seconds:.0f} s ({(time.perf_counter() - start) / 60:.1f} min in all)",
                   flush=True)
@@ -153,11 +153,11 @@ def _rmse(estimate: np.ndarray, truth: np.ndarray, mask: np.ndarray) -> float:
     return float(np.sqrt(np.mean((estimate[mask] - truth[mask]) ** 2)))
 
 
-def rules(case, fit_depth: np.ndarray, heldout: np.ndarray, seed: int, core: bool = False) -> dict[str, float]:
+def rules(case, fit_depth: np.ndarray, held_out: np.ndarray, seed: int, core: bool = False) -> dict[str, float]:
     """{rule: hole RMSE in disparity px} for one case and its saved fit (module docstring); ``core``: only
     the fills, ``fit``, ``kit``, ``fixed 1.0``, ``refined + 0.25`` and ``mean of 4 solves + 0.25`` (a
     fifth of the time, enough to compare two sets of fits)."""
-    held_depth = np.where(heldout, np.nan, case.depth)
+    held_depth = np.where(held_out, np.nan, case.depth)
     truth_in = case.fb / case.depth  # (H, W) px disparity of the input, NaN in its holes
     fit_px = case.fb / fit_depth
     fills_all = {n: f(truth_in, case.rgb) for n, f in BASELINES.items()}  # (H, W) px each
@@ -187,7 +187,7 @@ def rules(case, fit_depth: np.ndarray, heldout: np.ndarray, seed: int, core: boo
     mean_held = np.mean([fills_held[n] for n in FILL_MEMBERS], axis=0)
 
     def chosen_share(fill_held):  # the kit's own held-out choice, over shares up to the fill alone
-        return best_fill_share(fit_px, fill_held, truth_in, heldout, SHARES)[0]
+        return best_fill_share(fit_px, fill_held, truth_in, held_out, SHARES)[0]
 
     out = {f"fill {n}": score(px) for n, px in fills_all.items()}
     out.update(stereo_rule)
@@ -197,7 +197,7 @@ def rules(case, fit_depth: np.ndarray, heldout: np.ndarray, seed: int, core: boo
         out[f"fixed {f:.1f}"] = score((1 - f) * fit_px + f * mean_all)
     f = chosen_share(mean_held)
     out["chosen share"], out["chosen share: f"] = score((1 - f) * fit_px + f * mean_all), f
-    best = min(fills_held, key=lambda n: _rmse(fills_held[n], truth_in, heldout))
+    best = min(fills_held, key=lambda n: _rmse(fills_held[n], truth_in, held_out))
     out["chosen fill"] = score(fills_all[best])
     f = chosen_share(fills_held[best])
     out["chosen fill + share"], out["chosen fill + share: f"] = score((1 - f) * fit_px + f * fills_all[best]), f
@@ -214,7 +214,7 @@ def rules(case, fit_depth: np.ndarray, heldout: np.ndarray, seed: int, core: boo
     for s, lam in SMOOTHNESS:
         solves[s, lam] = case.fb / refine_full_resolution(case.depth, case.rgb, fit_depth, sigma_xy=s, lam=lam)
         held_refined = case.fb / refine_full_resolution(held_depth, case.rgb, fit_depth, sigma_xy=s, lam=lam)
-        predicted[s, lam] = _rmse(held_refined, truth_in, heldout)
+        predicted[s, lam] = _rmse(held_refined, truth_in, held_out)
         out[f"solve {s:g},{lam:g} + 0.25"] = score((1 - KIT_SHARE) * solves[s, lam] + KIT_SHARE * mean_all)
     chosen = min(SMOOTHNESS, key=predicted.get)
     out["chosen solve + 0.25"] = score((1 - KIT_SHARE) * solves[chosen] + KIT_SHARE * mean_all)
@@ -236,7 +236,7 @@ def report(data, names, seeds, fits: Path, variant: str, size: str, out: Path, f
                 continue
             case = make_suite_case(data, name, size)
             with np.load(path) as saved:
-                scores = rules(case, _saved_depth(saved, path, case), saved["heldout"], seed, core)
+                scores = rules(case, _saved_depth(saved, path, case), saved["held_out"], seed, core)
                 seconds = float(saved["seconds"])
             rows.append(dict(case=name, seed=seed, variant=variant, size=size, half=half(name), fit_seconds=seconds,
                              **scores))

@@ -109,7 +109,7 @@ STUDY = {
     "smooth1-it300": dict(smoothness=1.0, iterations=300),
     "smooth1-lr3e-3": dict(smoothness=1.0, lr=3e-3),
     "smooth1-ens3": dict(smoothness=1.0, ensemble=3),
-    "holdout-blobs": dict(holdout="blobs"),
+    "holdout-blobs": dict(held_out_shape="blobs"),
     "step3": dict(step_reach=3.0),  # real data: the hole terms off within 3 px of a depth step of the input,
     "step6": dict(step_reach=6.0),  # ... within 6 px (occlusion bands are 2-10 px wide at 125×185)
     "blend-ring": dict(blend_paper=True, blend_weight=None),  # the photo recipe's blend, its weight from a held-out ring

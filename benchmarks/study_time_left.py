@@ -52,7 +52,7 @@ def record(lane: int, lanes: int, out: str) -> None:
             rows.record(dict(case=name, variant=variant, seed=seed, profile=profile.name, cap=config.paper.iterations,
                              ran=int(result.iterations), cuts=[int(i) for i in history["lr_decay_iteration"]],
                              eval_iteration=[int(i) for i in history["eval_iteration"]],
-                             heldout=[float(e) for e in history["heldout"]],
+                             held_out=[float(e) for e in history["held_out"]],
                              patience=config.stopping.patience, eval_every=config.stopping.eval_every,
                              decays=config.stopping.plateau_decays, seconds=time.perf_counter() - start))
     finally:
@@ -69,7 +69,8 @@ def old_rule(stopper: PlateauStopper, done: int, cap: int) -> int:
 def replay(row: dict, rule) -> list:
     """(estimated − actual) / actual iterations left at each progress line from 20 % of the cap on."""
     stopper, errors = PlateauStopper(row["patience"], row["eval_every"], row["decays"]), []
-    for done, error in zip(row["eval_iteration"], row["heldout"]):
+    held_out = row["held_out"] if "held_out" in row else row["heldout"]  # the committed rows spell it "heldout"
+    for done, error in zip(row["eval_iteration"], held_out):
         if stopper.update(error) == "stop":
             break
         if done % (row["cap"] // 10) == 0 and done >= 0.2 * row["cap"] and done < row["ran"]:

@@ -123,7 +123,7 @@ CONFIG_BAD = {
     "flatness": [-0.5, float("inf"), float("nan")], "flatness_reach": [-1.0, float("inf"), "4"],
     "image_input": [-1.0, float("nan"), "1"], "image_blur": [-0.5, float("inf")],
     "disparity_margin": [0.5, float("inf"), float("nan")],
-    "holdout_fraction": [0.0, 0.5, float("nan")],
+    "held_out_fraction": [0.0, 0.5, float("nan")],
     "patience": [0, 2.5], "plateau_decays": [-1, 1.5], "eval_every": [0, True],
     "seed": [-1, 1.5, "0"],
     "auto_stop": ["yes", 1], "bf16": ["no", 0],

@@ -6,8 +6,8 @@ import torch
 
 from ddp_lite.method.config import FitConfig
 from ddp_lite.method.complete import complete_depth
-from ddp_lite.method.kit.blend import (BLEND_WEIGHTS, FILL_SHARES, best_fill_share, best_weight, fill_holdout, ring_width,
-                                  validation_ring)
+from ddp_lite.method.kit.blend import (BLEND_WEIGHTS, FILL_SHARES, best_fill_share, best_weight, fill_held_out_mask,
+                                  ring_width, validation_ring)
 from ddp_lite.method.kit.recipes import get_recipe
 from conftest import TINY, tilted_plane
 
@@ -311,16 +311,17 @@ def test_best_fill_share_is_the_least_squares_share_on_the_grid():
     assert best_fill_share(truth + 1.0, truth, truth, held)[0] == max(FILL_SHARES)  # at most the grid's largest
 
 
-def test_the_fill_holdout_is_blobs_of_one_twentieth_of_the_valid_pixels():
+def test_the_fill_held_out_mask_is_blobs_of_one_twentieth_of_the_valid_pixels():
     from scipy import ndimage
 
     valid = np.ones((96, 128), bool)
     valid[30:60, 30:90] = False
-    held = fill_holdout(valid, seed=1)
+    held = fill_held_out_mask(valid, seed=1)
     assert not (held & ~valid).any() and held.sum() == pytest.approx(0.05 * valid.sum(), rel=0.02)
     labels, count = ndimage.label(held)
     assert count < held.sum() / 10  # patches of tens of pixels, not scattered ones
-    assert np.array_equal(held, fill_holdout(valid, seed=1)) and not np.array_equal(held, fill_holdout(valid, seed=2))
+    assert np.array_equal(held, fill_held_out_mask(valid, seed=1))
+    assert not np.array_equal(held, fill_held_out_mask(valid, seed=2))
 
 
 def test_blend_fill_none_chooses_the_share_on_depth_held_out_of_the_fit():
@@ -329,7 +330,7 @@ def test_blend_fill_none_chooses_the_share_on_depth_held_out_of_the_fit():
     chosen = complete_depth(rgb, depth, variant="rgbd", config=base.replace(blend_fill=None))
     assert np.array_equal(depth, given, equal_nan=True)  # the caller's array is untouched
     # by hand: the blobs held out of the fit, the fill of what is left, the share from the blobs
-    held = fill_holdout(np.isfinite(depth), seed=base.paper.seed)
+    held = fill_held_out_mask(np.isfinite(depth), seed=base.paper.seed)
     held_out = np.where(held, np.nan, depth)
     alone = complete_depth(rgb, held_out, variant="rgbd", config=base, transform=chosen.transform)
     target = chosen.transform.to_disparity(depth)

@@ -112,9 +112,9 @@ def test_rgbd_warp_runs_with_neighbours_and_auto_stop_keeps_the_best():
     result = complete_depth(rgb, depth, ref, [(rgb, nbr)], variant="rgbd+warp", config=config, gt_depth=gt)
     assert {"disp", "rgb", "warp"} <= set(result.history)
     assert result.best_iteration <= result.iterations <= 40
-    heldout = result.history["heldout"]
+    held_out = result.history["held_out"]
     best_index = list(result.history["eval_iteration"]).index(result.best_iteration)
-    assert heldout[best_index] == pytest.approx(np.min(heldout[: len(heldout)]))
+    assert held_out[best_index] == pytest.approx(np.min(held_out[: len(held_out)]))
 
 
 @pytest.mark.parametrize("decays, expected", [

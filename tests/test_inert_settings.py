@@ -136,6 +136,19 @@ def test_a_config_field_given_to_complete_depth_names_fitconfig():
         complete_depth(rgb, depth, variant="rgbd", confg=None)
 
 
+@pytest.mark.parametrize("old, new", [("holdout", "held_out_shape"), ("holdout_fraction", "held_out_fraction")])
+def test_an_old_spelling_of_a_field_is_refused_with_its_new_name(old, new):
+    rgb, depth, _, _ = _inputs()
+    value = "blobs" if new == "held_out_shape" else 0.1
+    for call in (lambda: FitConfig(**{old: value}), lambda: FitConfig.for_profile("ci", **{old: value}),
+                 lambda: FitConfig().replace(**{old: value}), lambda: getattr(FitConfig(), old)):
+        with pytest.raises((TypeError, AttributeError), match=rf"{old!r}: the field is now {new!r}"):
+            call()
+    with pytest.raises(TypeError, match=rf"complete_depth\(\) got {old!r}: it is now the FitConfig field {new!r}"):
+        complete_depth(rgb, depth, variant="rgbd", **{old: value})
+    assert getattr(FitConfig(**{new: value}).stopping, new) == value  # the new name is the field
+
+
 def test_the_other_fit_entry_points_name_run_options_too():
     from ddp_lite.method.coarse_to_fine import complete_depth_coarse_to_fine
     from ddp_lite.method.dip import fit_image

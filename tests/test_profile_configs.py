@@ -22,7 +22,7 @@ DEFAULTS = dict(
     # combination
     ensemble=1, blend_paper=False, blend_weight=0.5, blend_fill=0.0, refine=False, depth_source='clean',
     # stopping
-    auto_stop=False, holdout_fraction=0.05, holdout='pixels', patience=200, plateau_decays=0, eval_every=10,
+    auto_stop=False, held_out_fraction=0.05, held_out_shape='pixels', patience=200, plateau_decays=0, eval_every=10,
     # tricks
     reg_noise_std=0.0, average_outputs=0.0,
     # precision

@@ -18,13 +18,13 @@ def test_a_log_gets_one_short_line_every_ten_percent():
     assert isinstance(bar, LineProgress)
     for i in bar:
         if i == 100:
-            bar.set_postfix(heldout="0.0123", refresh=False)
+            bar.set_postfix(held_out="0.0123", refresh=False)
     bar.close()  # the fit loop (method/loop.py) closes after the loop too: no second last line
     lines = log.getvalue().splitlines()
     assert "\r" not in log.getvalue()
     assert [line.split()[2] for line in lines[:-1]] == [f"{p}%" for p in range(10, 100, 10)]
     assert lines[0].startswith("DDP rgbd: 10% (15/150)")
-    assert lines[-1].startswith("DDP rgbd: done (150/150)") and lines[-1].endswith("heldout=0.0123")
+    assert lines[-1].startswith("DDP rgbd: done (150/150)") and lines[-1].endswith("held_out=0.0123")
     assert max(len(line) for line in lines) < 80
 
 
@@ -80,8 +80,8 @@ def test_the_loop_reports_through_the_hook_its_caller_passes():
         def __iter__(self):
             return iter(range(self.iterations))
 
-        def heldout(self, error):
-            self.calls.append(("heldout", error))
+        def held_out(self, error):
+            self.calls.append(("held_out", error))
 
         def expect(self, expected_total, earliest_total):
             self.calls.append(("expect", expected_total, earliest_total))
@@ -101,8 +101,8 @@ def test_the_loop_reports_through_the_hook_its_caller_passes():
     _, history, ran, _ = loop.run(net, noise, loss_fn, config, 20, lambda out: float(out.abs().mean()),
                                   progress=recorder, options=RunOptions())
     kinds = [call[0] for call in recorder.calls]
-    assert ran == 20 and kinds == ["heldout", "expect"] * 4 + ["close"]
-    assert np.allclose([c[1] for c in recorder.calls if c[0] == "heldout"], history["heldout"])
+    assert ran == 20 and kinds == ["held_out", "expect"] * 4 + ["close"]
+    assert np.allclose([c[1] for c in recorder.calls if c[0] == "held_out"], history["held_out"])
     assert all(0 < c[2] <= c[1] <= 20 for c in recorder.calls if c[0] == "expect")
     with command_progress(20, expected_share=0.5) as clock:
         bar = FitBar(20, "fit", enabled=False)

@@ -325,21 +325,21 @@ def test_bf16_none_follows_the_cpu_flags():
 
 
 @pytest.mark.parametrize("shape", ["pixels", "blobs"])
-def test_holdout_takes_its_share_of_valid_pixels_only(shape):
-    from ddp_lite.method.stopping import holdout_mask
+def test_held_out_takes_its_share_of_valid_pixels_only(shape):
+    from ddp_lite.method.stopping import held_out_mask
     valid = np.ones((48, 64), bool)
     valid[:, :20] = False  # a hole: never held out
-    held = holdout_mask(valid, 0.05, seed=3, shape=shape)
+    held = held_out_mask(valid, 0.05, seed=3, shape=shape)
     assert not held[~valid].any()
     assert abs(held.sum() / valid.sum() - 0.05) < 0.02
-    np.testing.assert_array_equal(held, holdout_mask(valid, 0.05, seed=3, shape=shape))  # seeded
+    np.testing.assert_array_equal(held, held_out_mask(valid, 0.05, seed=3, shape=shape))  # seeded
 
 
-def test_holdout_blobs_are_patches_not_scattered_pixels():
+def test_held_out_blobs_are_patches_not_scattered_pixels():
     from scipy import ndimage
-    from ddp_lite.method.stopping import holdout_mask
+    from ddp_lite.method.stopping import held_out_mask
     valid = np.ones((96, 128), bool)
-    pixels, blobs = (holdout_mask(valid, 0.05, seed=0, shape=s) for s in ("pixels", "blobs"))
+    pixels, blobs = (held_out_mask(valid, 0.05, seed=0, shape=s) for s in ("pixels", "blobs"))
     # 4-connected components: ~600 scattered pixels are mostly alone; blobs are a handful of patches
     assert ndimage.label(pixels)[1] > 400
     assert ndimage.label(blobs)[1] < 30
@@ -348,9 +348,9 @@ def test_holdout_blobs_are_patches_not_scattered_pixels():
     assert inner.sum() > 0.4 * blobs.sum()
 
 
-def test_bad_holdout_names_the_argument():
-    with pytest.raises(ValueError, match="config.holdout"):
-        FitConfig(holdout="rings").validate()
+def test_bad_held_out_shape_names_the_argument():
+    with pytest.raises(ValueError, match="config.held_out_shape"):
+        FitConfig(held_out_shape="rings").validate()
 
 
 def test_meshgrid_input_is_the_pixel_coordinates_then_seeded_noise():

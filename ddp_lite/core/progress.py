@@ -295,7 +295,7 @@ class FitProgress(Protocol):
     def __iter__(self) -> Iterator[int]:
         """The iteration numbers 0, 1, ..., ``iterations - 1``, each handed out as the loop takes it."""
 
-    def heldout(self, error: float) -> None:
+    def held_out(self, error: float) -> None:
         """The latest held-out error (mean |Z_out − Z_in| over the held-out pixels, normalised disparity)."""
 
     def expect(self, expected_total: int, earliest_total: int) -> None:
@@ -319,8 +319,8 @@ class FitBar:
     def __iter__(self) -> Iterator[int]:
         return iter(self.bar)
 
-    def heldout(self, error: float) -> None:
-        self.bar.set_postfix(heldout=f"{error:.4f}", refresh=False)
+    def held_out(self, error: float) -> None:
+        self.bar.set_postfix(held_out=f"{error:.4f}", refresh=False)
 
     def expect(self, expected_total: int, earliest_total: int) -> None:
         if self._clock_bar is not None:

@@ -13,7 +13,7 @@ import torch
 from ..core.camera import Camera
 from .config import FitConfig
 from .paper.disparity import DisparityTransform
-from .complete import fill_heldout, held_out, with_fill_share
+from .complete import fill_held_out, without_held_out, with_fill_share
 from .fit import check_run, fit_once, run_fit
 from .input_checks import check_fit_inputs
 from .kit.combine import refined
@@ -77,7 +77,7 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
     given (auto-stop included); the learning-rate schedule continues across the two stages.
     It is one fit: ``config.combination``'s ``ensemble`` and ``blend_paper`` do not apply; its ``refine`` and
     ``blend_fill`` do, to the full-size result (None: both stages fit without the held-out blobs that choose the share,
-    as in :func:`complete_depth`: :func:`~ddp_lite.method.complete.fill_heldout`).
+    as in :func:`complete_depth`: :func:`~ddp_lite.method.complete.fill_held_out`).
 
     Args:
         rgb: (H, W, 3) float in [0, 1] (may be None for ``variant="d"``).
@@ -106,8 +106,8 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
     options = check_run(options)
     config = FitConfig.for_profile(variant=variant) if config is None else config
     inputs, config = check_fit_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth, transform)
-    blobs = fill_heldout(inputs.depth, config)  # held out of both stages to choose the fill's share
-    seen = held_out(inputs, blobs)
+    blobs = fill_held_out(inputs.depth, config)  # held out of both stages to choose the fill's share
+    seen = without_held_out(inputs, blobs)
     rgb, depth, camera, neighbors, gt_depth = seen.rgb, seen.depth, seen.camera, seen.neighbors, seen.gt_depth
     scale = int(scale)
     H, W = depth.shape

@@ -20,7 +20,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from .kit.blend import best_fill_share, fill_holdout
+from .kit.blend import best_fill_share, fill_held_out_mask
 from .fit_cache import cached
 from ..core.camera import Camera
 from ..core.checks import MIN_VALID_PIXELS
@@ -34,7 +34,7 @@ from .fit import check_run, run_fit
 from .kit.combine import combine_fits, fit_members, input_fill, mixed_with_fill, refined
 from .result import DepthResult
 
-__all__ = ["complete_depth", "fill_heldout", "held_out", "with_fill_share"]
+__all__ = ["complete_depth", "fill_held_out", "without_held_out", "with_fill_share"]
 
 
 @names_misplaced_arguments
@@ -74,10 +74,10 @@ def complete_depth(rgb, depth, camera: Camera | None = None, neighbors=(), varia
     inputs, config = check_fit_inputs(rgb, depth, camera, neighbors, variant, config, gt_depth, transform)
     target = inputs.transform.to_disparity(inputs.depth)  # (H, W), NaN holes: what held-out pixels are judged by
     # what the fits see: the input less the valid pixels held out to choose the fill's share and a blend's weight
-    blobs = fill_heldout(inputs.depth, config)
-    seen = held_out(inputs, blobs)
+    blobs = fill_held_out(inputs.depth, config)
+    seen = without_held_out(inputs, blobs)
     members, ring = fit_members(seen.depth, config)
-    fitted = held_out(seen, ring)
+    fitted = without_held_out(seen, ring)
     # the fits, side by side where they may; a warm start fits the config's own net (a blend's second is the paper's)
     workers = side_by_side_workers(members[0], options, seen.spec, seen.depth.shape, len(seen.neighbors),
                                    len(members), callback)
@@ -90,29 +90,29 @@ def complete_depth(rgb, depth, camera: Camera | None = None, neighbors=(), varia
     return with_fill_share(result, inputs, seen, config, blobs, target)
 
 
-def fill_heldout(depth: np.ndarray, config: FitConfig) -> np.ndarray | None:
+def fill_held_out(depth: np.ndarray, config: FitConfig) -> np.ndarray | None:
     """``blend_fill=None``: the valid pixels of ``depth`` (H, W) metres held out of the fits to choose the fill's
-    share, blobs of :func:`~ddp_lite.method.kit.blend.fill_holdout` (H, W) bool; None where the share is given,
+    share, blobs of :func:`~ddp_lite.method.kit.blend.fill_held_out_mask` (H, W) bool; None where the share is given,
     or where too little valid depth is left to hold any out (the share is then 0)."""
     if config.combination.blend_fill is not None:
         return None
     valid = np.isfinite(depth)
-    heldout = fill_holdout(valid, config.paper.seed)
-    if heldout.sum() < MIN_VALID_PIXELS or (valid & ~heldout).sum() < MIN_VALID_PIXELS:
+    held_out = fill_held_out_mask(valid, config.paper.seed)
+    if held_out.sum() < MIN_VALID_PIXELS or (valid & ~held_out).sum() < MIN_VALID_PIXELS:
         return None
-    return heldout
+    return held_out
 
 
-def held_out(inputs: FitInputs, heldout: np.ndarray | None) -> FitInputs:
-    """``inputs`` with the ``heldout`` (H, W) bool pixels of their depth made holes; None: ``inputs`` as they are."""
-    if heldout is None:
+def without_held_out(inputs: FitInputs, held_out: np.ndarray | None) -> FitInputs:
+    """``inputs`` with the ``held_out`` (H, W) bool pixels of their depth made holes; None: ``inputs`` as they are."""
+    if held_out is None:
         return inputs
-    return replace(inputs, depth=np.where(heldout, np.nan, inputs.depth).astype(np.float32))
+    return replace(inputs, depth=np.where(held_out, np.nan, inputs.depth).astype(np.float32))
 
 
 def with_fill_share(result: DepthResult, inputs: FitInputs, seen: FitInputs, config: FitConfig,
-                    heldout: np.ndarray | None, target: np.ndarray) -> DepthResult:
-    """``result``, fitted on ``seen`` (``inputs`` less the ``heldout`` blobs of :func:`fill_heldout`), with
+                    held_out: np.ndarray | None, target: np.ndarray) -> DepthResult:
+    """``result``, fitted on ``seen`` (``inputs`` less the ``held_out`` blobs of :func:`fill_held_out`), with
     ``config.combination.blend_fill`` f of the colour-guided fill of ``inputs`` mixed in
     (:func:`~ddp_lite.method.kit.combine.mixed_with_fill`; f = 0: ``result`` as it is). f = None: the share whose mix with a fill of ``seen`` best predicts ``target``
     (the input depth in normalised disparity, (H, W)) on the held-out blobs
@@ -121,11 +121,11 @@ def with_fill_share(result: DepthResult, inputs: FitInputs, seen: FitInputs, con
     share, errors, source = config.combination.blend_fill, None, config.combination.depth_source
     if share == 0:
         return result
-    if share is None and heldout is None:
+    if share is None and held_out is None:
         share = 0.0
     elif share is None:
         share, errors = best_fill_share(result.disparity, input_fill(seen.depth, seen.rgb, result.transform, source),
-                                        target, heldout)
+                                        target, held_out)
     mixed = mixed_with_fill(result, inputs.depth, inputs.rgb, share, source)
     if errors is not None:
         mixed.history["blend_fill_errors"] = errors

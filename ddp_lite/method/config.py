@@ -46,12 +46,14 @@ from .runtime.device import Precision
 from .runtime.options import RUN_OPTIONS
 from .stopping import StoppingConfig
 
-__all__ = ["FitConfig", "SECTIONS", "FIELDS"]
+__all__ = ["FitConfig", "SECTIONS", "FIELDS", "RENAMED_FIELDS"]
 
 SECTIONS = {"paper": PaperConfig, "net_inputs": NetInputConfig, "holes": HoleConfig, "warp": WarpConfig,
             "combination": CombinationConfig, "stopping": StoppingConfig, "tricks": DipTricks, "precision": Precision}
 SECTION_OF = {f.name: section for section, cls in SECTIONS.items() for f in dataclasses.fields(cls)}  # field → section
 FIELDS = tuple(SECTION_OF)  # every field by its own name, section by section: the order of every flat view
+# old spellings of fields, refused with the new name wherever a field is given or read by name
+RENAMED_FIELDS = {"holdout": "held_out_shape", "holdout_fraction": "held_out_fraction"}
 
 
 @dataclass(init=False, slots=True)
@@ -171,7 +173,9 @@ class FitConfig:
 
 
 def _not_a_field(name: str, message: str) -> str:
-    """What to say of ``name``, no field of a FitConfig: where a run option goes, or the nearest name."""
+    """What to say of ``name``, no field of a FitConfig: its new name, where a run option goes, or the nearest name."""
+    if name in RENAMED_FIELDS:
+        return f"FitConfig has no {name!r}: the field is now {RENAMED_FIELDS[name]!r}"
     if name in RUN_OPTIONS:
         return (f"FitConfig has no {name!r}: it is a run option (how a fit runs, not what it computes); pass it to "
                 f"the run: complete_depth(..., options=RunOptions({name}=...)) (ddp_lite.RunOptions)")

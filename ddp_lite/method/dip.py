@@ -20,7 +20,7 @@ from .runtime.memory import check_memory
 from .misplaced_arguments import names_misplaced_arguments
 from .runtime.options import RunOptions, run_options
 from .runtime.tensors import to_tensor
-from .stopping import holdout_mask
+from .stopping import held_out_mask
 
 __all__ = ["ImageResult", "fit_image", "describe_image_fit"]
 
@@ -76,20 +76,21 @@ def fit_image(image, mask=None, config: FitConfig | None = None, clean=None, cal
     clean = check_image(clean, "clean", (H, W)) if clean is not None else None
     device = resolve_device(options)
     stopping = config.stopping
-    heldout = holdout_mask(mask, stopping.holdout_fraction, config.paper.seed) if stopping.auto_stop else np.zeros_like(mask)
+    held_out = (held_out_mask(mask, stopping.held_out_fraction, config.paper.seed) if stopping.auto_stop
+                else np.zeros_like(mask))
     target = to_tensor(image, device)
-    fit_mask = to_tensor(mask & ~heldout, device)
-    heldout_t = to_tensor(heldout, device)
+    fit_mask = to_tensor(mask & ~held_out, device)
+    held_out_t = to_tensor(held_out, device)
     n_fit = float(fit_mask.sum()) * 3
 
     def loss_fn(output):
         mse = (((output - target) ** 2) * fit_mask).sum() / n_fit
         return mse, {"mse": mse}
 
-    heldout_error = None
-    if heldout.any():
-        def heldout_error(output):
-            return float((((output - target) ** 2) * heldout_t).sum() / (float(heldout.sum()) * 3))
+    held_out_error = None
+    if held_out.any():
+        def held_out_error(output):
+            return float((((output - target) ** 2) * held_out_t).sum() / (float(held_out.sum()) * 3))
 
     evaluate = None
     if clean is not None:
@@ -108,7 +109,7 @@ def fit_image(image, mask=None, config: FitConfig | None = None, clean=None, cal
     net, noise = loop.build(config, 3, H, W, device)
     start = time.perf_counter()
     iterations = config.resolved_iterations("rgbd")
-    output, history, ran, best = loop.run(net, noise, loss_fn, config, iterations, heldout_error, evaluate,
+    output, history, ran, best = loop.run(net, noise, loss_fn, config, iterations, held_out_error, evaluate,
                                           user_callback, progress=FitBar(iterations, "DIP", options.progress),
                                           options=options)
     restored = output[0].permute(1, 2, 0).cpu().numpy().astype(np.float32)

@@ -34,7 +34,7 @@ from .runtime.memory import check_memory
 from .misplaced_arguments import names_misplaced_arguments
 from .runtime.options import RunOptions, run_options
 from .runtime.tensors import to_tensor
-from .stopping import heldout_error_fn, holdout_mask
+from .stopping import held_out_error_fn, held_out_mask
 
 __all__ = ["check_run", "run_fit", "fit_once", "hole_errors_fn"]
 
@@ -80,27 +80,28 @@ def run_fit(inputs: FitInputs, config: FitConfig, options: RunOptions, *, callba
     check_memory(config, options, spec.out_channels, H, W, len(neighbors) if w_warp > 0 else 0, device)
     valid = np.isfinite(depth)
     stopping = config.stopping
-    heldout = (holdout_mask(valid, stopping.holdout_fraction, config.paper.seed, stopping.holdout) if stopping.auto_stop
-               else np.zeros_like(valid))
-    if (valid & ~heldout).sum() < MIN_VALID_PIXELS:
-        heldout = np.zeros_like(valid)
+    held_out = (held_out_mask(valid, stopping.held_out_fraction, config.paper.seed, stopping.held_out_shape)
+                if stopping.auto_stop else np.zeros_like(valid))
+    if (valid & ~held_out).sum() < MIN_VALID_PIXELS:
+        held_out = np.zeros_like(valid)
     disparity_in = transform.to_disparity(depth)  # (H, W), NaN in the holes
     target = to_tensor(np.nan_to_num(disparity_in, nan=0.0), device)  # (1, 1, H, W)
     rgb_t = to_tensor(rgb, device) if rgb is not None and w_rgb + w_warp > 0 else None  # (1, 3, H, W)
     nbrs = [(to_tensor(img, device), cam) for img, cam in neighbors] if w_warp > 0 else []
-    fit_mask = to_tensor(valid & ~heldout, device).bool()
+    fit_mask = to_tensor(valid & ~held_out, device).bool()
     # the paper's loss, with the kit's warp term, occlusion tests and hole terms (each None or off unless asked
     # for) as its arguments; the hole terms act on the unconstrained pixels: holes, and the held-out pixels
     paper_loss = PaperLoss(spec, config.paper, transform, target, fit_mask, rgb_t, camera, nbrs, device,
                            **kit_warp_arguments(config.warp, config.paper.lambda_w, transform, fit_mask, rgb_t, camera,
                                                 nbrs, device),
-                           extra_terms=[HoleTerms(config.holes, ~(valid & ~heldout), rgb_t, rgb, device, disparity_in)])
+                           extra_terms=[HoleTerms(config.holes, ~(valid & ~held_out), rgb_t, rgb, device,
+                                                  disparity_in)])
 
     def loss_fn(output):  # (1, 1 or 4, H, W): Z_out, then I_out
         disparity = output[:, :1]  # one view for every term: the gradients add up in the same order
         return paper_loss(disparity, output[:, 1:4] if spec.uses_rgb else None)
 
-    heldout_error = heldout_error_fn(target, heldout, device) if heldout.any() else None
+    held_out_error = held_out_error_fn(target, held_out, device) if held_out.any() else None
     evaluate = hole_errors_fn(gt_depth, valid, transform, device) if gt_depth is not None else None
 
     user_callback = None
@@ -117,7 +118,7 @@ def run_fit(inputs: FitInputs, config: FitConfig, options: RunOptions, *, callba
         image = image_channels(rgb_t, inputs_of_net.image_input, inputs_of_net.image_blur)  # (1, 3, H, W)
     fill = None  # a classical fill of the fitted pixels only: the held-out ones stay unseen
     if inputs_of_net.fill_input > 0 or inputs_of_net.fill_start:
-        fill = to_tensor(fill_channel(transform.to_disparity(np.where(valid & ~heldout, depth, np.nan)),
+        fill = to_tensor(fill_channel(transform.to_disparity(np.where(valid & ~held_out, depth, np.nan)),
                                       rgb if spec.uses_rgb else None), device)  # (1, 1, H, W) in [0, 1]
     if inputs_of_net.fill_input > 0:
         extra = inputs_of_net.fill_input * fill
@@ -128,7 +129,7 @@ def run_fit(inputs: FitInputs, config: FitConfig, options: RunOptions, *, callba
         start_at(net, fill)
     start = time.perf_counter()
     progress = FitBar(iterations, f"DDP {variant}", options.progress)
-    output, history, ran, best = loop.run(net, noise, loss_fn, config, iterations, heldout_error, evaluate,
+    output, history, ran, best = loop.run(net, noise, loss_fn, config, iterations, held_out_error, evaluate,
                                           user_callback, progress=progress, options=options)
     state = {name: value.detach().cpu().clone() for name, value in net.state_dict().items()}
     seconds = time.perf_counter() - start

@@ -56,12 +56,12 @@ def build(config: FitConfig, out_channels: int, height: int, width: int, device,
     return net.to(device), noise.to(device)
 
 
-def run(net, noise, loss_fn, config: FitConfig, iterations: int, heldout_error=None, evaluate=None,
+def run(net, noise, loss_fn, config: FitConfig, iterations: int, held_out_error=None, evaluate=None,
         callback=None, *, progress: FitProgress, options: RunOptions):
     """Adam on ``loss_fn(net(noise))`` for at most ``iterations``; returns (kept output (1, C, H, W),
     history, iterations run, best iteration).
 
-    ``loss_fn(output) -> (total, {name: term})``; ``heldout_error(output) -> float`` (None: no
+    ``loss_fn(output) -> (total, {name: term})``; ``held_out_error(output) -> float`` (None: no
     auto-stop), watched every ``config.stopping.eval_every`` iterations; ``evaluate(output) -> {name: float}``,
     tracked there too, never optimised; ``callback(iteration, output)`` every ``options.callback_every``;
     ``progress``: the caller's hook, iterated over for the iterations; ``options``: the run's memory format
@@ -80,10 +80,10 @@ def run(net, noise, loss_fn, config: FitConfig, iterations: int, heldout_error=N
     jitter = torch.Generator(device=noise.device).manual_seed(paper.seed + 1) if tricks.reg_noise_std else None
     terms_log = None  # (iterations, n_terms) kept on the device: no host read per iteration
     lrs = []
-    evals = {"eval_iteration": [], "heldout": [], "lr_decay_iteration": []}
+    evals = {"eval_iteration": [], "held_out": [], "lr_decay_iteration": []}
     averaged = best_output = None
     best_iteration = 0
-    stop_check = stopping.auto_stop and heldout_error is not None
+    stop_check = stopping.auto_stop and held_out_error is not None
     stopper = PlateauStopper(stopping.patience, stopping.eval_every, stopping.plateau_decays)
     it = -1
     for it in progress:
@@ -116,8 +116,8 @@ def run(net, noise, loss_fn, config: FitConfig, iterations: int, heldout_error=N
         last = it + 1 == iterations
         if (it + 1) % stopping.eval_every == 0 or last:
             evals["eval_iteration"].append(it + 1)
-            error = float(heldout_error(current)) if heldout_error is not None else float("nan")
-            evals["heldout"].append(error)
+            error = float(held_out_error(current)) if held_out_error is not None else float("nan")
+            evals["held_out"].append(error)
             for key, value in (evaluate(current) if evaluate is not None else {}).items():
                 evals.setdefault(key, []).append(value)
             if stop_check:
@@ -130,7 +130,7 @@ def run(net, noise, loss_fn, config: FitConfig, iterations: int, heldout_error=N
                     evals["lr_decay_iteration"].append(it + 1)
                 elif event == "stop":
                     break
-                progress.heldout(error)
+                progress.held_out(error)
                 progress.expect(expected_stop(stopper, it + 1, iterations), earliest_stop(stopper, it + 1, iterations))
         if callback is not None and options.callback_every and (it + 1) % options.callback_every == 0:
             callback(it + 1, current)

@@ -7,7 +7,7 @@ import difflib
 import functools
 import inspect
 
-from .config import FIELDS
+from .config import FIELDS, RENAMED_FIELDS
 from .runtime.options import RUN_OPTIONS
 
 __all__ = ["names_misplaced_arguments"]
@@ -37,6 +37,9 @@ def _misplaced(function: str, name: str, parameters) -> str:
     if name in FIELDS:
         return (f"{function}() got {name!r}: it is a FitConfig field (what a fit computes); pass "
                 f"config=FitConfig.for_profile({name}=...)")
+    if name in RENAMED_FIELDS:
+        return (f"{function}() got {name!r}: it is now the FitConfig field {RENAMED_FIELDS[name]!r}; pass "
+                f"config=FitConfig.for_profile({RENAMED_FIELDS[name]}=...)")
     close = difflib.get_close_matches(name, list(parameters), n=1)
     return (f"{function}() got an unexpected keyword argument {name!r}"
             + (f"; did you mean {close[0]!r}?" if close else f"; it takes {', '.join(parameters)}"))

@@ -1,8 +1,8 @@
 """Ground-truth-free stopping: the valid pixels held out of the loss, their error, and the plateau rule.
 
 A run either follows a fixed schedule (the paper's) or stops by itself. For the latter a small
-random share of the *valid* pixels is held out of the loss (:func:`holdout_mask`); their error
-(:func:`heldout_error_fn`) is a ground-truth-free estimate of how well the net predicts depth it has
+random share of the *valid* pixels is held out of the loss (:func:`held_out_mask`); their error
+(:func:`held_out_error_fn`) is a ground-truth-free estimate of how well the net predicts depth it has
 not seen. The output at the best held-out error is kept. When it has not improved for ``patience``
 iterations (a plateau) the learning rate is cut by ``lr_gamma``, ``plateau_decays`` times, and the
 run stops at the next plateau (:class:`PlateauStopper`). Cutting the rate matters: at a constant
@@ -22,9 +22,9 @@ from ..core.checks import check_bool, check_choice, check_int, check_real
 from ..core.settings import Settings
 from .runtime.tensors import to_tensor
 
-__all__ = ["StoppingConfig", "HOLDOUTS", "PlateauStopper", "holdout_mask", "heldout_error_fn"]
+__all__ = ["StoppingConfig", "HELD_OUT_SHAPES", "PlateauStopper", "held_out_mask", "held_out_error_fn"]
 
-HOLDOUTS = ("pixels", "blobs")
+HELD_OUT_SHAPES = ("pixels", "blobs")
 
 
 @dataclass(frozen=True)
@@ -32,16 +32,16 @@ class StoppingConfig(Settings):
     """When a fit stops before its iterations (6 fields; off by default, the paper's fixed schedule)."""
 
     auto_stop: bool = False
-    holdout_fraction: float = 0.05  # share of valid pixels held out when auto_stop is on
-    holdout: str = "pixels"  # their shape: "pixels" (scattered) or "blobs" (hole-like patches)
+    held_out_fraction: float = 0.05  # share of valid pixels held out when auto_stop is on
+    held_out_shape: str = "pixels"  # their shape: "pixels" (scattered) or "blobs" (hole-like patches)
     patience: int = 200  # iterations without held-out improvement that make a plateau
     plateau_decays: int = 0  # cut lr by lr_gamma at the first this-many plateaus, stop at the next
     eval_every: int = 10  # iterations between held-out (and hole) errors
 
     def validate(self) -> None:
         check_bool(self.auto_stop, "config.auto_stop")
-        check_choice(self.holdout, "config.holdout", HOLDOUTS)
-        check_real(self.holdout_fraction, "config.holdout_fraction", 0.0, 0.5, low_open=True, high_open=True)
+        check_choice(self.held_out_shape, "config.held_out_shape", HELD_OUT_SHAPES)
+        check_real(self.held_out_fraction, "config.held_out_fraction", 0.0, 0.5, low_open=True, high_open=True)
         check_int(self.patience, "config.patience", minimum=1)
         check_int(self.plateau_decays, "config.plateau_decays", minimum=0)
         check_int(self.eval_every, "config.eval_every", minimum=1)
@@ -84,7 +84,7 @@ class PlateauStopper:
         return "stop"
 
 
-def holdout_mask(valid: np.ndarray, fraction: float, seed: int, shape: str = "pixels") -> np.ndarray:
+def held_out_mask(valid: np.ndarray, fraction: float, seed: int, shape: str = "pixels") -> np.ndarray:
     """A random share ``fraction`` of the valid pixels (H, W) bool, seeded: scattered single pixels, or
     ``"blobs"`` (smooth random blobs, blur scale min(H, W)/24 px, like the holes a fit must fill: a
     single held-out pixel is predicted from its neighbours by any smooth fit, a blob is not)."""
@@ -96,12 +96,12 @@ def holdout_mask(valid: np.ndarray, fraction: float, seed: int, shape: str = "pi
     return valid & (field <= np.quantile(field[valid], fraction))
 
 
-def heldout_error_fn(target: torch.Tensor, heldout: np.ndarray, device):
+def held_out_error_fn(target: torch.Tensor, held_out: np.ndarray, device):
     """``error(output)``: the mean |Z_out - Z_in| over the held-out pixels (H, W) bool, the
     ground-truth-free score auto-stop watches; ``target`` (1, 1, H, W) is Z_in."""
-    n_heldout = float(heldout.sum())
-    heldout_t = to_tensor(heldout, device).bool()
+    n_held_out = float(held_out.sum())
+    held_out_t = to_tensor(held_out, device).bool()
 
-    def heldout_error(output):
-        return float(((output[:, :1] - target).abs() * heldout_t).sum() / n_heldout)
-    return heldout_error
+    def held_out_error(output):
+        return float(((output[:, :1] - target).abs() * held_out_t).sum() / n_held_out)
+    return held_out_error

@@ -11,7 +11,7 @@ part of a recipe's one-line description, ``describe()``, and of the equation, ``
 ``CombinationConfig`` (``blend``, an ensemble's size included).
 
 Blends and ensembles combine whole fits: a blend holds out valid pixels as the fit's auto-stop does
-(``method/stopping.holdout_mask``), and each combination is a ``method/result.DepthResult`` (those two
+(``method/stopping.held_out_mask``), and each combination is a ``method/result.DepthResult`` (those two
 the only files of ``method/`` itself the kit uses, both below it); ``method/complete`` runs the fits side
 by side (``runtime/side_by_side``) and combines them with what is here.
 

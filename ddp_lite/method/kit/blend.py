@@ -29,7 +29,7 @@ the occlusions and the textured blob, the solver on the rest):
 pixels, in smooth blobs like holes, are held out of the fit (and of a fill computed for the choice),
 and the share that best predicts them wins:
 
-    B  = blobs of valid pixels (5 %), held out of the fit and of the fill        fill_holdout
+    B  = blobs of valid pixels (5 %), held out of the fit and of the fill        fill_held_out_mask
     f* = argmin_{f ∈ {0, 0.1, …, 0.5}}  RMSE_B( (1 − f)·Z_fit + f·Z_fill − Z_in )    best_fill_share
 
 The result mixes f* of the fill of the *whole* input into that fit. f stays at most ½, so the result
@@ -70,12 +70,13 @@ from ...core.settings import Settings
 
 __all__ = ["CombinationConfig", "DEPTH_SOURCES", "RIM_DISTRUST", "TUNED_SHORT_SIDE", "FILL_MEMBER_LENGTHS",
            "fill_member_settings", "rim_width", "trusted_depth", "BLEND_WEIGHTS", "FILL_SHARES",
-           "validation_ring", "best_weight", "ring_width", "fill_disparity", "FILL_MEMBERS", "fill_holdout", "best_fill_share"]
+           "validation_ring", "best_weight", "ring_width", "fill_disparity", "FILL_MEMBERS",
+           "fill_held_out_mask", "best_fill_share"]
 
 BLEND_WEIGHTS = (0.0, 0.25, 0.5, 0.75, 1.0)  # the kit fit's weight; 0 is the paper's fit alone
 RING_SHARE = 0.5  # the share of the ring held out: the rest keeps the holes' edges where they are
 FILL_SHARES = (0.0, 0.1, 0.2, 0.3, 0.4, 0.5)  # the fill's shares blend_fill=None chooses among: the fit keeps half
-FILL_HOLDOUT = 0.05  # the share of the valid pixels held out to choose it
+FILL_HELD_OUT = 0.05  # the share of the valid pixels held out to choose it
 # the classical fills averaged into the one mixed in: on the real pair the bilateral solver is the best fill
 # in three of five cases and colorization in two, and their mean lets the share grow without costing the
 # rendered scenes (docs/studies/real_data.md)
@@ -275,32 +276,32 @@ def fill_member_settings(name: str, shape) -> dict:
             for key, pixels in FILL_MEMBER_LENGTHS.get(name, {}).items()}
 
 
-def fill_holdout(valid: np.ndarray, seed: int = 0) -> np.ndarray:
-    """(H, W) bool: the valid pixels held out to choose the fill's share, ``FILL_HOLDOUT`` of them in
-    smooth random blobs (seeded; :func:`ddp_lite.method.stopping.holdout_mask` with ``shape="blobs"``).
+def fill_held_out_mask(valid: np.ndarray, seed: int = 0) -> np.ndarray:
+    """(H, W) bool: the valid pixels held out to choose the fill's share, ``FILL_HELD_OUT`` of them in
+    smooth random blobs (seeded; :func:`ddp_lite.method.stopping.held_out_mask` with ``shape="blobs"``).
     Blobs, not scattered pixels: a scattered pixel is predicted from its neighbours by any smooth fit.
 
     Example:
         >>> valid = np.ones((48, 64), bool); valid[20:28, 20:40] = False
-        >>> held = fill_holdout(valid, seed=0)
+        >>> held = fill_held_out_mask(valid, seed=0)
         >>> bool((held & ~valid).any()), round(float(held.sum() / valid.sum()), 2)
         (False, 0.05)
     """
-    from ..stopping import holdout_mask
+    from ..stopping import held_out_mask
 
-    return holdout_mask(np.asarray(valid, bool), FILL_HOLDOUT, seed + 777, "blobs")
+    return held_out_mask(np.asarray(valid, bool), FILL_HELD_OUT, seed + 777, "blobs")
 
 
-def best_fill_share(fit: np.ndarray, fill: np.ndarray, target: np.ndarray, heldout: np.ndarray,
+def best_fill_share(fit: np.ndarray, fill: np.ndarray, target: np.ndarray, held_out: np.ndarray,
                     shares=FILL_SHARES) -> tuple[float, list[float]]:
-    """The share f in (1 − f)·fit + f·fill whose RMSE against ``target`` on ``heldout`` is least (ties:
+    """The share f in (1 − f)·fit + f·fill whose RMSE against ``target`` on ``held_out`` is least (ties:
     the smaller f, the fit's), and the RMSE of every share. All (H, W), one unit.
 
     Example:
-        >>> target = np.zeros((2, 2)); heldout = np.ones((2, 2), bool)
-        >>> best_fill_share(target + 1.0, target - 1.0, target, heldout, shares=(0.0, 0.25, 0.5))
+        >>> target = np.zeros((2, 2)); held_out = np.ones((2, 2), bool)
+        >>> best_fill_share(target + 1.0, target - 1.0, target, held_out, shares=(0.0, 0.25, 0.5))
         (0.5, [1.0, 0.5, 0.0])
     """
-    _, errors = best_weight(fit, fill, target, heldout, [1.0 - f for f in shares])
+    _, errors = best_weight(fit, fill, target, held_out, [1.0 - f for f in shares])
     best = min(range(len(shares)), key=lambda k: (errors[k], shares[k]))
     return float(shares[best]), errors
