@@ -104,11 +104,7 @@ def test_the_real_suite_refuses_bad_data_cases_recipes_and_seeds_before_any_row(
     base = ["--suite", "middlebury", "--out", str(out)]
     empty = tmp_path / "empty"
     empty.mkdir()
-    twice = tmp_path / "twice"
-    for size in ("full", "half"):
-        make_middlebury_fixture(twice / size / "Desk", size=(48, 64) if size == "half" else (96, 128), seed=0)
     for argv, option in [(["--data", str(tmp_path / "nowhere")], "--data"), (["--data", str(empty)], "--data"),
-                         (["--data", str(twice)], "two folders hold scene 'Desk'"), (base[:2], "--data"),
                          (["--data", str(data), "--recipes", "kitt"], "--recipes"),
                          (["--data", str(data), "--recipes", "kit:seed=1"], "--recipes"),
                          (["--data", str(data), "--recipes", "kit:warp_combine=maximum"], "warp_combine"),
@@ -117,6 +113,26 @@ def test_the_real_suite_refuses_bad_data_cases_recipes_and_seeds_before_any_row(
                          (["--data", str(data), "--size", "48", "64"], "--size")]:
         _usage_error(base + argv, capsys, option)
     assert not out.exists()
+
+
+def test_the_real_suite_without_data_reads_the_data_root_and_a_scene_twice_once(capsys, tmp_path):
+    """No ``--data``: the data root (empty under the tests: the shipped samples, said on the first line); a root
+    holding one scene at two sizes: one copy of it, not an error (``data.installed.scene_folders``)."""
+    out = tmp_path / "real.jsonl"
+    twice = tmp_path / "twice"
+    for size in ("HalfSize", "ThirdSize"):
+        make_middlebury_fixture(twice / size / "Desk", size=(48, 64) if size == "ThirdSize" else (96, 128), seed=0)
+    for argv in ([], ["--data", str(twice)]):
+        with pytest.raises(SystemExit) as stop:
+            bench_quality.main(["--suite", "middlebury", "--out", str(out), *argv, "--check-args"])
+        printed = capsys.readouterr()
+        assert stop.value.code == 0 and "arguments OK" in printed.out, printed.err
+    assert not out.exists()
+    import bench_real
+    folder, line, samples = bench_real.suite_data(None)
+    assert samples and "shipped" in line and "data_fetch fetch" in line, line
+    folder, line, samples = bench_real.suite_data(twice)
+    assert not samples and "1 scenes" in line and "Desk" in line, line
 
 
 def test_the_documented_real_suite_commands_parse(data, capsys, tmp_path):
