@@ -19,6 +19,8 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE / "results" / "notebook_times.jsonl"
+sys.path.insert(0, str(HERE))  # _common, as every benchmark takes it
+from _common import parse_args  # noqa: E402
 README = HERE.parent / "README.md"
 
 # README column (its index among a row's cells, 0 = the notebook's name) → which rows fill it, and how a
@@ -108,7 +110,10 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--write", action="store_true", help="put the results into README.md's table")
     parser.add_argument("--check", action="store_true", help="exit 1 where README.md's table differs from them")
-    args = parser.parse_args(argv)
+    def check(args):
+        if args.write and args.check:
+            raise ValueError("--write and --check: give one (--write changes README.md, --check only reads it)")
+    args = parse_args(parser, argv, check)
     cells = rendered(read_rows())
     if args.write:
         for line in write_readme():

@@ -179,6 +179,9 @@ def _flags_said(*flags, full_shape=(60, 90)):
     from ddp_lite.sequences.working_size import working_shape
     args = build_parser().parse_args(["complete", "--rgb", "r.png", "--depth", "d.npy", "--out", "o.npy",
                                       "--profile", "ci", *flags])
+    # as complete sets them without --scene: only a typed --depth-source is judged
+    args.depth_source_given = args.depth_source is not None
+    args.variant, args.depth_source = args.variant or "rgbd", args.depth_source or "clean"
     max_side = args.max_side or 64
     shape = working_shape(full_shape, max_side)
     refine = not (args.raw or args.no_refine) and shape != full_shape
