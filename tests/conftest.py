@@ -99,7 +99,13 @@ def pytest_collection_modifyitems(config, items):
     items.sort(key=rank)  # stable: a file's tests and a notebook's cells keep their order
 
 
-# What several test files share; they import it with ``from conftest import ...`` (tests/ is on sys.path).
+# The tests are laid out like the package (tests/core, tests/method/kit, ...; tests/benchmarks, tests/notebooks and
+# tests/architecture for the rest), with no __init__.py: pytest's default import mode puts tests/ (this file's
+# folder) and each test file's own folder on sys.path, so a test imports a file beside it by its name (``from
+# test_classroom import ...``) and the helpers kept here in tests/ from anywhere (``conftest``,
+# ``bad_input_harness``, ``fill_references``). A test file's name is therefore unique across the folders.
+#
+# What several test files share; they import it with ``from conftest import ...``.
 TINY = dict(channels=(8, 16, 32), lr=1e-2)  # a small, fast FitConfig for short fits
 
 
