@@ -11,7 +11,7 @@ STAMP  := $(VENV)/.ddp-lite-installed
 # `make lab` serves $(LAB_DIR) on $(IP):$(PORT) and prints the URL with its token: notebooks/ (the
 # instructor's, solutions in) or, for a student, `make lab LAB_DIR=build/student` (`make student`).  --allow-root
 # only for root (Jupyter refuses root without it); --no-browser on Linux & co. without a display
-# (macOS always has one).  tests/test_lab.py runs exactly $(LAB_CMD), via `make -s lab-command`.
+# (macOS always has one).  tests/notebooks/test_lab.py runs exactly $(LAB_CMD), via `make -s lab-command`.
 PORT ?= 8888
 IP   ?= 127.0.0.1
 LAB_DIR ?= notebooks/

@@ -99,7 +99,13 @@ def pytest_collection_modifyitems(config, items):
     items.sort(key=rank)  # stable: a file's tests and a notebook's cells keep their order
 
 
-# What several test files share; they import it with ``from conftest import ...`` (tests/ is on sys.path).
+# The tests are laid out like the package (tests/core, tests/method/kit, ...; tests/benchmarks, tests/notebooks and
+# tests/architecture for the rest), with no __init__.py: pytest's default import mode puts tests/ (this file's
+# folder) and each test file's own folder on sys.path, so a test imports a file beside it by its name (``from
+# test_classroom import ...``) and the helpers kept here in tests/ from anywhere (``conftest``,
+# ``bad_input_harness``, ``fill_references``). A test file's name is therefore unique across the folders.
+#
+# What several test files share; they import it with ``from conftest import ...``.
 TINY = dict(channels=(8, 16, 32), lr=1e-2)  # a small, fast FitConfig for short fits
 
 
@@ -116,6 +122,29 @@ def plane_with_hole(height: int = 24, width: int = 32):
     depth = gt.copy()
     depth[8:16, 10:20] = np.nan
     return gt, depth
+
+
+def pinhole_plane(height: int = 60, width: int = 90):
+    """Ground-truth depth (H, W) float32 metres of a tilted plane seen by a pinhole camera: disparity 1/Z is
+    affine in the pixel coordinates (0.4–0.65 1/m: 1.5–2.5 m)."""
+    v, u = np.mgrid[0:height, 0:width].astype(np.float64)
+    return (1.0 / (0.4 + 0.002 * u + 0.001 * v)).astype(np.float32)
+
+
+def rgbd_files(folder, height: int = 60, width: int = 90):
+    """``rgb.png``, ``depth.npy`` (``pinhole_plane`` with 10 % random holes and one known hole at rows 20–34,
+    columns 30–49) and ``gt.npy`` written into ``folder``, the inputs of ``ddp-lite complete``; returns (depth, gt)."""
+    import cv2
+    from ddp_lite.classical.holes import random_holes
+    gt = pinhole_plane(height, width)
+    depth, _ = random_holes(gt, fraction=0.1, seed=3)
+    depth[20:35, 30:50] = np.nan
+    v, u = np.mgrid[0:height, 0:width]
+    rgb = np.stack([u / width, v / height, 0.5 + 0 * u], axis=-1)
+    cv2.imwrite(str(folder / "rgb.png"), (rgb[..., ::-1] * 255).astype(np.uint8))
+    np.save(folder / "depth.npy", depth)
+    np.save(folder / "gt.npy", gt)
+    return depth, gt
 
 
 def rectified_pair(width: int, height: int, focal: float = 60.0, baseline: float = 0.1):

@@ -15,7 +15,7 @@ Re-running a notebook re-does every fit in it, minutes at ``class``. With the en
 - the profile ``DDP_PROFILE`` names: ``config=None`` means its config.
 
 So a cached result is the result the same call would compute now (fits are deterministic on a
-CPU: ``tests/test_fit.py::test_same_seed_same_numbers_and_inputs_untouched``), only without the
+CPU: ``tests/method/test_fit.py::test_same_seed_same_numbers_and_inputs_untouched``), only without the
 wait; ``seconds`` is the time the fit took when it ran. A fit with a ``callback`` is never cached
 (the callback is what the caller wants to see), nor is a call whose arguments cannot be hashed,
 nor one that raises. Hashing is ``joblib.hash`` (MD5 of a pickle, arrays by their bytes).

@@ -164,7 +164,7 @@ def test_the_other_fit_entry_points_name_run_options_too():
 # ------------------------------------------------------------------ ddp-lite complete's flags
 
 def _complete(tmp_path, *flags):
-    from test_cli import _pair
+    from conftest import rgbd_files as _pair
     from ddp_lite.interface.cli import main
     _pair(tmp_path)
     return main(["complete", "--rgb", str(tmp_path / "rgb.png"), "--depth", str(tmp_path / "depth.npy"),

@@ -7,7 +7,7 @@ import re
 from functools import lru_cache
 from pathlib import Path
 
-PACKAGE = Path(__file__).resolve().parents[1] / "ddp_lite"
+PACKAGE = Path(__file__).resolve().parents[2] / "ddp_lite"
 HANDLER = re.compile(r"ddp_lite(\.\w+)+:\w+")
 
 
@@ -257,7 +257,8 @@ def _outside_sources():
     import json
     root = PACKAGE.parent
     for folder in ("tests", "benchmarks", "data_fetch"):
-        for path in sorted((root / folder).glob("*.py")):
+        # the tests sit in folders laid out like the package (tests/method/kit/...): all of them
+        for path in sorted((root / folder).rglob("*.py") if folder == "tests" else (root / folder).glob("*.py")):
             yield str(path.relative_to(root)), path.read_text(encoding="utf-8")
     for path in sorted((root / "notebooks").glob("*.ipynb")):
         for i, cell in enumerate(json.loads(path.read_text(encoding="utf-8"))["cells"]):

@@ -12,10 +12,11 @@ import cv2
 import numpy as np
 import pytest
 
+from conftest import pinhole_plane as _plane, rgbd_files as _pair
 from ddp_lite.interface import cli
 from ddp_lite.interface.cli import build_parser, main
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _subparsers():
@@ -190,25 +191,6 @@ def test_student_refuses_an_out_that_is_inside_or_contains_the_source(tmp_path, 
 
 
 # --- ddp-lite complete on a full-size image: a tilted plane with a known hole -------------------------
-
-def _plane(H=60, W=90):
-    """A tilted plane seen by a pinhole camera: disparity 1/Z is affine in the pixel coordinates."""
-    v, u = np.mgrid[0:H, 0:W].astype(np.float64)
-    return (1.0 / (0.4 + 0.002 * u + 0.001 * v)).astype(np.float32)  # 0.4–0.65 1/m: 1.5–2.5 m
-
-
-def _pair(tmp_path, H=60, W=90):
-    from ddp_lite.classical.holes import random_holes
-    gt = _plane(H, W)
-    depth, _ = random_holes(gt, fraction=0.1, seed=3)
-    depth[20:35, 30:50] = np.nan  # and one known hole
-    v, u = np.mgrid[0:H, 0:W]
-    rgb = np.stack([u / W, v / H, 0.5 + 0 * u], axis=-1)
-    cv2.imwrite(str(tmp_path / "rgb.png"), (rgb[..., ::-1] * 255).astype(np.uint8))
-    np.save(tmp_path / "depth.npy", depth)
-    np.save(tmp_path / "gt.npy", gt)
-    return depth, gt
-
 
 def test_complete_keeps_valid_pixels_exactly_fills_the_holes_and_writes_a_preview(tmp_path, capsys, monkeypatch):
     from ddp_lite.evaluation import viz

@@ -5,7 +5,7 @@ import shutil
 import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
 import bench_real  # noqa: E402
 import real_suite_pass  # noqa: E402
 from ddp_lite.data.samples import sample_scene  # noqa: E402

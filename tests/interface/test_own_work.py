@@ -23,7 +23,7 @@ from ddp_lite.method.paper.losses import ssim
 from ddp_lite.method.paper.warp import warp_to_reference
 from ddp_lite.studies.additions import paired_change
 
-NOTEBOOKS = Path(__file__).resolve().parent.parent / "notebooks"
+NOTEBOOKS = Path(__file__).resolve().parents[2] / "notebooks"
 
 
 def _rays(d, K):

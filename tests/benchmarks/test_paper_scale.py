@@ -10,7 +10,7 @@ import pytest
 from ddp_lite.classical.baselines import BASELINES
 from ddp_lite.studies.real_cases import make_real_case
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
 import paper_scale  # noqa: E402
 
 

@@ -140,7 +140,7 @@ def test_varied_negative_depths_are_refused_and_one_marker_is_warned(tmp_path):
 
 
 def test_cli_refuses_a_depth_with_a_negative_half_naming_it(tmp_path, capsys, monkeypatch):
-    from test_cli import _pair
+    from conftest import rgbd_files as _pair
     from ddp_lite.interface import cli_complete
     from ddp_lite.interface.cli import main
     depth, _ = _pair(tmp_path)
@@ -201,7 +201,7 @@ def test_ground_truth_in_another_unit_is_refused_naming_it(factor, unit):
 
 
 def test_cli_refuses_a_ground_truth_in_centimetres_before_any_work(tmp_path, capsys, monkeypatch):
-    from test_cli import _pair
+    from conftest import rgbd_files as _pair
     from ddp_lite.interface import cli_complete
     from ddp_lite.interface.cli import main
     _, gt = _pair(tmp_path)

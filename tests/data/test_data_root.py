@@ -20,7 +20,7 @@ from ddp_lite.data.samples import sample_scene
 from ddp_lite.studies.real_suite import find_scenes
 from ddp_lite.studies.table6 import table6_data_line, table6_sources
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
 import bench_real  # noqa: E402
 
 RAIL = ("view0.png", "view1.png", "view2.png", "view5.png", "disp1.png", "disp5.png", "dmin.txt")

@@ -13,7 +13,7 @@ import re
 
 import nbformat
 import pytest
-from test_classroom import README, SOURCES, _checks, _meta  # tests/ is on sys.path (see conftest.py)
+from test_classroom import README, SOURCES, _checks, _meta  # this file's folder is on sys.path (see conftest.py)
 
 from ddp_lite.interface import classroom, grading
 
