@@ -40,7 +40,7 @@ import stat
 import tempfile
 from pathlib import Path
 
-__all__ = ["atomic_path", "write_bytes_atomic", "regular_file", "read_regular_bytes", "read_text", "decode_text",
+__all__ = ["atomic_path", "write_bytes_atomic", "replace_between_markers", "regular_file", "read_regular_bytes", "read_text", "decode_text",
            "NotTextError", "describe_kind", "path_inside", "writing_inside", "PathEscapeError"]
 
 
@@ -163,6 +163,20 @@ def write_bytes_atomic(path, data: bytes, overwrite_readonly: bool = False, pref
                 view = view[os.write(fd, view):]
         finally:
             os.close(fd)
+
+
+def replace_between_markers(path, start: str, end: str, body: str, what: str = "table") -> bool:
+    """Put ``body`` between the lines ``start`` and ``end`` of the UTF-8 text file ``path`` (a generated table in a
+    README), atomically; True if the file changed. ``ValueError`` naming ``path`` when a marker is missing."""
+    text = Path(path).read_text(encoding="utf-8")
+    if start not in text or end not in text:
+        raise ValueError(f"readme {str(path)!r} has no {what} markers ({start} ... {end})")
+    head, rest = text.split(start, 1)
+    _, tail = rest.split(end, 1)
+    new = f"{head}{start}\n{body}\n{end}{tail}"
+    if new != text:
+        write_bytes_atomic(path, new.encode("utf-8"))
+    return new != text
 
 
 def describe_kind(mode: int) -> str:

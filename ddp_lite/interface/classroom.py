@@ -28,7 +28,7 @@ from pathlib import Path
 
 import nbformat
 
-from ..core.files import read_regular_bytes, write_bytes_atomic
+from ..core.files import read_regular_bytes, replace_between_markers, write_bytes_atomic
 from ..core.outpaths import check_not_overlapping, check_output_folder
 from ..method.kit.recipes import get_recipe
 from .source_rules import check_no_answer_left, check_numbering, check_source, read_source
@@ -261,15 +261,7 @@ def exercise_table(source_dir="notebooks") -> str:
 def update_readme_table(readme, source_dir="notebooks") -> bool:
     """Rewrite the exercise table between ``TABLE_START`` and ``TABLE_END`` in ``readme`` (atomically);
     True if it changed."""
-    text = Path(readme).read_text(encoding="utf-8")
-    if TABLE_START not in text or TABLE_END not in text:
-        raise ValueError(f"readme {str(readme)!r} has no exercise table markers ({TABLE_START} ... {TABLE_END})")
-    head, rest = text.split(TABLE_START, 1)
-    _, tail = rest.split(TABLE_END, 1)
-    new = f"{head}{TABLE_START}\n{exercise_table(source_dir)}\n{TABLE_END}{tail}"
-    if new != text:
-        write_bytes_atomic(readme, new.encode("utf-8"))
-    return new != text
+    return replace_between_markers(readme, TABLE_START, TABLE_END, exercise_table(source_dir), "exercise table")
 
 
 if __name__ == "__main__":  # python -m ddp_lite.interface.classroom docs/exercises.md [notebooks]: refresh the table

@@ -156,26 +156,26 @@ def _input_file(path: str, flag: str) -> None:
 SWAPPED = "did you swap --rgb and --depth?"
 
 
-def _looks_like_colour(path: str) -> bool:
-    """``path`` is an image file OpenCV reads as 3 or 4 channels of 8 bits: a colour picture."""
+def _eight_bit_channels(path: str) -> int | None:
+    """How many channels of 8 bits the image file ``path`` holds as OpenCV reads it (1, 3 or 4); None for an
+    array file, a file it cannot read, or a deeper image."""
     if os.path.splitext(path)[1].lower() in (".npy", ".pfm", ".bin"):
-        return False
+        return None
     try:
         raw = read_image_file(path, "--depth")
     except ValueError:
-        return False
-    return raw.dtype == np.uint8 and raw.ndim == 3 and raw.shape[2] in (3, 4)
+        return None
+    return (raw.shape[2] if raw.ndim == 3 else 1) if raw.dtype == np.uint8 else None
+
+
+def _looks_like_colour(path: str) -> bool:
+    """``path`` is an image file of 3 or 4 channels of 8 bits: a colour picture."""
+    return _eight_bit_channels(path) in (3, 4)
 
 
 def _looks_like_disparity(path: str) -> bool:
     """``path`` is a 1-channel 8-bit image: how Middlebury 2005/2006 and DepthComp store disparity."""
-    if os.path.splitext(path)[1].lower() in (".npy", ".pfm", ".bin"):
-        return False
-    try:
-        raw = read_image_file(path, "--depth")
-    except ValueError:
-        return False
-    return raw.dtype == np.uint8 and raw.ndim == 2
+    return _eight_bit_channels(path) == 1
 
 
 def _read_rgb(path: str) -> np.ndarray:

@@ -145,18 +145,8 @@ def profile_table() -> str:
 def update_profile_table(readme) -> bool:
     """Rewrite the profile table between ``TABLE_START`` and ``TABLE_END`` in ``readme`` (atomically);
     True if it changed."""
-    from pathlib import Path
-
-    from ..core.files import write_bytes_atomic
-    text = Path(readme).read_text(encoding="utf-8")
-    if TABLE_START not in text or TABLE_END not in text:
-        raise ValueError(f"readme {str(readme)!r} has no profile table markers ({TABLE_START} ... {TABLE_END})")
-    head, rest = text.split(TABLE_START, 1)
-    _, tail = rest.split(TABLE_END, 1)
-    new = f"{head}{TABLE_START}\n{profile_table()}\n{TABLE_END}{tail}"
-    if new != text:
-        write_bytes_atomic(readme, new.encode("utf-8"))
-    return new != text
+    from ..core.files import replace_between_markers
+    return replace_between_markers(readme, TABLE_START, TABLE_END, profile_table(), "profile table")
 
 
 if __name__ == "__main__":  # python -m ddp_lite.method.profiles README.md: refresh the profile table
