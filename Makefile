@@ -40,12 +40,17 @@ $(PY):
 # pip does not byte-compile (--no-compile): of the 2.6 GB stack the tests and notebooks import about a fifth
 # of the files, and Python compiles each on its first import and caches it (below), so compiling all of
 # site-packages at install time spent about 4x the CPU on files nothing imports.
+# The rest of the stack goes in through uv (Astral's installer, pinned below), which fetches and unpacks the
+# ~170 pinned packages in parallel: about 5x faster than pip here (35 s against 180 s on 2 cores); torch stays
+# with pip, which finds the CPU wheel on disk where uv would not look.  Without uv (no registry), pip does it all.
 PIP := $(PY) -m pip install --disable-pip-version-check -q --no-compile
+UV_PIN := uv==0.13.8
+UV := $(VENV)/bin/uv pip install -q --python $(PY)
 
 $(STAMP): $(PY) environment.txt pyproject.toml
 	$(PIP) "$$(grep -E '^torch==' environment.txt)"
-	$(PIP) -r environment.txt
-	$(PIP) --no-deps -e .
+	if $(PIP) "$(UV_PIN)"; then $(UV) -r environment.txt && $(UV) --no-deps -e .; \
+	else $(PIP) -r environment.txt && $(PIP) --no-deps -e .; fi
 	touch $(STAMP)
 
 # Python caches the bytecode of what it imports (in .venv and the checkout's __pycache__) unless
