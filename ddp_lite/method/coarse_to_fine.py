@@ -121,7 +121,7 @@ def complete_depth_coarse_to_fine(rgb, depth, camera: Camera | None = None, neig
     h, w = small.shape
     coarse_config = config.replace(iterations=n_coarse, auto_stop=False,
                                    lr_milestones=tuple(m for m in config.paper.lr_milestones if m < n_coarse))
-    coarse_noise = make_input(config.net_inputs.net_input, config.paper.noise_channels, h, w, seed=config.paper.seed)
+    coarse_noise = make_input(config.net_inputs.base, config.paper.noise_channels, h, w, seed=config.paper.seed)
     coarse = fit_once(
         _downsample_image(rgb, scale) if rgb is not None else None, small,
         _downsample_camera(camera, scale) if camera is not None else None,

@@ -17,8 +17,12 @@ to the run (``complete_depth(..., config=config, options=RunOptions(progress=Fal
 those names with a ``TypeError`` that says so.
 
 Each section is a frozen dataclass; ``config.holes.smoothness`` reads a field by its section. Users and
-recipes pass fields by their own names: ``FitConfig(lr=1e-2, smoothness=1.0)``, ``config.replace(lr=1e-2)``,
-``FitConfig.for_profile("ci", iterations=50)``; :meth:`FitConfig.flat` gives them back by those names.
+recipes pass fields by their flat names: ``FitConfig(lr=1e-2, smoothness=1.0)``, ``config.replace(lr=1e-2)``,
+``FitConfig.for_profile("ci", iterations=50)``; :meth:`FitConfig.flat` gives them back by those names, which
+are also the fit cache's key. A flat name is the field's own name, except where that would repeat its
+section's name inside the section: there the field drops the repeat and its flat name is qualified by the
+section (:data:`QUALIFIED_NAMES`: ``warp_cost`` is ``config.warp.cost``, ``net_input`` is
+``config.net_inputs.base``).
 Defaults are the paper's (supplement). A profile's sizes and schedules come from
 :meth:`FitConfig.for_profile`, the one place a :class:`~ddp_lite.method.profiles.Profile` becomes a config;
 what differs between the DDP variants comes from :mod:`ddp_lite.method.paper.variants`. The rules that
@@ -46,12 +50,17 @@ from .runtime.device import Precision
 from .runtime.options import RUN_OPTIONS
 from .stopping import StoppingConfig
 
-__all__ = ["FitConfig", "SECTIONS", "FIELDS", "RENAMED_FIELDS"]
+__all__ = ["FitConfig", "SECTIONS", "FIELDS", "QUALIFIED_NAMES", "RENAMED_FIELDS"]
 
 SECTIONS = {"paper": PaperConfig, "net_inputs": NetInputConfig, "holes": HoleConfig, "warp": WarpConfig,
             "combination": CombinationConfig, "stopping": StoppingConfig, "tricks": DipTricks, "precision": Precision}
-SECTION_OF = {f.name: section for section, cls in SECTIONS.items() for f in dataclasses.fields(cls)}  # field → section
-FIELDS = tuple(SECTION_OF)  # every field by its own name, section by section: the order of every flat view
+# every field by its flat name → (its section, its name there); each section spells out the flat names that are
+# not its fields' own (its flat_names: the section refuses them, naming the field, where it stands alone)
+FIELD_OF = {cls.flat_name(f.name): (section, f.name)
+            for section, cls in SECTIONS.items() for f in dataclasses.fields(cls)}
+FIELDS = tuple(FIELD_OF)  # every field by its flat name, section by section: the order of every flat view
+# the flat names that are not the field's own: flat name → where the field is read
+QUALIFIED_NAMES = {name: f"config.{section}.{field}" for name, (section, field) in FIELD_OF.items() if name != field}
 # old spellings of fields, refused with the new name wherever a field is given or read by name
 RENAMED_FIELDS = {"holdout": "held_out_shape", "holdout_fraction": "held_out_fraction"}
 
@@ -61,12 +70,12 @@ class FitConfig:
     """What a fit computes besides the data: eight sections (this module's docstring). Defaults are the
     paper's (supplement).
 
-    Use :meth:`for_profile` for the sizes and schedules of ``DDP_PROFILE``. Fields are given by their own
-    names (``FitConfig(lr=1e-2)``, ``config.replace(lr=1e-2)``) and read by their sections
-    (``config.paper.lr``); ``config.lr``, ``config.lr = 1e-2`` and a misspelt name raise ``AttributeError``
-    saying what to write instead, as does a run option (``FitConfig(progress=False)``: ``TypeError``, it goes
-    to the run as ``options=RunOptions(progress=False)``). NumPy integers given for integer fields become
-    Python ints.
+    Use :meth:`for_profile` for the sizes and schedules of ``DDP_PROFILE``. Fields are given by their flat
+    names (``FitConfig(lr=1e-2)``, ``config.replace(lr=1e-2)``, ``FitConfig(warp_cost="census")``) and read
+    by their sections (``config.paper.lr``, ``config.warp.cost``); ``config.lr``, ``config.lr = 1e-2`` and a
+    misspelt name raise ``AttributeError`` saying what to write instead, as does a run option
+    (``FitConfig(progress=False)``: ``TypeError``, it goes to the run as ``options=RunOptions(progress=False)``).
+    NumPy integers given for integer fields become Python ints.
 
     Example:
         >>> config = FitConfig(lr=1e-2, smoothness=1.0)
@@ -84,12 +93,14 @@ class FitConfig:
     precision: Precision
 
     def __init__(self, **settings):
-        """Fields by their own names (``lr=1e-2``) or whole sections (``holes=HoleConfig(...)``); a field
-        given by name wins over its section. What is not given is the paper's default."""
+        """Fields by their flat names (``lr=1e-2``, ``warp_cost="census"``) or whole sections
+        (``holes=HoleConfig(...)``); a field given by name wins over its section. What is not given is the
+        paper's default."""
         changes = {section: {} for section in SECTIONS}
         for name, value in settings.items():
-            if name in SECTION_OF:
-                changes[SECTION_OF[name]][name] = value
+            if name in FIELD_OF:
+                section, field = FIELD_OF[name]
+                changes[section][field] = value
             elif name not in SECTIONS:
                 raise TypeError(_not_a_field(name, f"FitConfig got an unexpected field {name!r}"))
         for section, cls in SECTIONS.items():
@@ -97,21 +108,22 @@ class FitConfig:
             object.__setattr__(self, section, dataclasses.replace(given, **changes[section]))
 
     def __getattr__(self, name):  # only names that are no attribute come here: say where the field is
-        if name in SECTION_OF:
-            raise AttributeError(f"FitConfig reads {name!r} by its section: config.{SECTION_OF[name]}.{name}")
+        if name in FIELD_OF:
+            section, field = FIELD_OF[name]
+            raise AttributeError(f"FitConfig reads {name!r} by its section: config.{section}.{field}")
         raise AttributeError(_not_a_field(name, f"FitConfig has no field {name!r}"))
 
     def __setattr__(self, name, value):  # a whole section may be set; a field, or a typo, must not pass in silence
-        if name in SECTION_OF:
+        if name in FIELD_OF:
             raise AttributeError(f"FitConfig changes {name!r} by a copy: config = config.replace({name}=...)")
         if name not in SECTIONS:
             raise AttributeError(_not_a_field(name, f"FitConfig has no field {name!r}"))
         object.__setattr__(self, name, value)
 
     def flat(self) -> dict:
-        """Every field by its own name, ``{"net": "unet", ..., "bf16": False}``, in :data:`FIELDS` order
+        """Every field by its flat name, ``{"net": "unet", ..., "bf16": False}``, in :data:`FIELDS` order
         (the fit cache's key, a sequence's manifest); ``FitConfig(**config.flat())`` is ``config`` again."""
-        return {name: getattr(getattr(self, section), name) for name, section in SECTION_OF.items()}
+        return {name: getattr(getattr(self, section), field) for name, (section, field) in FIELD_OF.items()}
 
     @classmethod
     def for_profile(cls, profile=None, variant: str = "rgbd+warp", recipe=None, **overrides) -> "FitConfig":
@@ -128,7 +140,7 @@ class FitConfig:
 
         Example:
             >>> config = FitConfig.for_profile("ci", variant="rgbd", recipe="paper")
-            >>> config.holes.smoothness, config.net_inputs.net_input, config.net_inputs.image_input
+            >>> config.holes.smoothness, config.net_inputs.base, config.net_inputs.image_input
             (0.0, 'noise', 0.0)
         """
         profile = get_profile(profile)
@@ -147,7 +159,7 @@ class FitConfig:
         return cls(**values)
 
     def replace(self, **changes) -> "FitConfig":
-        """A copy with some fields (by their own names) or sections changed."""
+        """A copy with some fields (by their flat names) or sections changed."""
         return dataclasses.replace(self, **changes)
 
     def resolved_iterations(self, variant: str) -> int:
@@ -167,7 +179,7 @@ class FitConfig:
             getattr(self, section).validate()
         # seeds seed, seed+1, ... of the ensemble's members must all be seeds
         check_int(self.paper.seed, "config.seed", minimum=0, maximum=MAX_SEED - (self.combination.ensemble - 1))
-        if self.net_inputs.net_input == "meshgrid" and self.paper.noise_channels < 2:
+        if self.net_inputs.base == "meshgrid" and self.paper.noise_channels < 2:
             raise ValueError(f"config.noise_channels must be at least 2 with net_input='meshgrid' (x and y), "
                              f"got {self.paper.noise_channels}")
 
@@ -176,6 +188,9 @@ def _not_a_field(name: str, message: str) -> str:
     """What to say of ``name``, no field of a FitConfig: its new name, where a run option goes, or the nearest name."""
     if name in RENAMED_FIELDS:
         return f"FitConfig has no {name!r}: the field is now {RENAMED_FIELDS[name]!r}"
+    qualified = next((flat for flat, (_, field) in FIELD_OF.items() if field == name and flat != name), None)
+    if qualified is not None:  # a field's name in its section, given where its flat name goes
+        return f"FitConfig has no {name!r}: {QUALIFIED_NAMES[qualified]} is given by its flat name {qualified!r}"
     if name in RUN_OPTIONS:
         return (f"FitConfig has no {name!r}: it is a run option (how a fit runs, not what it computes); pass it to "
                 f"the run: complete_depth(..., options=RunOptions({name}=...)) (ddp_lite.RunOptions)")

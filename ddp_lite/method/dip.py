@@ -43,7 +43,7 @@ def describe_image_fit(config: FitConfig, height: int, width: int) -> str:
     paper = config.paper
     extra = paper.noise_channels - 2  # a meshgrid input is (u, v) and then noise channels
     inputs = (("the pixel coordinates" + (f" + {extra} noise channels" if extra > 0 else ""))
-              if config.net_inputs.net_input == "meshgrid" else f"{paper.noise_channels} channels of fixed noise")
+              if config.net_inputs.base == "meshgrid" else f"{paper.noise_channels} channels of fixed noise")
     jitter = f", input jitter σ {config.tricks.reg_noise_std:.3g}" if config.tricks.reg_noise_std else ""
     return (f"Deep Image Prior: {height}×{width} (H×W) image, {'UNet' if paper.net == 'unet' else 'SkipNet'} "
             f"{'-'.join(map(str, paper.channels))}, {config.resolved_iterations('rgbd')} iterations, lr {paper.lr:g}, "

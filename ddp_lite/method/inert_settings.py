@@ -49,9 +49,10 @@ def inert_settings(config, variant, neighbors: int) -> list[str]:
     if not spec.needs_neighbors:
         for name in (f.name for f in dataclasses.fields(warp)):
             if _changed(warp, name):
-                said.append(f"config.{name}={getattr(warp, name)!r} acts on nothing: variant {spec.name!r} has no warp "
-                            f"term (it is the 'rgbd+warp' variant's, with a camera and neighbours)")
-    elif warp.warp_combine == "min" and neighbors == 1:
+                said.append(f"config.{warp.flat_name(name)}={getattr(warp, name)!r} acts on nothing: variant "
+                            f"{spec.name!r} has no warp term (it is the 'rgbd+warp' variant's, with a camera and "
+                            f"neighbours)")
+    elif warp.combine == "min" and neighbors == 1:
         said.append("config.warp_combine='min' acts on nothing with one neighbour: the minimum over one neighbour's "
                     "cost is that cost, as the mean is (it picks between two or more)")
     if not spec.uses_rgb and config.paper.gammas is not None:

@@ -48,7 +48,7 @@ def build(config: FitConfig, out_channels: int, height: int, width: int, device,
         except RuntimeError as error:
             raise ValueError(f"init: its weights do not fit this config's network ({error.args[0].splitlines()[0]})")
     if noise is None:
-        noise = make_input(config.net_inputs.net_input, paper.noise_channels, height, width, seed=paper.seed)
+        noise = make_input(config.net_inputs.base, paper.noise_channels, height, width, seed=paper.seed)
     elif tuple(noise.shape) != (1, paper.noise_channels, height, width):
         raise ValueError(f"noise must be (1, {paper.noise_channels}, {height}, {width}), got {tuple(noise.shape)}")
     if image is not None:

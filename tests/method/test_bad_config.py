@@ -4,6 +4,8 @@ option given where the method's settings go refused saying where it belongs, and
 """
 from __future__ import annotations
 
+import dataclasses
+
 from bad_input_harness import BAD, CaseList, depth, refusal_test, rgb, tiny, with_env
 from ddp_lite.method.complete import complete_depth
 from ddp_lite.method.config import FitConfig
@@ -67,6 +69,27 @@ case("for_profile(progress=False)", TypeError, "progress")(
 case("config.replace(device='cpu')", TypeError, "device")(lambda tmp: (lambda: tiny().replace(device="cpu")))
 case("config.run", AttributeError, "RunOptions")(lambda tmp: (lambda: tiny().run))
 case("config.progress", AttributeError, "run option")(lambda tmp: (lambda: tiny().progress))
+
+
+# --------------------------------------------------------------------------- a field's flat name inside its section
+# FitConfig takes these fields by their section-qualified flat names (FitConfig(warp_cost=...)); the section itself
+# names them without the repeat (config.warp.cost): the flat name read from, or given to, the section is refused
+# with the field's name. Spelt out here, not read from the code.
+QUALIFIED = {"net_input": ("net_inputs", "base", "meshgrid"), "warp_occlusion": ("warp", "occlusion", True),
+             "warp_confidence": ("warp", "confidence", True), "warp_reach": ("warp", "reach", 2.0),
+             "warp_cost": ("warp", "cost", "census"), "warp_texture": ("warp", "texture", True),
+             "warp_combine": ("warp", "combine", "min")}
+for _flat, (_section, _field, _value) in QUALIFIED.items():
+    case(f"config.{_section}.{_flat}", AttributeError, f"config.{_section}.{_field}")(
+        lambda tmp, section=_section, flat=_flat: (lambda: getattr(getattr(tiny(), section), flat)))
+    case(f"{_section} section({_flat}=...)", TypeError, f"the field is {_field!r}")(
+        lambda tmp, section=_section, flat=_flat, value=_value: (
+            lambda: type(getattr(tiny(), section))(**{flat: value})))
+    case(f"dataclasses.replace(config.{_section}, {_flat}=...)", TypeError, f"config.{_section}.{_field}")(
+        lambda tmp, section=_section, flat=_flat, value=_value: (
+            lambda: dataclasses.replace(getattr(tiny(), section), **{flat: value})))
+    case(f"FitConfig({_field}=...)", TypeError, repr(_flat))(
+        lambda tmp, field=_field, value=_value: (lambda: tiny(**{field: value})))
 
 
 # --------------------------------------------------------------------------- seeds, attributes, budgets

@@ -177,16 +177,57 @@ def test_a_config_and_its_fields_by_name_make_each_other(key):
     assert list(config.flat()) == list(DEFAULTS)  # one flat order, section by section
 
 
+# the fields whose flat name (FitConfig's keyword, flat()'s key, the fit cache's key) is qualified by their
+# section, which names them without the repeat: flat name → (section, field, a value other than the default)
+QUALIFIED = {"net_input": ("net_inputs", "base", "meshgrid"), "warp_occlusion": ("warp", "occlusion", True),
+             "warp_confidence": ("warp", "confidence", True), "warp_reach": ("warp", "reach", 2.0),
+             "warp_cost": ("warp", "cost", "census"), "warp_texture": ("warp", "texture", True),
+             "warp_combine": ("warp", "combine", "min")}
+
+
+@pytest.mark.parametrize("flat", sorted(QUALIFIED))
+def test_a_section_qualified_flat_name_sets_and_reads_its_field(flat):
+    section, field, value = QUALIFIED[flat]
+    for config in (FitConfig(**{flat: value}), FitConfig().replace(**{flat: value}),
+                   FitConfig.for_profile("ci", variant="rgbd+warp", recipe="paper", **{flat: value})):
+        assert getattr(getattr(config, section), field) == value
+        assert config.flat()[flat] == value and field not in config.flat()
+        assert FitConfig(**config.flat()) == config
+    assert getattr(getattr(FitConfig(), section), field) == DEFAULTS[flat]
+
+
+def test_the_flat_names_are_unique_and_qualified_where_the_section_drops_its_name():
+    import dataclasses
+
+    from ddp_lite.method.config import FIELDS, QUALIFIED_NAMES, SECTIONS
+    assert len(FIELDS) == len(set(FIELDS)) == sum(len(dataclasses.fields(cls)) for cls in SECTIONS.values())
+    assert QUALIFIED_NAMES == {flat: f"config.{section}.{field}" for flat, (section, field, _) in QUALIFIED.items()}
+
+
+def test_a_sections_own_description_reads_its_fields_by_their_flat_names():
+    from ddp_lite.method.kit.recipes import describe_method
+    assert "pixel coordinates" in describe_method({"net_input": "meshgrid", "noise_channels": 2})
+    assert "only where the neighbour can see" in describe_method({"warp_occlusion": True})
+    assert "from the neighbour that agrees best" in describe_method({"warp_combine": "min"})
+
+
+def test_a_sections_field_given_by_its_flat_name_says_both_names():
+    from ddp_lite.method.kit.warp_terms import WarpConfig
+    with pytest.raises(TypeError, match=r"WarpConfig has no field 'warp_cost': the field is 'cost' "
+                                        r"\(config\.warp\.cost\).*FitConfig\(warp_cost="):
+        WarpConfig(warp_cost="census")
+    with pytest.raises(AttributeError, match=r"'warp_reach' as 'reach': config\.warp\.reach"):
+        FitConfig().warp.warp_reach  # noqa: B018
+    assert not hasattr(FitConfig().warp, "cosst")  # an unknown name is still just no attribute
+
+
 def test_a_profile_names_each_config_field_it_sets():
     """The profile → config table is explicit: each field it names is a config field, and each value is the
     profile's own (a rename on either side fails here, not in a copy that silently stops)."""
-    import dataclasses
-
-    from ddp_lite.method.config import SECTIONS
-    config_fields = {f.name for cls in SECTIONS.values() for f in dataclasses.fields(cls)}
+    from ddp_lite.method.config import FIELDS
     for profile in PROFILES.values():
         settings = profile.fit_settings("rgbd", "skip")
-        assert set(settings) <= config_fields
+        assert set(settings) <= set(FIELDS)
         assert (settings["lr"], settings["lr_gamma"], settings["auto_stop"], settings["patience"],
                 settings["plateau_decays"], settings["eval_every"]) == (
             profile.lr, profile.lr_gamma, profile.auto_stop, profile.patience, profile.plateau_decays, profile.eval_every)

@@ -15,7 +15,7 @@ def test_the_paper_recipe_adds_nothing_at_any_size(profile):
     config = FitConfig.for_profile(profile, variant="rgbd", recipe="paper")
     assert (config.holes.smoothness, config.holes.flatness) == (0.0, 0.0)
     assert (config.net_inputs.image_input, config.net_inputs.fill_input) == (0.0, 0.0)
-    assert config.net_inputs.net_input == "noise" and config.paper.noise_channels == 16  # the paper's 16 noise channels
+    assert config.net_inputs.base == "noise" and config.paper.noise_channels == 16  # the paper's 16 noise channels
     size_and_budget = ("channels", "iterations", "lr", "lr_milestones", "auto_stop", "patience")
     kit = FitConfig.for_profile(profile, variant="rgbd", recipe="kit")
     assert all(config.flat()[name] == kit.flat()[name] for name in size_and_budget)  # the profile decides these

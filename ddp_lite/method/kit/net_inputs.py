@@ -1,8 +1,8 @@
-"""The kit's net inputs (:class:`NetInputConfig`): the fixed input as the pixel coordinates instead of
-noise (``net_input``), and extra channels joined to it by the fit (off in the ``paper`` recipe): the
-view's colour image, blurred (``image_input``, :func:`image_channels`), and a classical fill of the
-input disparity (``fill_input``, :func:`fill_channel`). The net takes them as extra input channels; it
-does not know what they are. ``fill_start`` starts the net's output at that fill instead (:func:`start_at`).
+"""The kit's net inputs (:class:`NetInputConfig`): the fixed input's base channels as the pixel coordinates
+instead of noise (``base``, FitConfig's ``net_input``), and extra channels joined to them by the fit (off in the
+``paper`` recipe): the view's colour image, blurred (``image_input``, :func:`image_channels`), and a classical
+fill of the input disparity (``fill_input``, :func:`fill_channel`). The net takes them as extra input channels;
+it does not know what they are. ``fill_start`` starts the net's output at that fill instead (:func:`start_at`).
 """
 from __future__ import annotations
 
@@ -25,16 +25,21 @@ __all__ = ["NetInputConfig", "image_channels", "fill_channel", "start_at"]
 @dataclass(frozen=True)
 class NetInputConfig(Settings):
     """What the net is fed besides the paper's noise, and where its output starts (5 fields; the defaults
-    are the paper's)."""
+    are the paper's). ``base`` is FitConfig's ``net_input`` (``flat_names``)."""
 
-    net_input: str = "noise"  # "noise" (the paper) or "meshgrid" (x, y in the first two channels; nets.make_input)
+    section = "net_inputs"
+    flat_names = {"base": "net_input"}
+
+    # the channels every fit's input starts with, the paper's noise_channels of them, before any image or fill
+    # channels are joined: "noise" (the paper) or "meshgrid" (x, y in the first two, noise in the rest; nets.make_input)
+    base: str = "noise"
     image_input: float = 0.0  # > 0: the colour image × this joins the net input (variants with colour)
     image_blur: float = 1.0  # σ in px of the Gaussian blur on that image (0: none)
     fill_input: float = 0.0  # > 0: a classical fill of the input disparity × this joins the net input
     fill_start: bool = False  # the net's first output is that fill: it fits what the fill gets wrong (start_at)
 
     def validate(self) -> None:
-        check_choice(self.net_input, "config.net_input", NET_INPUTS)
+        check_choice(self.base, "config.net_input", NET_INPUTS)
         for name in ("image_input", "image_blur", "fill_input"):
             check_real(getattr(self, name), f"config.{name}", 0.0)
         check_bool(self.fill_start, "config.fill_start")
@@ -43,7 +48,7 @@ class NetInputConfig(Settings):
         """These inputs' part of a recipe's one-line description (``kit.recipes.describe_method``), with the
         paper's ``noise_channels`` beside them; "" for the paper's input."""
         parts = ["the pixel coordinates" + (" + noise" if noise_channels > 2 else "")
-                 if self.net_input == "meshgrid" else "noise"]
+                 if self.base == "meshgrid" else "noise"]
         if self.image_input:
             parts.append(f"the colour image (blurred, σ {self.image_blur:g} px; not for depth-only)")
         return ", net input: " + " + ".join(parts) if parts != ["noise"] else ""
@@ -51,8 +56,8 @@ class NetInputConfig(Settings):
     def equation(self, noise_channels: int, uses_rgb: bool) -> tuple[list[str], list[str]]:
         """(the paper's inputs that stay, the kit's added ones) of the net in the equation a config optimises
         (``method.equation``), LaTeX, with the paper's ``noise_channels``, for a variant that sees colour or not."""
-        in_paper = ["\\text{noise}"] if self.net_input != "meshgrid" or noise_channels > 2 else []
-        added = ["u, v"] if self.net_input == "meshgrid" else []
+        in_paper = ["\\text{noise}"] if self.base != "meshgrid" or noise_channels > 2 else []
+        added = ["u, v"] if self.base == "meshgrid" else []
         if uses_rgb and self.image_input > 0:
             added.append(f"G_{{{self.image_blur:g}}} * I_{{\\mathrm{{in}}}}")
         if self.fill_input > 0:

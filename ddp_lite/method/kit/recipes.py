@@ -29,7 +29,6 @@ what each addition bought on the quality suite (``benchmarks/bench_quality.py``)
 """
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass, field
 
 from ...core.checks import env_choice, named_choice
@@ -148,7 +147,6 @@ def describe_method(settings: dict) -> str:
     """What ``settings`` (``FitConfig`` fields by name, as :meth:`Recipe.settings` gives) add to the paper's
     method, for one line of a notebook's first cell: "" for the paper's method. Each kit section describes
     itself (its ``describe()``), the fields ``settings`` leaves out at their defaults."""
-    def section(cls):
-        return cls(**{f.name: settings[f.name] for f in dataclasses.fields(cls) if f.name in settings})
-    return (section(HoleConfig).describe() + section(NetInputConfig).describe(section(PaperConfig).noise_channels)
-            + section(WarpConfig).describe() + section(CombinationConfig).describe())
+    return (HoleConfig.from_flat(settings).describe()
+            + NetInputConfig.from_flat(settings).describe(PaperConfig.from_flat(settings).noise_channels)
+            + WarpConfig.from_flat(settings).describe() + CombinationConfig.from_flat(settings).describe())

@@ -4,7 +4,7 @@ Not in the paper. The paper's L_warp compares every reference pixel that lands i
 neighbour's image with the colour found there. Beside a foreground edge, a band of the background
 is hidden from the neighbour by the foreground; the colour found there is the foreground's, so
 L_warp pulls the band's depth towards a wrong answer. On stereo pairs those bands are where
-left-right checks fail, the commonest real hole. ``WarpConfig.warp_occlusion`` leaves them out.
+left-right checks fail, the commonest real hole. ``WarpConfig.occlusion`` (``warp_occlusion``) leaves them out.
 
 The test, for a reference point P (pixel p, depth z) and the neighbour's centre C: P is hidden
 when the segment from P to C passes behind the reference surface, i.e. some point S of it

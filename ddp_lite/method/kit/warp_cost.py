@@ -4,7 +4,7 @@ The paper's L_warp compares intensities, ``λw (1 − SSIM) + (1 − λw) L1`` o
 two views differ by more than the depth explains (exposure, shading, specular light, a pooled image's
 blur) or where the colour is flat, the intensity cost's minimum can sit at a wrong depth: on the real
 Motorcycle pair it does for most pixels of the SGBM holes (docs/studies/real_data.md, "Where the warp term can
-be trusted"). Three other costs are offered by ``WarpConfig.warp_cost``:
+be trusted"). Three other costs are offered by ``WarpConfig.cost`` (``warp_cost``):
 
 - ``"census"``: a soft census (ternary) transform, as in UnFlow's ternary loss (Meister et al., AAAI
   2018): each pixel is described by the soft signs ``t = d / sqrt(ε + d²)`` of the grey-level
@@ -22,7 +22,7 @@ be trusted"). Three other costs are offered by ``WarpConfig.warp_cost``:
   census sees the order of the grey levels, blind to offsets and with little pull in flat colour; the
   intensity half keeps the paper's pull where the census is weak.
 
-``WarpConfig.warp_texture`` weights each pixel's cost by how well the neighbour can constrain its depth:
+``WarpConfig.texture`` (``warp_texture``) weights each pixel's cost by how well the neighbour can constrain its depth:
 a change of depth moves the pixel's match along its epipolar line, so the cost can tell depths apart
 only where the reference image changes along that line. The weight is the grey level's derivative
 along the epipolar direction ``s = |∇G · e|`` (:func:`epipolar_directions`), made ``s / (s + median(s))``
@@ -32,7 +32,7 @@ dominate), then divided by its image mean, so the term keeps the paper's overall
 Tried on the real pair and on rendered scenes, none of them kept (docs/studies/real_data.md, "Other photometric
 costs for the warp term").
 
-``WarpConfig.warp_combine = "min"`` needs each neighbour's cost per pixel (:meth:`WarpCost.pixel_costs`):
+``WarpConfig.combine = "min"`` (``warp_combine``) needs each neighbour's cost per pixel (:meth:`WarpCost.pixel_costs`):
 ``(1 − λw) · L1 + λw · (1 − SSIM)`` at each pixel, the L1 averaged over the colour channels and the SSIM
 that of the 11×11 window centred on the pixel (the images mirrored at the border, so every pixel has
 one), or the census distance at the pixel.

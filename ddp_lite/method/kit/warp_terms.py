@@ -1,7 +1,8 @@
 """The kit's warp term of one fit, handed to the paper's loss as its ``warp_term`` (and its occlusion
 tests as its ``visibility``): the masks and costs are built here once per fit, from the settings
-(:class:`WarpConfig`) and the images, and applied each iteration. Each is off unless the config asks for
-it; with all off :func:`kit_warp_term` is None and the paper's Eq. 5 runs unchanged.
+(:class:`WarpConfig`, named below as FitConfig takes them: ``warp_cost`` is ``config.warp.cost``) and the
+images, and applied each iteration. Each is off unless the config asks for it; with all off
+:func:`kit_warp_term` is None and the paper's Eq. 5 runs unchanged.
 
 - ``warp_confidence``: per neighbour, the pixels whose photometric match singles out one depth
   (:mod:`ddp_lite.method.kit.warp_confidence`), from the images alone;
@@ -42,30 +43,35 @@ __all__ = ["WARP_COMBINATIONS", "WarpConfig", "WarpTerm", "minimum_over_neighbou
 
 @dataclass(frozen=True)
 class WarpConfig(Settings):
-    """The kit's changes to the warp term L_warp (6 fields; the defaults are the paper's Eq. 5)."""
+    """The kit's changes to the warp term L_warp (6 fields; the defaults are the paper's Eq. 5). FitConfig takes
+    each by its name in ``flat_names`` (``FitConfig(warp_cost="census")`` sets ``config.warp.cost``)."""
 
-    warp_occlusion: bool = False  # skip pixels a nearer point hides from the neighbour (visibility.Visibility)
-    warp_confidence: bool = False  # only where the images single out one depth (warp_confidence)
-    warp_reach: float | None = None  # only on the unfitted pixels (holes, held-out) and within this many px of
+    section = "warp"
+    flat_names = {"occlusion": "warp_occlusion", "confidence": "warp_confidence", "reach": "warp_reach",
+                  "cost": "warp_cost", "texture": "warp_texture", "combine": "warp_combine"}
+
+    occlusion: bool = False  # skip pixels a nearer point hides from the neighbour (visibility.Visibility)
+    confidence: bool = False  # only where the images single out one depth (warp_confidence)
+    reach: float | None = None  # only on the unfitted pixels (holes, held-out) and within this many px of
     # them, off the valid input L_disp pins (warp_region; None: every pixel, the paper)
-    warp_cost: str = "intensity"  # what L_warp compares: "intensity" (L1 + SSIM on colour, the paper), "census" (a
+    cost: str = "intensity"  # what L_warp compares: "intensity" (L1 + SSIM on colour, the paper), "census" (a
     # soft census, no L1/SSIM), "gradient" (L1 on the images' differences + SSIM) or "census+intensity" (half each,
     # the census at L1 + SSIM's size) (warp_cost)
-    warp_texture: bool = False  # weighted per pixel by the reference's change along the epipolar line
+    texture: bool = False  # weighted per pixel by the reference's change along the epipolar line
     # (warp_cost.texture_weights: flat colour little)
-    warp_combine: str = "mean"  # over the N neighbours: "mean" (the paper's Eq. 5) or "min": per pixel the neighbour
+    combine: str = "mean"  # over the N neighbours: "mean" (the paper's Eq. 5) or "min": per pixel the neighbour
     # that agrees best (minimum_over_neighbours)
 
     def validate(self) -> None:
-        check_choice(self.warp_cost, "config.warp_cost", WARP_COSTS)
-        check_choice(self.warp_combine, "config.warp_combine", WARP_COMBINATIONS)
-        for name in ("warp_occlusion", "warp_confidence", "warp_texture"):
-            check_bool(getattr(self, name), f"config.{name}")
-        if self.warp_combine == "min" and self.warp_texture:
+        check_choice(self.cost, "config.warp_cost", WARP_COSTS)
+        check_choice(self.combine, "config.warp_combine", WARP_COMBINATIONS)
+        for name in ("occlusion", "confidence", "texture"):
+            check_bool(getattr(self, name), f"config.{self.flat_name(name)}")
+        if self.combine == "min" and self.texture:
             raise ValueError("config.warp_texture weights each neighbour's cost over the image; with "
                              "config.warp_combine='min' use one or the other")
-        if self.warp_reach is not None:
-            check_real(self.warp_reach, "config.warp_reach", 0.0)
+        if self.reach is not None:
+            check_real(self.reach, "config.warp_reach", 0.0)
 
     def describe(self) -> str:
         """These changes' part of a recipe's one-line description (``kit.recipes.describe_method``); "" for
@@ -74,30 +80,30 @@ class WarpConfig(Settings):
                  "gradient": ", the warp term's L1 on the images' differences (not on intensities)",
                  "census+intensity": ", the warp term half L1 + SSIM on intensities, half a soft census of 7×7 "
                                      "patches at its size"}
-        return ((", the warp term only where the neighbour can see" if self.warp_occlusion else "")
-                + (", the warp term only where the images single out one depth" if self.warp_confidence else "")
-                + (f", the warp term only in the holes and within {self.warp_reach:g} px of them"
-                   if self.warp_reach is not None else "")
-                + costs.get(self.warp_cost, "")
+        return ((", the warp term only where the neighbour can see" if self.occlusion else "")
+                + (", the warp term only where the images single out one depth" if self.confidence else "")
+                + (f", the warp term only in the holes and within {self.reach:g} px of them"
+                   if self.reach is not None else "")
+                + costs.get(self.cost, "")
                 + (", the warp term weighted by the image's change along each pixel's epipolar line"
-                   if self.warp_texture else "")
+                   if self.texture else "")
                 + (", the warp term per pixel from the neighbour that agrees best (not their mean)"
-                   if self.warp_combine == "min" else ""))
+                   if self.combine == "min" else ""))
 
     def equation(self) -> list[str]:
         """These changes as the marks on L_warp in the equation a config optimises (``method.equation``);
         [] for the paper's warp term."""
-        return [name for name, on in (("visible", self.warp_occlusion),  # kit.visibility
-                                      ("confident", self.warp_confidence),  # kit.warp_confidence
-                                      ("holes", self.warp_reach is not None),  # warp_region
-                                      (self.warp_cost, self.warp_cost != "intensity"),  # kit.warp_cost
-                                      ("textured", self.warp_texture),
-                                      ("min over views", self.warp_combine == "min"))
+        return [name for name, on in (("visible", self.occlusion),  # kit.visibility
+                                      ("confident", self.confidence),  # kit.warp_confidence
+                                      ("holes", self.reach is not None),  # warp_region
+                                      (self.cost, self.cost != "intensity"),  # kit.warp_cost
+                                      ("textured", self.texture),
+                                      ("min over views", self.combine == "min"))
                 if on]
 
 
 def warp_region(fit_mask: torch.Tensor, reach: float) -> torch.Tensor:
-    """(1, 1, H, W) bool: the pixels the warp term keeps with ``WarpConfig.warp_reach`` (the kit's, not the
+    """(1, 1, H, W) bool: the pixels the warp term keeps with ``WarpConfig.reach`` (the kit's, not the
     paper's): those ``fit_mask`` (1, 1, H, W) bool leaves unfitted (holes, held-out pixels) and every pixel
     within ``reach`` px of one (Euclidean distance between pixel centres, so ``reach`` 0 is the holes alone,
     1 adds their 4-neighbours).
@@ -175,22 +181,22 @@ def kit_warp_term(config: WarpConfig, lambda_w: float, transform: DisparityTrans
     # per neighbour, the pixels whose photometric match singles out one depth (1, 1, H, W) bool,
     # from the images alone, once per fit (it does not depend on the fit's depth)
     keep = ([warp_confidence(rgb, image, camera, cam, transform.d_min, transform.d_max, lambda_w)
-             for image, cam in neighbors] if config.warp_confidence else None)
-    if config.warp_reach is not None:  # the warp term only in the holes and a ring around them
-        region = warp_region(fit_mask, config.warp_reach)
+             for image, cam in neighbors] if config.confidence else None)
+    if config.reach is not None:  # the warp term only in the holes and a ring around them
+        region = warp_region(fit_mask, config.reach)
         keep = [region & c for c in keep] if keep else [region] * len(neighbors)
-    kind = config.warp_cost if config.warp_cost != "intensity" or config.warp_texture else None
+    kind = config.cost if config.cost != "intensity" or config.texture else None
     weights = ([texture_weights(rgb, epipolar_directions(camera, cam).to(device)) for _, cam in neighbors]
-               if config.warp_texture else None)
-    combine = config.warp_combine
+               if config.texture else None)
+    combine = config.combine
     if keep is None and kind is None and combine == "mean":
         return None
     return WarpTerm(lambda_w, keep, kind, weights, combine)
 
 
 def occlusion_tests(config: WarpConfig, camera, neighbors, device) -> list | None:
-    """One occlusion test per neighbour for the paper's warpers (``config.warp_occlusion``); None: none."""
-    if not config.warp_occlusion or not neighbors:
+    """One occlusion test per neighbour for the paper's warpers (``config.occlusion``); None: none."""
+    if not config.occlusion or not neighbors:
         return None
     return [Visibility(camera, cam, torch.float32, device) for _, cam in neighbors]
 

@@ -131,7 +131,7 @@ def test_paper_loss_with_another_cost_or_the_weights_pulls_the_depth_and_the_def
 
 def test_the_options_are_checked_off_by_default_and_named_as_the_kits():
     config = FitConfig()
-    assert config.warp.warp_cost == "intensity" and config.warp.warp_texture is False
+    assert config.warp.cost == "intensity" and config.warp.texture is False
     FitConfig(warp_cost="census", warp_texture=True).validate()
     with pytest.raises(ValueError, match="config.warp_cost"):
         FitConfig(warp_cost="ncc").validate()
