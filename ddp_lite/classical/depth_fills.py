@@ -18,8 +18,8 @@ Every fill has the signature of :mod:`ddp_lite.classical.baselines`, ``fn(depth,
 - ``ebi`` / ``fbf``: stand-ins for the EBI and FBF rows of the paper's Table 6 from ``cv2.xphoto.inpaint``:
   shift-map inpainting (patches of valid depth pasted at offsets chosen by graph cuts) and
   frequency-selective reconstruction (a sparse Fourier basis fitted around each hole, extrapolated into
-  it). Neither is the paper's method; on Motorcycle 250×370 both are worse than ``linear`` (mean hole RMSE
-  over four hole kinds ×2.2 and ×1.4).
+  it). Neither is the paper's method, and on the real Motorcycle pair both are worse than ``linear``
+  (``docs/studies/real_data.md``, "The stand-ins for the paper's EBI and FBF rows").
 """
 from __future__ import annotations
 
@@ -89,7 +89,8 @@ def _griddata(depth, rgb, method: str) -> np.ndarray:
 def _clough_tocher_within_triangles(known: np.ndarray, values: np.ndarray, wanted: np.ndarray) -> np.ndarray:
     """Clough-Tocher values at ``wanted`` (M, 2), each clamped to the range of its Delaunay triangle's three
     vertices (NaN outside the hull). The cubic's gradients are estimated from far-off pixels: across a
-    depth edge they overshoot by several times the step (Motorcycle, 125×185 blobs: 7.3 px against nearest's 1.4)."""
+    depth edge they overshoot by several times the step (``docs/studies/real_data.md``, "The classical fills
+    bounded on real photos")."""
     interpolant = interpolate.CloughTocher2DInterpolator(known, values)
     out = interpolant(wanted)
     simplex = interpolant.tri.find_simplex(wanted)
@@ -127,8 +128,9 @@ def fill_linear(depth, rgb=None) -> np.ndarray:
 def fill_linear_from_rim(depth, rgb=None) -> np.ndarray:
     """:func:`fill_linear` triangulating only the valid pixels that touch a hole (8-neighbours): (H, W) →
     (H, W) float32. A hole pixel's triangle has its corners on the hole's rim, so this is the same fill
-    up to the ties a regular grid leaves to the triangulation (cocircular pixels), and ~50× faster on
-    a 500×741 photo (0.3 s against 13 s), where `ddp-lite complete` compares against it.
+    up to the ties a regular grid leaves to the triangulation (cocircular pixels), and much faster on a
+    full-size photo, where `ddp-lite complete` compares against it (only the rim is triangulated;
+    ``docs/studies/real_data.md``, "The stand-ins for the paper's EBI and FBF rows").
 
     Example:
         >>> depth = np.tile(np.arange(6, dtype=np.float32) + 1, (4, 1))
@@ -193,9 +195,9 @@ def fill_navier_stokes(depth, rgb=None) -> np.ndarray:
 def fill_biharmonic(depth, rgb=None) -> np.ndarray:
     """Biharmonic inpainting (``skimage.restoration.inpaint_biharmonic``): (H, W) metres → (H, W) float32.
 
-    Each hole's values are clamped to the range of the valid pixels touching it (the surface overshoots a
-    depth edge: Motorcycle 125×185 blobs-2, 1.73 px clamped to 1.27, nearest 1.35). Exact on planar depth
-    away from the image border.
+    Each hole's values are clamped to the range of the valid pixels touching it (the surface has no maximum
+    principle and overshoots a depth edge: ``docs/studies/real_data.md``, "The classical fills bounded on real
+    photos"). Exact on planar depth away from the image border.
     """
     from skimage.restoration import inpaint_biharmonic
 
@@ -217,12 +219,11 @@ def fill_ebi(depth, rgb=None) -> np.ndarray:
     neighbouring copies agree: whole patches of the valid depth are pasted into the holes. EBI (Arias et al.
     2011) is a variational exemplar method (patch weights and a patch error minimised together, values
     blended from many patches); shift-map pastes single offsets and does not see the colour image (given
-    Lab colour as extra channels it was better on 2 of 4 Motorcycle hole kinds, worse on the other 2). The
-    float32 depth is used as it is: quantised to uint16 levels the same fill was ~1.8× worse (its costs
-    are scaled for 8-bit levels). On Motorcycle 250×370 it is ~2× the linear fill's hole RMSE, takes
-    ~5–14 s a fill on 2 shared cores, and is fragile: the offsets it picks move with the input's last
-    digits (125×185 blobs-1: 2.86 px, or 1.67 px with the mean subtracted in float32 instead of float64).
-    For one input it is deterministic.
+    Lab colour as extra channels it was no better overall). The float32 depth is used as it is: quantised
+    to uint16 levels the same fill was worse (its costs are scaled for 8-bit levels). On the real
+    Motorcycle pair it is well behind the linear fill, takes seconds a fill, and is fragile: the offsets
+    it picks move with the input's last digits (``docs/studies/real_data.md``, "The stand-ins for the
+    paper's EBI and FBF rows"). For one input it is deterministic.
     Valid pixels keep their input value.
     """
     depth, valid, _ = check_fill_input(depth, rgb)
@@ -249,9 +250,9 @@ def fill_fbf(depth, rgb=None) -> np.ndarray:
     the hole. FBF (Atapour-Abarghouei et al. 2016) also fills with a Fourier basis but filters the depth's
     spectrum with a Butterworth filter and iterates; this is the closest library method, not FBF.
     OpenCV's FSR takes 8-bit images only (16-bit input comes back unfilled), and its stopping rule is in
-    grey levels: the more levels the valid range spans, the longer it runs. On Motorcycle 250×370 (blobs-1,
-    blobs-2, blobs-3, occlusion) the FAST mode on 64 levels had a mean hole RMSE of 4.05 px in ≤ 1.8 s a
-    fill, on 256 levels 4.69 px in ≤ 4 s; the BEST mode on 256 levels took ~50 s a fill (linear: 2.86 px).
+    grey levels: the more levels the valid range spans, the longer it runs. The FAST mode on 64 levels was
+    both better and faster than on 256 levels, and the BEST mode too slow for a class
+    (``docs/studies/real_data.md``, "The stand-ins for the paper's EBI and FBF rows").
     One level is 1/63 of the valid range, a quantisation the valid pixels do not see (they keep their value).
     """
     depth, valid, _ = check_fill_input(depth, rgb)

@@ -86,7 +86,7 @@ def _plain(value):
     equally in any process (a pickled tensor does not: its bytes differ from run to run)."""
     if isinstance(value, torch.Tensor):
         return value.detach().cpu().numpy()
-    if isinstance(value, FitConfig):  # its fields by their own names
+    if isinstance(value, FitConfig):  # its fields by their flat names
         return (type(value).__qualname__, {name: _plain(item) for name, item in value.flat().items()})
     if isinstance(value, RunOptions):  # the progress bar changes no result
         fields = {f.name: _plain(getattr(value, f.name)) for f in dataclasses.fields(value) if f.name != "progress"}

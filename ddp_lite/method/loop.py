@@ -67,7 +67,8 @@ def run(net, noise, loss_fn, config: FitConfig, iterations: int, held_out_error=
     ``progress``: the caller's hook, iterated over for the iterations; ``options``: the run's memory format
     and callback rate (the net's precision is the config's)."""
     paper, stopping, tricks = config.paper, config.stopping, config.tricks
-    # the fused kernel updates all parameters in one call: ~10-25 % faster per iteration on CPU
+    # the fused kernel updates all parameters in one call: faster per iteration on CPU
+    # (docs/studies/benchmark_history.md, "Fused Adam")
     optimizer = torch.optim.Adam(net.parameters(), lr=paper.lr, fused=noise.device.type in ("cpu", "cuda"))
     if paper.schedule == "cosine":
         scheduler = torch.optim.lr_scheduler.CosineAnnealingLR(optimizer, T_max=iterations)

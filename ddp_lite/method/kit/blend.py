@@ -37,14 +37,14 @@ is mostly the network's. The blobs, unlike a ring around the holes, cost the fit
 measured, the choice does not tell the photograph from the rendered scenes: the held-out valid depth
 prefers the fill on both, so it only buys a larger share with its cost (``docs/studies/real_data.md``). It
 stays a study lever (recipe ``fill-chosen``); the ``kit`` recipe takes a fixed share where the variant
-sees colour (:data:`~ddp_lite.method.kit.recipes.KIT_AT`). On the real suite's 61 cases a larger fixed
-share helps the fit alone more (f = 0.8: 1.02× the best fill against 1.18× at ¼), but the fit made sharp
-first (``refine``, the ``photo`` recipe) does better at ¼ (``docs/studies/real_suite.md``).
+sees colour (:data:`~ddp_lite.method.kit.recipes.KIT_AT`). On the real suite a larger fixed share helps the
+fit alone more, but the fit made sharp first (``refine``, the ``photo`` recipe) does better at ¼
+(``docs/studies/real_suite.md``, "The fit made sharp, and how much fill to mix in").
 
 ``depth_source`` says where the input depth came from. A stereo matcher's holes have a rim it often
-got wrong: on the real suite's SGBM depth, 16 % of the valid pixels within 2 px of a hole are more than
-1 px off, against 1.7 % further in, and the fit, which reproduces the valid pixels,
-cannot tell. With ``"stereo"`` the steps after the fit (the fill mixed in, the ``refine`` solve) do not
+got wrong: on the real suite's SGBM depth the valid pixels within 2 px of a hole are many times more often
+more than 1 px off than those further in (``docs/studies/real_suite.md``, "A stereo matcher's depth"), and
+the fit, which reproduces the valid pixels, cannot tell. With ``"stereo"`` the steps after the fit (the fill mixed in, the ``refine`` solve) do not
 read the valid pixels within :data:`RIM_DISTRUST` px of a hole (:func:`trusted_depth`); the answer keeps
 them as given.
 
@@ -77,9 +77,8 @@ BLEND_WEIGHTS = (0.0, 0.25, 0.5, 0.75, 1.0)  # the kit fit's weight; 0 is the pa
 RING_SHARE = 0.5  # the share of the ring held out: the rest keeps the holes' edges where they are
 FILL_SHARES = (0.0, 0.1, 0.2, 0.3, 0.4, 0.5)  # the fill's shares blend_fill=None chooses among: the fit keeps half
 FILL_HELD_OUT = 0.05  # the share of the valid pixels held out to choose it
-# the classical fills averaged into the one mixed in: on the real pair the bilateral solver is the best fill
-# in three of five cases and colorization in two, and their mean lets the share grow without costing the
-# rendered scenes (docs/studies/real_data.md)
+# the classical fills averaged into the one mixed in: on the real pair each is the best fill on some of the
+# hole kinds, and their mean lets the share grow without costing the rendered scenes (docs/studies/real_data.md)
 FILL_MEMBERS = ("colorization", "bilateral-solver")
 # the largest short side (px) of the images the steps after the fit were tuned on (the eighth-size real suite,
 # 115-138 rows; the class profile's 96×128): their pixel settings below hold there and scale with the short side

@@ -2,8 +2,9 @@
 
     Z = 1/K Σ_k Z_k,   I = 1/K Σ_k I_k,   D = depth of Z
 
-Not in the paper. One fit's hole error moves ±10 % and more with the seed (other weights, noise
-and held-out pixels); the mean keeps what the fits agree on. Members run side by side in threads
+Not in the paper. One fit's hole error moves with the seed (other weights, noise and held-out
+pixels), often by more than a lever changes it (``docs/studies/benchmark_history.md``, "The width
+study"); the mean keeps what the fits agree on. Members run side by side in threads
 where cores and memory allow (:mod:`ddp_lite.method.runtime.side_by_side`).
 """
 from __future__ import annotations

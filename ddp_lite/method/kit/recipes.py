@@ -15,9 +15,9 @@ A profile (``ci``, ``class``, ``paper``; ``DDP_PROFILE``) sets the size and the 
 - ``photo``: for real photographs, the ``kit`` fit without its hole terms (:data:`PHOTO_HOLE_TERMS`),
   made sharp by an image-guided edge-aware solve toward it (``refine``: the fast bilateral solver of
   :mod:`ddp_lite.classical.full_resolution` at the fit's own size, averaged over four smoothness settings),
-  with the kit's share of the colour-guided fill: one fit, 0.92× the best fill of each case on the mean
-  of the real suite's 61 cases over seeds 0-2, SGBM's depth declared a stereo matcher's
-  (``docs/results.md``; how it was chosen: ``docs/studies/real_suite.md``). ``ddp-lite complete`` runs one such solve at the photo's full size instead.
+  with the kit's share of the colour-guided fill: one fit, the kit's best on the real suite's cases, SGBM's
+  depth declared a stereo matcher's (its numbers: ``docs/results.md``; how it was chosen:
+  ``docs/studies/real_suite.md``). ``ddp-lite complete`` runs one such solve at the photo's full size instead.
   For a stereo matcher's depth, ``depth_source="stereo"`` (``FitConfig`` field; ``complete --depth-source``):
   the solves and the fill do not read the rim of its holes, which the matcher often got wrong, and reach
   twice as far (:mod:`ddp_lite.method.kit.blend`).

@@ -58,8 +58,9 @@ SSIM_WINDOW = 11  # the paper's SSIM window (method.paper.losses); per pixel, th
 CENSUS_RADIUS = 3  # 7×7 patches, UnFlow's
 # UnFlow's soft sign, on grey levels 0-255, is d / sqrt(0.81 + d²): ±0.74 at one grey level, so in a pooled
 # photograph's flat colour the signs are noise. Here ε = (10 grey levels)², on [0, 1]: on the real pair's valid
-# input (where the input depth is known) the cost's per-pixel minimum then agrees with that depth as often as
-# the intensity cost's does, to a point (87-95 % within 2 px, 88-96 % for intensities; 82-90 % with UnFlow's ε and 5×5 patches)
+# input (where the input depth is known) the cost's per-pixel minimum then agrees with that depth about as often
+# as the intensity cost's does, and more often than with UnFlow's ε (docs/studies/real_data.md, "Other
+# photometric costs for the warp term")
 CENSUS_EPSILON = (10.0 / 255.0) ** 2
 HAMMING_ETA = 0.1  # UnFlow's: one flipped sign costs 4 / 4.1, a sign against 0 1 / 1.1
 # the census's mean per pixel at the true depth on the real pair's valid input is 1/0.59 of L1 + SSIM's (0.565-0.616

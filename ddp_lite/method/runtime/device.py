@@ -35,8 +35,8 @@ class Precision(Settings):
 def use_bf16(bf16: bool | None, device: torch.device) -> bool:
     """Whether a fit runs its net in bfloat16: ``bf16`` itself, or for ``None`` whether ``device``
     computes bfloat16 natively (a CPU with AVX-512 BF16 or AMX, a CUDA GPU with bf16). Where it
-    is emulated it is slower than float32 (0.84× on a CPU without it), where it is native 1.37×
-    faster at 96×128 with no worse hole error over 8 seeds (``benchmarks/README.md``)."""
+    is emulated it is slower than float32, where it is native faster with no worse hole error over
+    seeds (``docs/studies/benchmark_history.md``, "What to keep (the speed study)")."""
     if bf16 is not None:
         return bool(bf16)
     if device.type == "cuda":
