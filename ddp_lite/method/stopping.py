@@ -6,9 +6,9 @@ random share of the *valid* pixels is held out of the loss (:func:`held_out_mask
 not seen. The output at the best held-out error is kept. When it has not improved for ``patience``
 iterations (a plateau) the learning rate is cut by ``lr_gamma``, ``plateau_decays`` times, and the
 run stops at the next plateau (:class:`PlateauStopper`). Cutting the rate matters: at a constant
-rate the hole error jumps ±10 % between evaluations, and stopping on that noise gave away 13 % on
-average against the best a long run reached (``benchmarks/bench_autostop.py``). Its settings are
-:class:`StoppingConfig`.
+rate the hole error jumps between evaluations, and stopping on that noise gave away much of what a long
+run reached (``docs/studies/benchmark_history.md``, "bench_autostop.py: the stop rule of the `class`
+profile"). Its settings are :class:`StoppingConfig`.
 """
 from __future__ import annotations
 

@@ -1,8 +1,8 @@
 """Independent fits side by side: on a CPU, one torch thread each, as many at once as torch has threads.
 
-A net of the kit's sizes does not keep two cores busy: two one-thread fits side by side do ~1.3× the
-work of one two-thread fit (``benchmarks/bench_ensemble.py --fits``), more where a machine has more
-cores. Whatever fits do not depend on each other run here: the members of an ensemble or a blend, the
+A net of the kit's sizes does not keep two cores busy: two one-thread fits side by side do more work
+than one two-thread fit, and more still where a machine has more cores (``docs/studies/benchmark_history.md``,
+"Ensembles side by side"). Whatever fits do not depend on each other run here: the members of an ensemble or a blend, the
 views of a multi-view scene, the rows of a table. A fit run side by side gives the numbers it gives
 with ``torch.set_num_threads(1)``, on any machine (one thread's sums are taken in one order).
 
