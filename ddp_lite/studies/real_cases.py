@@ -41,7 +41,7 @@ from ..method.runtime.side_by_side import run_fits
 from ..classical.stereo import sgm_disparity, sgm_left_right_failures
 from ..core.views import Scene, View
 
-__all__ = ["REAL_HOLES", "REAL_FACTORS", "make_real_case", "pool_scene", "RealCase", "factor_for_profile",
+__all__ = ["REAL_HOLES", "REAL_FACTORS", "make_real_case", "pool_scene", "RealCase", "factor_for_profile", "factor_for_pixels",
            "compare_fills", "compare_fills_on"]
 
 REAL_HOLES = ("blobs-1", "blobs-2", "blobs-3", "sgbm", "occlusion")
@@ -199,6 +199,21 @@ def factor_for_profile(profile=None, shape=(500, 741)) -> int:
     factor = 1
     while (rows // factor) * (columns // factor) > 2 * H * W:
         factor *= 2
+    return factor
+
+
+def factor_for_pixels(shape, pixels: int) -> int:
+    """The smallest integer pooling factor that brings a pair of full size ``shape`` (H, W), cropped as
+    :func:`make_real_case` crops it, to at most ``pixels`` pixels.
+
+    Example:
+        >>> factor_for_pixels((277, 316), 96 * 128)  # a quarter-size Middlebury 2006 view at class's pixels
+        3
+    """
+    rows, columns = (n - n % _CROP_MULTIPLE for n in shape)
+    factor = 1
+    while (rows // factor) * (columns // factor) > pixels:
+        factor += 1
     return factor
 
 

@@ -4,9 +4,9 @@ holes of the same kind, every fill and DDP, our figures beside the paper's.
 The paper took DepthComp's inputs (Middlebury 2006 disparities with holes cut by hand, full size) and
 reported RMSE in full-size disparity px. Only Plastic's holes are public; Baby1 and Bowling1 get
 DepthComp-style brush strokes (``holes.stroke_holes``: about 8.5 % of the image, strokes H/18 wide, as on
-Plastic). The kit's shipped copies are a quarter of full size (``data.samples``), pooled further to the
-profile's size (``real_cases.factor_for_profile``), so our px are px of that working size: compare
-*ratios* (DDP / linear, / FMM, / GIF, / EBI), which do not depend on the unit.
+Plastic). The kit's shipped copies are a quarter of full size (``data.samples``), pooled further to at most
+the profile's pixels (:func:`table6_factor`), so our px are px of that working size: compare *ratios*
+(DDP / linear, / FMM, / GIF, / EBI), which do not depend on the unit.
 """
 from __future__ import annotations
 
@@ -22,9 +22,9 @@ from ..data.middlebury_rail import load_rail_scene
 from ..data.samples import read_depthcomp_holes
 from ..method.kit.recipes import FOR_PHOTOGRAPHS
 from ..method.profiles import get_profile
-from .real_cases import RealCase, compare_fills_on, factor_for_profile, make_real_case
+from .real_cases import RealCase, compare_fills_on, factor_for_pixels, make_real_case
 
-__all__ = ["TABLE6_SCENES", "PAPER_TABLE6_RMSE", "PAPER_ROWS", "table6_recipes", "table6_sources", "table6_data_line",
+__all__ = ["TABLE6_SCENES", "PAPER_TABLE6_RMSE", "PAPER_ROWS", "table6_recipes", "table6_factor", "table6_sources", "table6_data_line",
            "table6_case", "table6", "paper_ratios", "our_ratios"]
 
 TABLE6_SCENES = ("Plastic", "Baby1", "Bowling1")
@@ -42,6 +42,21 @@ def table6_recipes(profile=None) -> tuple[str, ...]:
     name = get_profile(profile).name
     wanted = ("paper", "kit", FOR_PHOTOGRAPHS) if name == "paper" else ("paper", FOR_PHOTOGRAPHS)
     return tuple(dict.fromkeys(wanted))  # in order, once each (the recommendation may be one of the others)
+
+
+def table6_factor(profile, shape) -> int:
+    """The pooling factor of a Table 6 scene of size ``shape`` (H, W) at ``profile`` (a name, a Profile or None:
+    ``DDP_PROFILE``): the smallest integer that brings it to at most the profile's pixels (``class``: a
+    quarter-size copy → about 92×105; ``paper``: a full-size one → half size). A single real case elsewhere
+    takes up to twice the profile's pixels (``real_cases.factor_for_profile``); Table 6 fits every recipe on
+    three scenes side by side, so it takes the profile's own, which keeps notebook 06 to a lesson's minutes.
+
+    Example:
+        >>> table6_factor("class", (277, 325)), table6_factor("paper", (1110, 1300))
+        (3, 2)
+    """
+    H, W = get_profile(profile).size
+    return factor_for_pixels(shape, H * W)
 
 
 def table6_sources(profile=None, dest=None) -> dict[str, SceneCopy]:
@@ -67,7 +82,8 @@ def table6_data_line(profile=None, dest=None) -> str:
 
 
 def table6_case(scene: str, profile=None, seed: int = 0, data=None) -> RealCase:
-    """A Table 6 scene (``TABLE6_SCENES``) with its holes, pooled to the profile's size → :class:`RealCase`
+    """A Table 6 scene (``TABLE6_SCENES``) with its holes, pooled to the profile's pixels (:func:`table6_factor`)
+    → :class:`RealCase`
     (the rail's view0 and view2 as neighbours). Plastic: DepthComp's own holes; the others: strokes
     (``seed``). ``data``: a folder of Middlebury scenes (``real_suite.find_scenes``) to take the scene from
     at its own size, DepthComp's full-size hole file with it when it is there; None: the copy
@@ -87,7 +103,7 @@ def table6_case(scene: str, profile=None, seed: int = 0, data=None) -> RealCase:
         holes = read_depthcomp_holes(hole_file, full.size)
     else:
         holes = ~stroke_holes(full[0].depth, seed=seed)[1] & np.isfinite(full[0].depth)
-    factor = factor_for_profile(profile, full.size)
+    factor = table6_factor(profile, full.size)
     return make_real_case("depthcomp" if scene == "Plastic" else "strokes", factor, full, hole_mask=holes)
 
 

@@ -241,3 +241,16 @@ def test_table6_fits_the_papers_recipe_and_the_one_recommended_for_photographs_a
     assert table6.table6_recipes("paper") == ("paper", "kit", recipes.FOR_PHOTOGRAPHS)
     monkeypatch.setattr(table6, "FOR_PHOTOGRAPHS", "kit")  # another study may recommend kit one day
     assert table6.table6_recipes("paper") == ("paper", "kit") and table6.table6_recipes("class") == ("paper", "kit")
+
+
+def test_table6_pools_each_scene_to_at_most_the_profiles_pixels_by_the_smallest_integer_factor():
+    from ddp_lite.studies.real_cases import factor_for_pixels
+    from ddp_lite.studies.table6 import table6_case, table6_factor
+    assert factor_for_pixels((100, 100), 2500) == 2  # 50×50 = 2500 exactly
+    assert factor_for_pixels((100, 100), 2499) == 3  # 33×33 = 1089; 2 would leave 2500
+    assert factor_for_pixels((103, 103), 2500) == 2  # cropped to 100×100 first, as make_real_case crops
+    # a quarter-size Plastic (276×316 after the crop): 2 → 138×158 = 21804 > 96·128 = 12288; 3 → 92×105 = 9660
+    assert table6_factor("class", (277, 318)) == 3
+    assert table6_factor("paper", (1110, 1270)) == 2  # 555×635 = 352425 ≤ 512·960
+    case = table6_case("Plastic", "class")
+    assert case.depth.shape == (92, 105) and case.depth.size <= 96 * 128
