@@ -61,7 +61,7 @@ def textured_pixels(case) -> np.ndarray:
 
 def study(holes: str) -> None:
     case, nbr, ref, image, transform, planes = real_sweep(holes)
-    cost = cost_volume(ref, image, case.camera, nbr.camera, planes).numpy()  # (D, H, W)
+    cost = cost_volume(ref, image, Warper(case.camera, nbr.camera), planes).numpy()  # (D, H, W)
     at_min = cost.min(axis=0)
     seen = np.isfinite(at_min)  # some plane lands inside the neighbour (not so at the left border: no minimum)
     disparity_min = case.fb / planes[cost.argmin(axis=0)]
@@ -94,7 +94,7 @@ def scene_line(case, neighbor: int) -> str:
     """One line for a suite case and one neighbour: inside the scored holes the neighbour sees, the median
     distance (px) of the photometric minimum from the truth and the share farther than ``WRONG_PX``."""
     case, nbr, ref, image, transform, planes = real_sweep("", case, neighbor)
-    cost = cost_volume(ref, image, case.camera, nbr.camera, planes).numpy()  # (D, H, W)
+    cost = cost_volume(ref, image, Warper(case.camera, nbr.camera), planes).numpy()  # (D, H, W)
     seen = np.isfinite(cost.min(axis=0))
     truth = filled_truth(case)
     with torch.no_grad():
@@ -117,7 +117,7 @@ def combined_lines(case) -> list[str]:
         planes = planes_k if planes is None else planes
         if len(planes_k) != len(planes) or not np.allclose(planes_k, planes):
             return [f"{case.name:<22} neighbours sweep different planes: no combined line"]
-        volumes.append(cost_volume(ref, image, case.camera, nbr.camera, planes).numpy())  # (D, H, W) each
+        volumes.append(cost_volume(ref, image, Warper(case.camera, nbr.camera), planes).numpy())  # (D, H, W) each
     stacked = np.stack(volumes)  # (N, D, H, W), NaN where a plane falls outside that neighbour
     truth_disparity = case.fb / filled_truth(case)
     lines = []

@@ -79,14 +79,17 @@ def _parallax_px(ref_cam: Camera, nbr_cam: Camera, near: float, far: float) -> f
 def sweep_planes(ref_cam: Camera, nbr_cam: Camera, d_min: float, d_max: float, step_px: float = STEP_PX) -> np.ndarray:
     """(D,) plane depths in metres, near → far, uniform in inverse depth over [d_min, d_max], spaced
     ``step_px`` of disparity at the pixel that moves most (8 ≤ D ≤ ``MAX_PLANES``)."""
-    parallax = _parallax_px(ref_cam, nbr_cam, d_min, d_max)
+    return _planes(_parallax_px(ref_cam, nbr_cam, d_min, d_max), d_min, d_max, step_px)
+
+
+def _planes(parallax: float, d_min: float, d_max: float, step_px: float = STEP_PX) -> np.ndarray:
+    """:func:`sweep_planes` for a sweep whose nearest and farthest planes lie ``parallax`` px apart."""
     count = int(np.clip(math.ceil(parallax / step_px - 1e-6) + 1, 8, MAX_PLANES))  # - 1e-6: round-off of an exact fit
     return 1.0 / np.linspace(1.0 / d_min, 1.0 / d_max, count)
 
 
-def _cost_slices(reference, neighbour, ref_cam, nbr_cam, planes, lambda_w):
+def _cost_slices(reference, neighbour, warper, planes, lambda_w):
     """The cost volume :func:`cost_volume` returns, ``CHUNK`` planes at a time: (d, H, W) each."""
-    warper = Warper(ref_cam, nbr_cam, dtype=reference.dtype, device=reference.device)
     H, W = reference.shape[-2:]
     for start in range(0, len(planes), CHUNK):
         depths = torch.tensor(planes[start:start + CHUNK], dtype=reference.dtype, device=reference.device)
@@ -97,20 +100,21 @@ def _cost_slices(reference, neighbour, ref_cam, nbr_cam, planes, lambda_w):
 
 
 @torch.no_grad()
-def cost_volume(reference: torch.Tensor, neighbour: torch.Tensor, ref_cam: Camera, nbr_cam: Camera,
-                planes: np.ndarray, lambda_w: float = 0.5) -> torch.Tensor:
+def cost_volume(reference: torch.Tensor, neighbour: torch.Tensor, warper: Warper, planes: np.ndarray,
+                lambda_w: float = 0.5) -> torch.Tensor:
     """:func:`photometric_cost` of ``reference`` (1, C, H, W) against ``neighbour`` (1, C, H', W') warped
-    through each fronto-parallel plane of ``planes`` (D,) metres → (D, H, W); +inf where the plane sends
-    the pixel outside the neighbour or behind it. Memory: D·H·W floats plus ``CHUNK`` warped images
-    (the one volume :func:`warp_confidence` keeps: 82 planes at 125×185 is 7.6 MB)."""
-    return torch.cat(list(_cost_slices(reference, neighbour, ref_cam, nbr_cam, planes, lambda_w)))
+    by ``warper`` (``Warper(ref_cam, nbr_cam)``, in the images' dtype and on their device) through each
+    fronto-parallel plane of ``planes`` (D,) metres → (D, H, W); +inf where the plane sends the pixel
+    outside the neighbour or behind it. Memory: D·H·W floats plus ``CHUNK`` warped images (the one volume
+    :func:`warp_confidence` keeps: 82 planes at 125×185 is 7.6 MB)."""
+    return torch.cat(list(_cost_slices(reference, neighbour, warper, planes, lambda_w)))
 
 
-def _best_plane(reference, neighbour, ref_cam, nbr_cam, planes, lambda_w) -> torch.Tensor:
+def _best_plane(reference, neighbour, warper, planes, lambda_w) -> torch.Tensor:
     """(H, W) long: the plane of least cost, without keeping the volume (the left-right check needs no more)."""
     best_cost = best = None
     start = 0
-    for chunk in _cost_slices(reference, neighbour, ref_cam, nbr_cam, planes, lambda_w):
+    for chunk in _cost_slices(reference, neighbour, warper, planes, lambda_w):
         value, index = chunk.min(dim=0)
         if best is None:
             best_cost, best = value, index
@@ -153,9 +157,13 @@ def warp_confidence(reference: torch.Tensor, neighbour: torch.Tensor, ref_cam: C
     """
     if not 0.0 < d_min < d_max:
         raise ValueError(f"need 0 < d_min < d_max, got d_min={d_min}, d_max={d_max}")
-    planes = sweep_planes(ref_cam, nbr_cam, d_min, d_max)
-    step = max(_parallax_px(ref_cam, nbr_cam, d_min, d_max) / (len(planes) - 1), 1e-9)  # px per plane
-    cost = cost_volume(reference, neighbour, ref_cam, nbr_cam, planes, lambda_w)  # (D, H, W)
+    # the two warps, built once: the sweep from each side and the round trip of the left-right check
+    forward = Warper(ref_cam, nbr_cam, dtype=reference.dtype, device=reference.device)  # reference → neighbour
+    backward = Warper(nbr_cam, ref_cam, dtype=reference.dtype, device=reference.device)  # neighbour → reference
+    parallax = _parallax_px(ref_cam, nbr_cam, d_min, d_max)
+    planes = _planes(parallax, d_min, d_max)  # as sweep_planes
+    step = max(parallax / (len(planes) - 1), 1e-9)  # px per plane
+    cost = cost_volume(reference, neighbour, forward, planes, lambda_w)  # (D, H, W)
     best_cost, best = cost.min(dim=0)  # (H, W)
     index = torch.arange(len(planes), device=cost.device).reshape(-1, 1, 1)
     away = (index - best[None]).abs() > EXCLUSION_PX / step
@@ -163,12 +171,10 @@ def warp_confidence(reference: torch.Tensor, neighbour: torch.Tensor, ref_cam: C
     unique = torch.isfinite(best_cost) & (best_cost < (1.0 - uniqueness) * second)  # inf second: unique
 
     # left-right: the neighbour's own winner, from its side, must send the match back
-    back_best = _best_plane(neighbour, reference, nbr_cam, ref_cam, planes, lambda_w)  # (H', W')
+    back_best = _best_plane(neighbour, reference, backward, planes, lambda_w)  # (H', W')
     depths = torch.tensor(planes, dtype=reference.dtype, device=reference.device)
-    forward = Warper(ref_cam, nbr_cam, dtype=reference.dtype, device=reference.device)
     there = _pixel_in_other(forward, depths[best][None, None])  # (1, 2, H, W) in the neighbour
-    back = _pixel_in_other(Warper(nbr_cam, ref_cam, dtype=reference.dtype, device=reference.device),
-                           depths[back_best][None, None])  # (1, 2, H', W') in the reference
+    back = _pixel_in_other(backward, depths[back_best][None, None])  # (1, 2, H', W') in the reference
     grid = there * forward.to_grid - 1.0
     returned = F.grid_sample(back, grid.permute(0, 2, 3, 1), mode="nearest", padding_mode="border",
                              align_corners=True)  # (1, 2, H, W)

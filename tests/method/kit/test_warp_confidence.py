@@ -9,6 +9,7 @@ from scipy import ndimage
 from ddp_lite.method.config import FitConfig
 from ddp_lite.method.paper.losses import ssim, warp_loss
 from ddp_lite.method.kit.warp_confidence import cost_volume, photometric_cost, sweep_planes, warp_confidence
+from ddp_lite.method.paper.warp import Warper
 from conftest import rectified_pair
 
 FOCAL, BASELINE, WIDTH, HEIGHT = 60.0, 0.1, 96, 40
@@ -76,7 +77,7 @@ def test_the_sweep_spans_the_range_at_the_step_asked_for():
     assert planes[0] == pytest.approx(D_MIN) and planes[-1] == pytest.approx(D_MAX)
     assert np.allclose(np.diff(disparity), -0.25, atol=1e-6)  # 14 → 1 px in steps of 0.25
     image = torch.rand(1, 3, HEIGHT, WIDTH)
-    volume = cost_volume(image, image, left, right, planes[:5])
+    volume = cost_volume(image, image, Warper(left, right), planes[:5])
     assert volume.shape == (5, HEIGHT, WIDTH)
     assert torch.isinf(volume[0, :, :10]).all()  # 14 px of disparity sends these outside the right image
 
