@@ -17,7 +17,6 @@ import time
 import warnings
 
 import numpy as np
-import torch
 
 from . import loop
 from ..core.checks import MIN_VALID_PIXELS, check_callback, check_finite_output
@@ -25,7 +24,7 @@ from ..core.progress import FitBar
 from .config import FitConfig
 from .input_checks import FitInputs, check_fit_inputs
 from .kit.hole_terms import HoleTerms
-from .kit.net_inputs import fill_channel, image_channels, start_at
+from .kit.net_inputs import net_extras, start_at
 from .kit.warp_terms import kit_warp_arguments
 from .paper.total_loss import PaperLoss
 from .result import DepthResult
@@ -84,18 +83,18 @@ def run_fit(inputs: FitInputs, config: FitConfig, options: RunOptions, *, callba
                 if stopping.auto_stop else np.zeros_like(valid))
     if (valid & ~held_out).sum() < MIN_VALID_PIXELS:
         held_out = np.zeros_like(valid)
+    fitted = valid & ~held_out  # the pixels L_disp sees
     disparity_in = transform.to_disparity(depth)  # (H, W), NaN in the holes
     target = to_tensor(np.nan_to_num(disparity_in, nan=0.0), device)  # (1, 1, H, W)
     rgb_t = to_tensor(rgb, device) if rgb is not None and w_rgb + w_warp > 0 else None  # (1, 3, H, W)
     nbrs = [(to_tensor(img, device), cam) for img, cam in neighbors] if w_warp > 0 else []
-    fit_mask = to_tensor(valid & ~held_out, device).bool()
+    fit_mask = to_tensor(fitted, device).bool()
     # the paper's loss, with the kit's warp term, occlusion tests and hole terms (each None or off unless asked
     # for) as its arguments; the hole terms act on the unconstrained pixels: holes, and the held-out pixels
     paper_loss = PaperLoss(spec, config.paper, transform, target, fit_mask, rgb_t, camera, nbrs, device,
                            **kit_warp_arguments(config.warp, config.paper.lambda_w, transform, fit_mask, rgb_t, camera,
                                                 nbrs, device),
-                           extra_terms=[HoleTerms(config.holes, ~(valid & ~held_out), rgb_t, rgb, device,
-                                                  disparity_in)])
+                           extra_terms=[HoleTerms(config.holes, ~fitted, rgb_t, rgb, device, disparity_in)])
 
     def loss_fn(output):  # (1, 1 or 4, H, W): Z_out, then I_out
         disparity = output[:, :1]  # one view for every term: the gradients add up in the same order
@@ -111,22 +110,14 @@ def run_fit(inputs: FitInputs, config: FitConfig, options: RunOptions, *, callba
             callback(iteration, {"disparity": disparity, "depth": transform.to_depth(disparity),
                                  "rgb": output[0, 1:4].permute(1, 2, 0).cpu().numpy() if output.shape[1] >= 4 else None})
 
-    # the view's colours as input channels, for the variants that see them (rgb_t is None otherwise)
-    image = None
-    inputs_of_net = config.net_inputs
-    if inputs_of_net.image_input > 0 and rgb_t is not None:
-        image = image_channels(rgb_t, inputs_of_net.image_input, inputs_of_net.image_blur)  # (1, 3, H, W)
-    fill = None  # a classical fill of the fitted pixels only: the held-out ones stay unseen
-    if inputs_of_net.fill_input > 0 or inputs_of_net.fill_start:
-        fill = to_tensor(fill_channel(transform.to_disparity(np.where(valid & ~held_out, depth, np.nan)),
-                                      rgb if spec.uses_rgb else None), device)  # (1, 1, H, W) in [0, 1]
-    if inputs_of_net.fill_input > 0:
-        extra = inputs_of_net.fill_input * fill
-        image = extra if image is None else torch.cat([image, extra], dim=1)
+    # the kit's extra input channels (the view's colours for the variants that see them, rgb_t None otherwise;
+    # a classical fill of the fitted pixels only: the held-out ones stay unseen) and where the output starts
+    extra, start_disparity = net_extras(config.net_inputs, rgb_t, rgb if spec.uses_rgb else None,
+                                        np.where(fitted, disparity_in, np.nan), device)
     net, noise = loop.build(config, spec.out_channels, H, W, device, init.state if init is not None else None,
-                            noise, image)
-    if inputs_of_net.fill_start:
-        start_at(net, fill)
+                            noise, extra)
+    if start_disparity is not None:
+        start_at(net, start_disparity)
     start = time.perf_counter()
     progress = FitBar(iterations, f"DDP {variant}", options.progress)
     output, history, ran, best = loop.run(net, noise, loss_fn, config, iterations, held_out_error, evaluate,

@@ -33,11 +33,11 @@ _INIT_LOCK = threading.Lock()
 
 
 def build(config: FitConfig, out_channels: int, height: int, width: int, device, init_state=None, noise=None,
-          image=None):
+          extra=None):
     """The net and its fixed input (1, C, H, W): ``noise`` (made from the config when None), followed
-    by ``image`` (1, 3, H, W) when given (``kit.net_inputs.image_channels``)."""
+    by the ``extra`` channels (1, C', H, W) when given (``kit.net_inputs.net_extras``)."""
     paper = config.paper
-    in_channels = paper.noise_channels + (0 if image is None else image.shape[1])
+    in_channels = paper.noise_channels + (0 if extra is None else extra.shape[1])
     with _INIT_LOCK, torch.random.fork_rng(devices=[]):  # deterministic init without touching the caller's RNG
         torch.manual_seed(paper.seed)
         options = dict(down=paper.down, up=paper.up, pad=paper.pad) if paper.net == "unet" else {}
@@ -51,8 +51,8 @@ def build(config: FitConfig, out_channels: int, height: int, width: int, device,
         noise = make_input(config.net_inputs.base, paper.noise_channels, height, width, seed=paper.seed)
     elif tuple(noise.shape) != (1, paper.noise_channels, height, width):
         raise ValueError(f"noise must be (1, {paper.noise_channels}, {height}, {width}), got {tuple(noise.shape)}")
-    if image is not None:
-        noise = torch.cat([noise.to(device), image.to(device)], dim=1)  # (1, noise_channels + 3, H, W)
+    if extra is not None:
+        noise = torch.cat([noise.to(device), extra.to(device)], dim=1)  # (1, noise_channels + C', H, W)
     return net.to(device), noise.to(device)
 
 

@@ -3,6 +3,7 @@ instead of noise (``base``, FitConfig's ``net_input``), and extra channels joine
 ``paper`` recipe): the view's colour image, blurred (``image_input``, :func:`image_channels`), and a classical
 fill of the input disparity (``fill_input``, :func:`fill_channel`). The net takes them as extra input channels;
 it does not know what they are. ``fill_start`` starts the net's output at that fill instead (:func:`start_at`).
+A fit asks for all of them in one call, :func:`net_extras`.
 """
 from __future__ import annotations
 
@@ -18,8 +19,9 @@ from ...core.checks import check_bool, check_choice, check_real
 from ...core.settings import Settings
 from ..paper.losses import blur_valid, gaussian_kernel_1d  # SSIM's separable Gaussian, reused for the image input
 from ..paper.nets import NET_INPUTS
+from ..runtime.tensors import to_tensor
 
-__all__ = ["NetInputConfig", "image_channels", "fill_channel", "start_at"]
+__all__ = ["NetInputConfig", "net_extras", "image_channels", "fill_channel", "start_at"]
 
 
 @dataclass(frozen=True)
@@ -63,6 +65,36 @@ class NetInputConfig(Settings):
         if self.fill_input > 0:
             added.append("\\text{fill}(Z_{\\mathrm{in}})")
         return in_paper, added
+
+
+def net_extras(config: NetInputConfig, rgb_t: torch.Tensor | None, rgb: np.ndarray | None, disparity: np.ndarray,
+               device) -> tuple[torch.Tensor | None, torch.Tensor | None]:
+    """What ``config`` adds to one fit's net: ``(channels, start)``, each None where it adds nothing.
+
+    ``channels`` (1, C, H, W): the extra input channels joined to the paper's input, in this order: the
+    colour image (:func:`image_channels` of ``rgb_t`` (1, 3, H, W); None: a variant that does not see
+    colour) and ``fill_input ×`` the fill. ``start`` (1, 1, H, W), with ``fill_start``: the disparity the
+    net's depth output starts at (:func:`start_at`). The fill is :func:`fill_channel` of ``disparity``
+    (H, W) in [0, 1], NaN where the fit has no input (holes and held-out pixels), guided by ``rgb``
+    (H, W, 3) (None: no colour).
+
+    Example:
+        >>> disparity = np.array([[0.2, np.nan, 0.6], [0.2, 0.4, 0.6]])
+        >>> channels, start = net_extras(NetInputConfig(fill_input=2.0), None, None, disparity, "cpu")
+        >>> tuple(channels.shape), start  # no colour channels without rgb_t, no start without fill_start
+        ((1, 1, 2, 3), None)
+        >>> [round(v, 3) for v in channels[0, 0, 0].tolist()]  # the fill (0.2, 0.4, 0.6) × 2
+        [0.4, 0.8, 1.2]
+    """
+    channels = []
+    if config.image_input > 0 and rgb_t is not None:
+        channels.append(image_channels(rgb_t, config.image_input, config.image_blur))  # (1, 3, H, W)
+    fill = None
+    if config.fill_input > 0 or config.fill_start:
+        fill = to_tensor(fill_channel(disparity, rgb), device)  # (1, 1, H, W) in [0, 1]
+    if config.fill_input > 0:
+        channels.append(config.fill_input * fill)
+    return (torch.cat(channels, dim=1) if channels else None), (fill if config.fill_start else None)
 
 
 def image_channels(image: torch.Tensor, scale: float = 1.0, blur: float = 1.0) -> torch.Tensor:
