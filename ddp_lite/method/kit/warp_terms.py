@@ -22,7 +22,7 @@ reprojection (Godard et al., ICCV 2019) does the same for self-supervised depth.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import torch
@@ -143,6 +143,7 @@ def minimum_over_neighbours(costs: list, valid: list) -> torch.Tensor:
     return total / counted.sum().clamp(min=1).to(total.dtype)
 
 
+@dataclass(eq=False)
 class WarpTerm:
     """The kit's warp term: ``term(reference, warped, valid)`` → scalar, over the N neighbours (``combine``
     "mean": the mean of each one's cost, "min": per pixel the smallest, :func:`minimum_over_neighbours`)
@@ -151,10 +152,13 @@ class WarpTerm:
     :class:`~ddp_lite.method.kit.warp_cost.WarpCost` of ``kind`` with per-neighbour ``weights``.
     """
 
-    def __init__(self, lambda_w: float, keep: list | None = None, kind: str | None = None, weights: list | None = None,
-                 combine: str = "mean"):
-        self.lambda_w, self.keep, self.kind, self.weights, self.combine = lambda_w, keep, kind, weights, combine
-        self.cost = None  # the WarpCost against the paper's reference, made at the first call
+    lambda_w: float
+    keep: list | None = None
+    kind: str | None = None
+    weights: list | None = None
+    combine: str = "mean"
+    # the WarpCost against the paper's reference, made at the first call
+    cost: WarpCost | None = field(default=None, init=False, repr=False)
 
     def __call__(self, reference, warped: list, valid: list) -> torch.Tensor:
         if self.keep is not None:
