@@ -1,9 +1,9 @@
 """The kit's net inputs (:class:`NetInputConfig`): the fixed input's base channels as the pixel coordinates
 instead of noise (``base``, FitConfig's ``net_input``), and extra channels joined to them by the fit (off in the
 ``paper`` recipe): the view's colour image, blurred (``image_input``, :func:`image_channels`), and a classical
-fill of the input disparity (``fill_input``, :func:`fill_channel`). The net takes them as extra input channels;
-it does not know what they are. ``fill_start`` starts the net's output at that fill instead (:func:`start_at`).
-A fit asks for all of them in one call, :func:`net_extras`.
+fill of the input disparity (``fill_input``). The net takes them as extra input channels; it does not know what
+they are. ``fill_start`` starts the net's output at that fill instead (:func:`start_at`). A fit asks for the
+channels and the start in one call, :func:`net_extras`.
 """
 from __future__ import annotations
 
@@ -21,7 +21,7 @@ from ..paper.losses import blur_valid, gaussian_kernel_1d  # SSIM's separable Ga
 from ..paper.nets import NET_INPUTS
 from ..runtime.tensors import to_tensor
 
-__all__ = ["NetInputConfig", "net_extras", "image_channels", "fill_channel", "start_at"]
+__all__ = ["NetInputConfig", "net_extras", "image_channels", "start_at"]
 
 
 @dataclass(frozen=True)
@@ -74,24 +74,31 @@ def net_extras(config: NetInputConfig, rgb_t: torch.Tensor | None, rgb: np.ndarr
     ``channels`` (1, C, H, W): the extra input channels joined to the paper's input, in this order: the
     colour image (:func:`image_channels` of ``rgb_t`` (1, 3, H, W); None: a variant that does not see
     colour) and ``fill_input ×`` the fill. ``start`` (1, 1, H, W), with ``fill_start``: the disparity the
-    net's depth output starts at (:func:`start_at`). The fill is :func:`fill_channel` of ``disparity``
-    (H, W) in [0, 1], NaN where the fit has no input (holes and held-out pixels), guided by ``rgb``
-    (H, W, 3) (None: no colour).
+    net's depth output starts at (:func:`start_at`), the fill itself.
+
+    The fill is a classical fill of ``disparity`` (H, W) in [0, 1], NaN where the fit has no input (holes
+    and held-out pixels): its colorization fill (``guided_fills.fill_colorization``) guided by ``rgb``
+    (H, W, 3), or its linear fill without colour (``rgb`` None). From this input the net starts close to
+    a fill that already follows the colour, and its prior has to explain only what that fill gets wrong;
+    from the coordinates and the image alone, a hole's depth is whatever function of them fits the valid
+    pixels best.
 
     Example:
         >>> disparity = np.array([[0.2, np.nan, 0.6], [0.2, 0.4, 0.6]])
         >>> channels, start = net_extras(NetInputConfig(fill_input=2.0), None, None, disparity, "cpu")
         >>> tuple(channels.shape), start  # no colour channels without rgb_t, no start without fill_start
         ((1, 1, 2, 3), None)
-        >>> [round(v, 3) for v in channels[0, 0, 0].tolist()]  # the fill (0.2, 0.4, 0.6) × 2
-        [0.4, 0.8, 1.2]
+        >>> [[round(v, 3) for v in row] for row in channels[0, 0].tolist()]  # the linear fill × 2
+        [[0.4, 0.8, 1.2], [0.4, 0.8, 1.2]]
     """
     channels = []
     if config.image_input > 0 and rgb_t is not None:
         channels.append(image_channels(rgb_t, config.image_input, config.image_blur))  # (1, 3, H, W)
     fill = None
     if config.fill_input > 0 or config.fill_start:
-        fill = to_tensor(fill_channel(disparity, rgb), device)  # (1, 1, H, W) in [0, 1]
+        shifted = disparity + 1.0  # the fills take positive values (written for metres); 0 is a valid disparity
+        filled = fill_colorization(shifted, rgb) if rgb is not None else fill_linear(shifted)
+        fill = to_tensor(filled - 1.0, device)  # (1, 1, H, W) in [0, 1]
     if config.fill_input > 0:
         channels.append(config.fill_input * fill)
     return (torch.cat(channels, dim=1) if channels else None), (fill if config.fill_start else None)
@@ -116,24 +123,6 @@ def image_channels(image: torch.Tensor, scale: float = 1.0, blur: float = 1.0) -
         kernel = gaussian_kernel_1d(2 * radius + 1, float(blur), image.dtype, str(image.device))  # (2r + 1,)
         image = blur_valid(F.pad(image, (radius,) * 4, mode="replicate"), kernel)  # (1, 3, H, W)
     return scale * image
-
-
-def fill_channel(disparity: np.ndarray, rgb: np.ndarray | None, scale: float = 1.0) -> np.ndarray:
-    """A classical fill of the input as one more input channel: ``disparity`` (H, W) in [0, 1] with NaN
-    holes → (H, W) float32, ``scale ×`` its colorization fill (``guided_fills.fill_colorization``, guided by
-    ``rgb`` (H, W, 3)), or its linear fill without colour.
-
-    From this input the net starts close to a fill that already follows the colour, and its prior
-    has to explain only what that fill gets wrong; from the coordinates and the image alone, a
-    hole's depth is whatever function of them fits the valid pixels best.
-
-    Example:
-        >>> fill_channel(np.array([[0.2, np.nan, 0.6], [0.2, 0.4, 0.6]]), None).astype(float).round(3).tolist()
-        [[0.2, 0.4, 0.6], [0.2, 0.4, 0.6]]
-    """
-    shifted = disparity + 1.0  # the fills take positive values (they are written for metres); 0 is a valid disparity
-    filled = fill_colorization(shifted, rgb) if rgb is not None else fill_linear(shifted)
-    return (scale * (filled - 1.0)).astype(np.float32)
 
 
 def start_at(net, disparity: torch.Tensor) -> None:
