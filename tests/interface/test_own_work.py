@@ -155,3 +155,37 @@ def test_in_grading_the_kernel_watches_and_reports_what_it_saw(tmp_path, capsys)
     out = capsys.readouterr().out
     assert out.startswith("FAIL psnr: psnr calls skimage.metrics.peak_signal_noise_ratio"), out
     assert exercises.check_psnr(RemoteFunction("mine", run, tmp_path)) is True
+
+
+def test_watching_imports_nothing_and_still_catches_an_import_inside_the_function():
+    """A grading kernel watches the student's function for the check's forbidden callables without importing
+    them (torch, SciPy: seconds per kernel): a callable exists only once its module is loaded. A function that
+    imports the forbidden module itself, or reaches it through a lazily loading package, is still caught."""
+    import subprocess
+    import sys
+    script = (
+        "import sys\n"
+        "from ddp_lite.interface.own_work import call_watched\n"
+        "heavy = ('statistics', 'scipy', 'skimage', 'torch', 'ddp_lite.evaluation')\n"
+        "loaded = lambda: sorted(m for m in sys.modules if m.split('.')[0] in heavy or m.startswith(heavy))\n"
+        "assert not loaded(), loaded()\n"
+        "names = ('statistics.harmonic_mean', 'scipy.stats.hmean', 'ddp_lite.evaluation.metrics.point_cloud_prf',\n"
+        "         'skimage.metrics.peak_signal_noise_ratio')\n"
+        "seen = set()\n"
+        "assert call_watched(lambda p, r: 2 * p * r / (p + r), (0.5, 0.5), {}, names, seen) == 0.5\n"
+        "assert not seen and not loaded(), (seen, loaded())\n"
+        "def imports_it(p, r):\n"
+        "    import statistics\n"
+        "    return statistics.harmonic_mean([p, r])\n"
+        "assert call_watched(imports_it, (0.5, 0.5), {}, names, seen) == 0.5\n"
+        "assert seen == {'statistics.harmonic_mean'}, seen\n"
+        "def lazily(a, b):\n"
+        "    import skimage.metrics  # a lazily loading package: the name is loaded on first use\n"
+        "    return skimage.metrics.peak_signal_noise_ratio(a, b, data_range=1.0)\n"
+        "import numpy as np\n"
+        "call_watched(lazily, (np.zeros((4, 4)), np.full((4, 4), 0.5)), {}, names, seen)\n"
+        "assert 'skimage.metrics.peak_signal_noise_ratio' in seen, seen\n"
+        "print('ok')\n")
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300,
+                          env={**__import__("os").environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])})
+    assert done.returncode == 0 and done.stdout.strip() == "ok", done.stderr[-3000:]
