@@ -229,16 +229,25 @@ def run_graded(nb, is_check, workdir, env: dict, timeout: int):
             raise DeadKernelError(f"a cell ignored the interrupt at its {timeout} s timeout; the kernel was killed")
 
     nb.metadata.pop("kernelspec", None)  # the notebook's choice of kernel is the student's: not followed
+    # shut down "immediate" (killed, its process group with it): a graded kernel has nothing to save, and
+    # a graceful shutdown waits for it to exit on its own
     client = GradingClient(nb, timeout=timeout, allow_errors=True, interrupt_on_timeout=True, kernel_name="python3",
-                           resources={"metadata": {"path": str(workdir)}})
+                           shutdown_kernel="immediate", resources={"metadata": {"path": str(workdir)}})
     calls = Path(workdir) / ".grader-calls"
     calls.mkdir(exist_ok=True)
 
+    dead: list = []  # what killed the kernel during a check: the check's later calls fail with it at once
+
     def run(code: str) -> str | None:
+        if dead:  # (nbclient would take a second per call to find the kernel gone)
+            raise DeadKernelError(str(dead[0]))
         helper = nbformat.v4.new_code_cell(code)
         nb.cells.append(helper)  # nbclient files a cell's outputs by its index: a cell of its own, dropped after
         try:
             client.execute_cell(helper, len(nb.cells) - 1, store_history=False)
+        except DeadKernelError as error:
+            dead.append(error)
+            raise
         finally:
             nb.cells.pop()
         errors = [o for o in helper.outputs if o.get("output_type") == "error"]
