@@ -170,7 +170,7 @@ def test_watching_imports_nothing_and_still_catches_an_import_inside_the_functio
         "loaded = lambda: sorted(m for m in sys.modules if m.split('.')[0] in heavy or m.startswith(heavy))\n"
         "assert not loaded(), loaded()\n"
         "names = ('statistics.harmonic_mean', 'scipy.stats.hmean', 'ddp_lite.evaluation.metrics.point_cloud_prf',\n"
-        "         'skimage.metrics.peak_signal_noise_ratio')\n"
+        "         'skimage.exposure.rescale_intensity')\n"
         "seen = set()\n"
         "assert call_watched(lambda p, r: 2 * p * r / (p + r), (0.5, 0.5), {}, names, seen) == 0.5\n"
         "assert not seen and not loaded(), (seen, loaded())\n"
@@ -179,12 +179,12 @@ def test_watching_imports_nothing_and_still_catches_an_import_inside_the_functio
         "    return statistics.harmonic_mean([p, r])\n"
         "assert call_watched(imports_it, (0.5, 0.5), {}, names, seen) == 0.5\n"
         "assert seen == {'statistics.harmonic_mean'}, seen\n"
-        "def lazily(a, b):\n"
-        "    import skimage.metrics  # a lazily loading package: the name is loaded on first use\n"
-        "    return skimage.metrics.peak_signal_noise_ratio(a, b, data_range=1.0)\n"
+        "def lazily(image):\n"
+        "    import skimage.exposure  # a lazily loading package: the name is loaded on first use\n"
+        "    return skimage.exposure.rescale_intensity(image)\n"
         "import numpy as np\n"
-        "call_watched(lazily, (np.zeros((4, 4)), np.full((4, 4), 0.5)), {}, names, seen)\n"
-        "assert 'skimage.metrics.peak_signal_noise_ratio' in seen, seen\n"
+        "call_watched(lazily, (np.arange(16.0).reshape(4, 4),), {}, names, seen)\n"
+        "assert 'skimage.exposure.rescale_intensity' in seen, seen\n"
         "print('ok')\n")
     done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300,
                           env={**__import__("os").environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])})
