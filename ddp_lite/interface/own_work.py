@@ -9,9 +9,9 @@ A forbidden call found makes the check FAIL, whatever the numbers. Watching impo
 exists only once its module is loaded, so each name is looked up among the loaded modules, and again
 whenever the function loads more. In grading the function runs in the student's kernel: the kernel
 imports this module (the standard library only) and reports what it saw with the answer
-(:mod:`ddp_lite.interface.grading_kernel`), without loading the libraries the check forbids. This stops the one-line answer, not
-a determined cheat: a function that switches the hook off is reported as such, but the kernel is the
-student's.
+(:mod:`ddp_lite.interface.grading_kernel`), without loading the libraries the check forbids. This stops
+the one-line answer, not a determined cheat: a function that switches the hook off is reported as such,
+but the kernel is the student's.
 """
 from __future__ import annotations
 
