@@ -149,8 +149,9 @@ def warp_confidence(reference: torch.Tensor, neighbour: torch.Tensor, ref_cam: C
         erode_px: r of the neighbourhood that must be confident too (0: the pixel alone).
 
     Example:
-        >>> cam = Camera.from_fov(48, 32, 60.0); nbr = Camera(cam.K, np.diag([1.0, 1, 1, 1]), 48, 32)
-        >>> nbr.cam_from_world[0, 3] = -0.1  # 0.1 m to the right
+        >>> cam = Camera.from_fov(48, 32, 60.0)
+        >>> moved = np.eye(4); moved[0, 3] = -0.1  # the neighbour 0.1 m to the right
+        >>> nbr = Camera(cam.K, moved, 48, 32)
         >>> image = torch.rand(1, 3, 32, 48)
         >>> warp_confidence(image, image, cam, nbr, 1.0, 4.0).shape
         torch.Size([1, 1, 32, 48])
