@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..core.checks import env_choice, named_choice
+from ..core.checks import check_int, env_choice, named_choice
 from .kit.recipes import get_recipe
 from .paper.variants import get_variant
 
@@ -61,6 +61,15 @@ class Profile:
     def milestones(self, iterations: int) -> tuple[int, ...]:
         """The learning-rate decay iterations a run of ``iterations`` reaches (paper depth-only: none)."""
         return tuple(m for m in self.lr_milestones if m < iterations)
+
+    def cut_short(self, iterations: int | None) -> dict:
+        """The ``FitConfig`` fields that end this profile's schedule at ``iterations``: the count and the
+        learning-rate decays it still reaches ({} for None: the profile's own run). For a notebook's smoke run
+        at ``ci``, where no check reads how good a fit is (each study module names its own count)."""
+        if iterations is None:
+            return {}
+        iterations = check_int(iterations, "iterations", minimum=1)
+        return {"iterations": iterations, "lr_milestones": self.milestones(iterations)}
 
     def fit_settings(self, variant, net: str = "unet") -> dict:
         """The ``FitConfig`` fields this profile sets for ``variant`` (a name or
