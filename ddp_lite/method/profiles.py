@@ -97,7 +97,7 @@ PROFILES = {
     "ci": Profile("ci", size=(48, 64), channels=(16, 32, 64, 128), skip_channels=(32, 32, 32, 32),
                   iterations=150, iterations_depth_only=150, lr=1e-2, lr_milestones=(90, 128),
                   lr_gamma=0.3, auto_stop=False, patience=60, plateau_decays=0, eval_every=10, n_views=4, seeds=(0,),
-                  image_iterations=120),
+                  image_iterations=50),
     "class": Profile("class", size=(96, 128), channels=(16, 32, 64, 128, 256), skip_channels=(128,) * 5,
                      iterations=600, iterations_depth_only=600, lr=1e-2, lr_milestones=(),
                      lr_gamma=0.3, auto_stop=True, patience=50, plateau_decays=1, eval_every=10, n_views=6, seeds=(0, 1),
