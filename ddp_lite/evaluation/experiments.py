@@ -29,8 +29,8 @@ from ..classical.stereo import sgm_depth_subsampled
 from ..method.paper.variants import get_variant
 from ..core.views import LABEL_SKY
 
-__all__ = ["Case", "make_case", "sgm_depth_at_scale", "LIVE_ITERATIONS", "live_settings", "run_variants", "run_cases",
-           "run_jobs", "error_table", "format_table", "format_ranking", "format_mean_spread", "ablation", "TABLE2_CONFIGS"]
+__all__ = ["Case", "make_case", "sgm_depth_at_scale", "run_variants", "run_cases", "run_jobs", "error_table",
+           "format_table", "format_ranking", "format_mean_spread", "ablation", "TABLE2_CONFIGS"]
 
 
 @dataclass
@@ -120,35 +120,21 @@ def make_case(scene_name: str = "house", profile: Profile | str | None = None, r
                 scene, ref, labels)
 
 
-# make test runs every notebook at ci as a smoke test of its cells: their story and figures are told at class. The
-# notebooks' live fits (run_variants, run_cases, ablation; notebook 06's Table 6, notebook 10's path) run a third of
-# ci's 150 iterations there: no check of theirs reads how good a fit is, but notebook 04's (the warp loss does no
-# clear harm), whose margin over seeds 0-2 is no smaller at 50 than at 150. {profile: iterations}; None: the
-# profile's own. A caller's own ``iterations`` wins.
-LIVE_ITERATIONS = {"ci": 50, "class": None, "paper": None}
-
-
-def live_settings(profile=None) -> dict:
-    """The ``FitConfig`` fields a notebook's live fit takes at ``profile`` (a name, a Profile or None:
-    ``DDP_PROFILE``): :data:`LIVE_ITERATIONS` (``Profile.cut_short``); {} at ``class`` and ``paper``."""
-    profile = get_profile(profile)
-    return profile.cut_short(LIVE_ITERATIONS[profile.name])
-
-
 def run_variants(case: Case, variants=("d", "rgbd", "rgbd+warp"), profile=None, net: str = "unet", *,
                  options: RunOptions | None = None, **config_overrides) -> dict[str, DepthResult]:
-    """Fit each DDP variant on ``case`` with the profile's config (:func:`live_settings` its budget); {variant:
-    DepthResult}. The fits are independent and run side by side (:mod:`ddp_lite.method.runtime.side_by_side`)."""
-    overrides = {**live_settings(profile), **config_overrides}
+    """Fit each DDP variant on ``case`` with the profile's config for a notebook (``Profile.notebook_settings``:
+    at ``ci`` a shorter run; ``config_overrides`` win); {variant: DepthResult}. The fits are independent and run
+    side by side (:mod:`ddp_lite.method.runtime.side_by_side`)."""
+    overrides = {**get_profile(profile).notebook_settings(), **config_overrides}
     results = run_jobs([(case, variant, net, overrides) for variant in variants], profile, options)
     return dict(zip(variants, results))
 
 
 def run_cases(cases, variant: str = "rgbd", profile=None, net: str = "unet", *, options: RunOptions | None = None,
               **config_overrides) -> list[DepthResult]:
-    """Fit ``variant`` on each of ``cases`` with the profile's config (:func:`live_settings` its budget), side by
-    side → one DepthResult per case."""
-    overrides = {**live_settings(profile), **config_overrides}
+    """Fit ``variant`` on each of ``cases`` with the profile's config for a notebook (``Profile.notebook_settings``;
+    ``config_overrides`` win), side by side → one DepthResult per case."""
+    overrides = {**get_profile(profile).notebook_settings(), **config_overrides}
     return run_jobs([(case, variant, net, overrides) for case in cases], profile, options)
 
 
@@ -277,13 +263,13 @@ def ablation(cases, configs: dict | None = None, profile=None, holes: str = "edg
     ``tau`` × the median depth, "SGM+DDP" style, sky not scored); ``examples`` is
     ``{scene: (case, {row: DepthResult})}`` for the first case of each scene, so that a figure draws
     each fit against the holes and ground truth it was fitted on. ``config_overrides`` go to every
-    fit (e.g. ``gammas=(0.5, 0.5)``), after :func:`live_settings` (the budget).
+    fit (e.g. ``gammas=(0.5, 0.5)``), after ``Profile.notebook_settings`` (at ``ci`` a shorter run).
     """
     configs = TABLE2_CONFIGS if configs is None else configs
-    live = live_settings(profile)
-    if live and "iterations" not in config_overrides:
-        log(f"profile '{get_profile(profile).name}': each fit {live['iterations']} iterations (LIVE_ITERATIONS: a smoke run)")
-    config_overrides = {**live, **config_overrides}
+    short = get_profile(profile).notebook_settings()
+    if short and "iterations" not in config_overrides:
+        log(f"each fit {short['iterations']} iterations (the profile's notebook_iterations)")
+    config_overrides = {**short, **config_overrides}
     runs, examples = [], {}
     made = [(scene, seed, make_case(scene, profile, holes=holes, seed=seed)) for scene, seed in cases]
     jobs = [(case, variant, net, {**config_overrides, **(extra[0] if extra else {}), "seed": seed})

@@ -20,7 +20,7 @@ from ..method.runtime.options import RunOptions
 from ..method.runtime.side_by_side import run_side_by_side
 from ..method.profiles import get_profile
 from ..method.kit.recipes import get_recipe
-from ..evaluation.experiments import Case, live_settings, make_case
+from ..evaluation.experiments import Case, make_case
 from .real_cases import RealCase, factor_for_profile, make_real_case
 
 __all__ = ["ADDITIONS", "addition_steps", "additions_cases", "run_additions", "hole_error_px", "paired_change",
@@ -93,14 +93,14 @@ def run_additions(cases: dict[str, Case], profile=None, seeds=(0, 1, 2), variant
 
     Returns ``{"steps": [names], "best_fill": {case: (name, px)}, "px": {case: {step: [px per seed]}},
     "ratio": {case: {step: [DDP px / best fill px, per seed]}}, "example": {case: {step: depth}}}``
-    (the example: seed ``seeds[0]``'s completed depth, for figures). Each fit runs the notebooks' live budget
-    (``experiments.live_settings``: at ``ci`` a smoke run).
+    (the example: seed ``seeds[0]``'s completed depth, for figures). The fits run as a notebook's
+    (``Profile.notebook_settings``: at ``ci`` a shorter run).
     """
     profile = get_profile(profile)
     steps = addition_steps(profile)
-    short = live_settings(profile)
+    short = profile.notebook_settings()
     if short:
-        log(f"profile '{profile.name}': each fit {short['iterations']} iterations (LIVE_ITERATIONS: a smoke run)")
+        log(f"each fit {short['iterations']} iterations (the profile's notebook_iterations)")
     names = list(steps)
     # a step that only adds the fill's share mixes it into the previous step's fits: the same net fit
     mixes_fill = {name: i > 0 and not steps[names[i - 1]].get("blend_fill")

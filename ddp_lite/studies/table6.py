@@ -20,7 +20,6 @@ from ..classical.holes import stroke_holes
 from ..data.installed import DEPTHCOMP_FILE, SceneCopy, data_line, depthcomp_hole_file, find_scene, shipped_scene
 from ..data.middlebury_rail import load_rail_scene
 from ..data.samples import read_depthcomp_holes
-from ..evaluation.experiments import live_settings
 from ..method.kit.recipes import FOR_PHOTOGRAPHS
 from ..method.profiles import get_profile
 from .real_cases import RealCase, compare_fills_on, factor_for_profile, make_real_case
@@ -96,14 +95,14 @@ def table6_case(scene: str, profile=None, seed: int = 0, data=None) -> RealCase:
 def table6(profile=None, recipes=None, seed: int = 0) -> tuple[dict, dict]:
     """Every fill and DDP under ``recipes`` (rgbd, as the paper runs Middlebury; None: ``table6_recipes``) on
     the three scenes → ``(rmse, outputs)``: {scene: {method: hole RMSE in working-size disparity px}} and
-    {scene: (case, truth (H, W) px, {method: (H, W) px})}. Each fit runs the notebooks' live budget
-    (``experiments.live_settings``: at ``ci`` a smoke run)."""
+    {scene: (case, truth (H, W) px, {method: (H, W) px})}. The fits run as a notebook's
+    (``Profile.notebook_settings``: at ``ci`` a shorter run)."""
     profile = get_profile(profile)
     recipes = table6_recipes(profile) if recipes is None else recipes
     rmse, outputs = {}, {}
     cases = [table6_case(scene, profile, seed) for scene in TABLE6_SCENES]
     every = compare_fills_on(cases, profile, recipes=recipes, seed=seed,  # every scene's fits in one side-by-side pool
-                             **live_settings(profile))
+                             **profile.notebook_settings())
     for scene, case, estimates in zip(TABLE6_SCENES, cases, every):
         truth = case.fb / case.gt
         rmse[scene] = {name: case.rmse_px(case.fb / d) for name, d in estimates.items()}

@@ -1,5 +1,5 @@
 """What the notebooks run live at each profile: the smallest set their cells need at ``ci``, and ``class``
-as the notebooks have always run it."""
+as the notebooks have always run it; a notebook's fits at ``ci`` cut short (``Profile.notebook_settings``)."""
 import pytest
 
 from ddp_lite.evaluation.experiments import ablation_cases
@@ -43,12 +43,13 @@ def test_cut_short_refuses_what_is_not_a_positive_count(bad, error):
         get_profile("ci").cut_short(bad)
 
 
-def test_the_notebooks_live_fits_run_a_third_of_cis_iterations_at_ci_and_the_profiles_own_elsewhere():
-    from ddp_lite.evaluation.experiments import LIVE_ITERATIONS, live_settings
+def test_a_notebooks_fits_run_a_third_of_cis_iterations_at_ci_and_the_profiles_own_elsewhere():
+    from ddp_lite.method.config import FitConfig
+    from ddp_lite.method.profiles import get_profile
 
-    assert set(LIVE_ITERATIONS) == {"ci", "class", "paper"}
-    assert live_settings("ci") == {"iterations": 50, "lr_milestones": ()}  # 150 cut to 50: before the decay at 90
-    assert live_settings("class") == {} and live_settings("paper") == {}
+    assert get_profile("ci").notebook_settings() == {"iterations": 50, "lr_milestones": ()}  # before the decay at 90
+    assert get_profile("class").notebook_settings() == {} and get_profile("paper").notebook_settings() == {}
+    assert FitConfig.for_profile("ci", variant="rgbd").paper.iterations == 150  # everything else: ci's own run
 
 
 def test_run_variants_and_run_cases_pass_the_live_budget_and_a_callers_own_iterations_win(monkeypatch):
