@@ -122,16 +122,20 @@ def make_case(scene_name: str = "house", profile: Profile | str | None = None, r
 
 def run_variants(case: Case, variants=("d", "rgbd", "rgbd+warp"), profile=None, net: str = "unet", *,
                  options: RunOptions | None = None, **config_overrides) -> dict[str, DepthResult]:
-    """Fit each DDP variant on ``case`` with the profile's config; {variant: DepthResult}. The fits are
-    independent and run side by side (:mod:`ddp_lite.method.runtime.side_by_side`)."""
-    results = run_jobs([(case, variant, net, config_overrides) for variant in variants], profile, options)
+    """Fit each DDP variant on ``case`` with the profile's config for a notebook (``Profile.notebook_settings``:
+    at ``ci`` a shorter run; ``config_overrides`` win); {variant: DepthResult}. The fits are independent and run
+    side by side (:mod:`ddp_lite.method.runtime.side_by_side`)."""
+    overrides = {**get_profile(profile).notebook_settings(), **config_overrides}
+    results = run_jobs([(case, variant, net, overrides) for variant in variants], profile, options)
     return dict(zip(variants, results))
 
 
 def run_cases(cases, variant: str = "rgbd", profile=None, net: str = "unet", *, options: RunOptions | None = None,
               **config_overrides) -> list[DepthResult]:
-    """Fit ``variant`` on each of ``cases`` with the profile's config, side by side → one DepthResult per case."""
-    return run_jobs([(case, variant, net, config_overrides) for case in cases], profile, options)
+    """Fit ``variant`` on each of ``cases`` with the profile's config for a notebook (``Profile.notebook_settings``;
+    ``config_overrides`` win), side by side → one DepthResult per case."""
+    overrides = {**get_profile(profile).notebook_settings(), **config_overrides}
+    return run_jobs([(case, variant, net, overrides) for case in cases], profile, options)
 
 
 def run_jobs(jobs, profile=None, options: RunOptions | None = None) -> list[DepthResult]:
@@ -259,9 +263,13 @@ def ablation(cases, configs: dict | None = None, profile=None, holes: str = "edg
     ``tau`` × the median depth, "SGM+DDP" style, sky not scored); ``examples`` is
     ``{scene: (case, {row: DepthResult})}`` for the first case of each scene, so that a figure draws
     each fit against the holes and ground truth it was fitted on. ``config_overrides`` go to every
-    fit (e.g. ``gammas=(0.5, 0.5)``).
+    fit (e.g. ``gammas=(0.5, 0.5)``), after ``Profile.notebook_settings`` (at ``ci`` a shorter run).
     """
     configs = TABLE2_CONFIGS if configs is None else configs
+    short = get_profile(profile).notebook_settings()
+    if short and "iterations" not in config_overrides:
+        log(f"each fit {short['iterations']} iterations (the profile's notebook_iterations)")
+    config_overrides = {**short, **config_overrides}
     runs, examples = [], {}
     made = [(scene, seed, make_case(scene, profile, holes=holes, seed=seed)) for scene, seed in cases]
     jobs = [(case, variant, net, {**config_overrides, **(extra[0] if extra else {}), "seed": seed})

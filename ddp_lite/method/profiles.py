@@ -1,6 +1,9 @@
 """Profiles: how big and how long, the ``DDP_PROFILE`` switch (``ci``, ``class`` or ``paper``).
 
-- ``ci``: seconds per notebook on a 2-core CPU (what nbval runs): tiny images, a narrow net;
+- ``ci``: seconds per notebook on a 2-core CPU (what nbval runs): tiny images, a narrow net; ``make test``
+  runs every notebook at ``ci`` as a smoke test of its cells, so a notebook's fits there run
+  ``notebook_iterations`` (50 of 150; the notebooks' checks that read a fit hold there over seeds 0-2,
+  ``docs/studies/benchmark_history.md``);
 - ``class`` (default): minutes per notebook on a laptop CPU, sizes where the effects show;
 - ``paper``: the paper's sizes and schedules (lr 5e-5, ×0.01 at 12000 and 15000 of 16000
   iterations; depth-only 6000), meant for a GPU.
@@ -16,7 +19,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..core.checks import env_choice, named_choice
+from ..core.checks import check_int, env_choice, named_choice
 from .kit.recipes import get_recipe
 from .paper.variants import get_variant
 
@@ -46,6 +49,7 @@ class Profile:
     iterations: int  # RGBD variants
     iterations_depth_only: int
     image_iterations: int  # Deep Image Prior on a natural image
+    notebook_iterations: int | None  # a notebook's depth fits (notebook_settings); None: iterations
     lr: float
     lr_milestones: tuple[int, ...]  # iterations (as in FitConfig) where lr × lr_gamma; a shorter run skips them
     lr_gamma: float
@@ -61,6 +65,21 @@ class Profile:
     def milestones(self, iterations: int) -> tuple[int, ...]:
         """The learning-rate decay iterations a run of ``iterations`` reaches (paper depth-only: none)."""
         return tuple(m for m in self.lr_milestones if m < iterations)
+
+    def cut_short(self, iterations: int | None) -> dict:
+        """The ``FitConfig`` fields that end this profile's schedule at ``iterations``: the count and the
+        learning-rate decays it still reaches ({} for None: the profile's own run)."""
+        if iterations is None:
+            return {}
+        iterations = check_int(iterations, "iterations", minimum=1)
+        return {"iterations": iterations, "lr_milestones": self.milestones(iterations)}
+
+    def notebook_settings(self) -> dict:
+        """The ``FitConfig`` fields a notebook's depth fits take on top of :meth:`fit_settings`: the run cut to
+        ``notebook_iterations`` (:meth:`cut_short`; {} where it is None, as at ``class`` and ``paper``).
+        The notebooks' studies apply it (``evaluation.experiments``, ``studies``); a notebook that builds its
+        own config passes it: ``FitConfig.for_profile(profile, ..., **profile.notebook_settings())``."""
+        return self.cut_short(self.notebook_iterations)
 
     def fit_settings(self, variant, net: str = "unet") -> dict:
         """The ``FitConfig`` fields this profile sets for ``variant`` (a name or
@@ -88,15 +107,15 @@ PROFILES = {
     "ci": Profile("ci", size=(48, 64), channels=(16, 32, 64, 128), skip_channels=(32, 32, 32, 32),
                   iterations=150, iterations_depth_only=150, lr=1e-2, lr_milestones=(90, 128),
                   lr_gamma=0.3, auto_stop=False, patience=60, plateau_decays=0, eval_every=10, n_views=4, seeds=(0,),
-                  image_iterations=120),
+                  image_iterations=50, notebook_iterations=50),
     "class": Profile("class", size=(96, 128), channels=(16, 32, 64, 128, 256), skip_channels=(128,) * 5,
                      iterations=600, iterations_depth_only=600, lr=1e-2, lr_milestones=(),
                      lr_gamma=0.3, auto_stop=True, patience=50, plateau_decays=1, eval_every=10, n_views=6, seeds=(0, 1),
-                     image_iterations=300),
+                     image_iterations=300, notebook_iterations=None),
     "paper": Profile("paper", size=(512, 960), channels=(32, 64, 128, 256, 512), skip_channels=(128,) * 5,
                      iterations=16000, iterations_depth_only=6000, lr=5e-5, lr_milestones=(12000, 15000),
                      lr_gamma=0.01, auto_stop=False, patience=2000, plateau_decays=0, eval_every=100, n_views=8,
-                     seeds=(0, 1, 2), image_iterations=3000),
+                     seeds=(0, 1, 2), image_iterations=3000, notebook_iterations=None),
 }
 
 
@@ -122,14 +141,16 @@ TABLE_END = "<!-- end of the profile table -->"
 
 def profile_table() -> str:
     """The README's Markdown table of the profiles, written from :data:`PROFILES` so that it cannot drift
-    from what a fit runs: size, net, a depth fit's iterations and learning rate, and an image fit's
-    (notebook 01's Deep Image Prior fits, ``image_iterations``, always a fixed count)."""
+    from what a fit runs: size, net, a depth fit's iterations (and a notebook's, ``notebook_iterations``, where
+    they differ) and learning rate, and an image fit's (notebook 01's Deep Image Prior fits, ``image_iterations``,
+    always a fixed count)."""
     rows = ["| profile | size | net | iterations of a depth fit | learning rate | image fits (notebook 01) | meant for |",
             "|---|---|---|---|---|---|---|"]
     for name, p in PROFILES.items():
         iterations = (f"{'≤ ' if p.auto_stop else ''}{p.iterations}"
                       + (f" (depth-only {p.iterations_depth_only})" if p.iterations_depth_only != p.iterations else "")
-                      + (", stops by itself" if p.auto_stop else ", fixed"))
+                      + (", stops by itself" if p.auto_stop else ", fixed")
+                      + (f"; a notebook's {p.notebook_iterations}" if p.notebook_iterations is not None else ""))
         if p.lr_milestones:
             schedule = f"{p.lr:g}, ×{p.lr_gamma:g} at {' and '.join(map(str, p.lr_milestones))}"
         elif p.plateau_decays:

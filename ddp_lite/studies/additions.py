@@ -93,9 +93,14 @@ def run_additions(cases: dict[str, Case], profile=None, seeds=(0, 1, 2), variant
 
     Returns ``{"steps": [names], "best_fill": {case: (name, px)}, "px": {case: {step: [px per seed]}},
     "ratio": {case: {step: [DDP px / best fill px, per seed]}}, "example": {case: {step: depth}}}``
-    (the example: seed ``seeds[0]``'s completed depth, for figures).
+    (the example: seed ``seeds[0]``'s completed depth, for figures). The fits run as a notebook's
+    (``Profile.notebook_settings``: at ``ci`` a shorter run).
     """
+    profile = get_profile(profile)
     steps = addition_steps(profile)
+    short = profile.notebook_settings()
+    if short:
+        log(f"each fit {short['iterations']} iterations (the profile's notebook_iterations)")
     names = list(steps)
     # a step that only adds the fill's share mixes it into the previous step's fits: the same net fit
     mixes_fill = {name: i > 0 and not steps[names[i - 1]].get("blend_fill")
@@ -106,7 +111,7 @@ def run_additions(cases: dict[str, Case], profile=None, seeds=(0, 1, 2), variant
     def fit(k: int):
         case_name, step, seed = jobs[k]
         case = cases[case_name]
-        config = FitConfig.for_profile(profile, variant=variant, recipe="paper", seed=seed, **steps[step])
+        config = FitConfig.for_profile(profile, variant=variant, recipe="paper", seed=seed, **steps[step], **short)
         neighbors = case.neighbors if variant == "rgbd+warp" else ()
         return complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant, config=config,
                               options=options)

@@ -2,8 +2,8 @@
 Kinect-style readings filled and scored by PSNR (paper Fig. 8).
 
 - ``sweep_views``: ``plane_sweep`` of every view of a scene against its best neighbours.
-- ``complete_views``: DDP (the profile's config) on each view's holes, "MVS+DDP" style: the input
-  kept where valid; the views' fits side by side.
+- ``complete_views``: DDP (the profile's config, run as a notebook's) on each view's holes, "MVS+DDP" style:
+  the input kept where valid; the views' fits side by side.
 - ``fused_scores``: Fusibile-style fusion of a list of depth maps, scored P/R/F (%) against points.
 - ``reprojection_psnr``: the paper's PSNR for NYU (Sec. 4.4): warp a neighbour image into the
   reference view through a depth map and compare with the reference image, 20·log10(1/√MSE).
@@ -19,6 +19,7 @@ import numpy as np
 from ..classical.baselines import fill
 from ..method.config import FitConfig
 from ..method.complete import complete_depth
+from ..method.profiles import get_profile
 from ..method.runtime.options import RunOptions
 from ..method.runtime.side_by_side import run_fits
 from ..evaluation.fusion import fuse_depths, points_from_depth
@@ -44,11 +45,11 @@ def scene_neighbors(scene: Scene, n: int):
 
 def complete_views(views, depths, neighbors_of, profile=None, variant: str = "rgbd+warp", log=print,
                    options: RunOptions = RunOptions(progress=False)) -> list:
-    """DDP (``FitConfig.for_profile``) on each of ``depths`` (H, W metres, NaN holes) of ``views``, with
-    ``neighbors_of(i)`` as warp partners → list of (H, W) depths, the input kept where it was valid.
-    The views' fits are independent: they run side by side (:mod:`ddp_lite.method.runtime.side_by_side`),
-    as ``options`` say (no progress bars by default)."""
-    config = FitConfig.for_profile(profile, variant=variant)
+    """DDP (``FitConfig.for_profile``, run as a notebook's: ``Profile.notebook_settings``) on each of ``depths``
+    (H, W metres, NaN holes) of ``views``, with ``neighbors_of(i)`` as warp partners → list of (H, W) depths, the
+    input kept where it was valid. The views' fits are independent: they run side by side
+    (:mod:`ddp_lite.method.runtime.side_by_side`), as ``options`` say (no progress bars by default)."""
+    config = FitConfig.for_profile(profile, variant=variant, **get_profile(profile).notebook_settings())
 
     def fit(i: int):
         return complete_depth(views[i].rgb, depths[i], views[i].camera, neighbors_of(i), variant=variant, config=config,
@@ -111,7 +112,6 @@ def nyu_fill_table(path, profile=None, index: int = 0, fraction: float = 0.15, s
     """
     from ..data.datasets import load_nyu
     from ..classical.holes import random_holes
-    from ..method.profiles import get_profile
     from ..data.resample import resize_scene
 
     profile = get_profile(profile) if profile is None or isinstance(profile, str) else profile

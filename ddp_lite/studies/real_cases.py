@@ -235,11 +235,13 @@ def compare_fills(case: RealCase, profile=None, recipes=("paper", "kit"), varian
 
 
 def compare_fills_on(cases: list, profile=None, recipes=("paper", "kit"), variant: str = "rgbd", seed: int = 0,
-                     options: RunOptions = RunOptions(progress=False)) -> list[dict[str, np.ndarray]]:
+                     options: RunOptions = RunOptions(progress=False), **config_overrides) -> list[dict[str, np.ndarray]]:
     """:func:`compare_fills` of each of ``cases``, the fits of every case side by side in one pool (case by
-    case, three fits on two cores leave one idle for the third) → one {name: (H, W) px} per case."""
+    case, three fits on two cores leave one idle for the third) → one {name: (H, W) px} per case.
+    ``config_overrides`` (``FitConfig`` fields) go to every fit, e.g. a shorter run (``Profile.cut_short``)."""
     configs = [[FitConfig.for_profile(profile, variant=variant, recipe=recipe, seed=seed,
-                                      depth_source=case.depth_source) for recipe in recipes] for case in cases]
+                                      depth_source=case.depth_source, **config_overrides) for recipe in recipes]
+               for case in cases]
     fitted = _plain_fits_on(list(zip(cases, configs)), variant, options)  # per case: (config, result) pairs
     outs = []
     for case, case_configs, case_fitted in zip(cases, configs, fitted):

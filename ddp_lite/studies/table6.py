@@ -37,10 +37,11 @@ def table6_recipes(profile=None) -> tuple[str, ...]:
     """The recipes DDP runs under in Table 6 at ``profile`` (a name, a Profile or None: ``DDP_PROFILE``):
     the paper's and the one the kit recommends for real photographs (``recipes.FOR_PHOTOGRAPHS``), and at
     ``paper`` the ``kit`` recipe between them. ``class`` leaves ``kit`` out to keep a laptop's run of
-    notebook 06 to minutes (one fit per recipe and scene), ``ci`` to keep ``make test`` short (the cells
-    need only the paper's recipe); notebook 10 puts its additions on the paper's recipe one at a time."""
+    notebook 06 to minutes (one fit per recipe and scene); ``ci`` runs the paper's recipe alone, to keep
+    ``make test`` short (the cells need only the paper's recipe); notebook 10 puts the kit's additions on the
+    paper's recipe one at a time."""
     name = get_profile(profile).name
-    wanted = ("paper", "kit", FOR_PHOTOGRAPHS) if name == "paper" else ("paper", FOR_PHOTOGRAPHS)
+    wanted = {"ci": ("paper",), "class": ("paper", FOR_PHOTOGRAPHS), "paper": ("paper", "kit", FOR_PHOTOGRAPHS)}[name]
     return tuple(dict.fromkeys(wanted))  # in order, once each (the recommendation may be one of the others)
 
 
@@ -110,11 +111,14 @@ def table6_case(scene: str, profile=None, seed: int = 0, data=None) -> RealCase:
 def table6(profile=None, recipes=None, seed: int = 0) -> tuple[dict, dict]:
     """Every fill and DDP under ``recipes`` (rgbd, as the paper runs Middlebury; None: ``table6_recipes``) on
     the three scenes → ``(rmse, outputs)``: {scene: {method: hole RMSE in working-size disparity px}} and
-    {scene: (case, truth (H, W) px, {method: (H, W) px})}."""
+    {scene: (case, truth (H, W) px, {method: (H, W) px})}. The fits run as a notebook's
+    (``Profile.notebook_settings``: at ``ci`` a shorter run)."""
+    profile = get_profile(profile)
     recipes = table6_recipes(profile) if recipes is None else recipes
     rmse, outputs = {}, {}
     cases = [table6_case(scene, profile, seed) for scene in TABLE6_SCENES]
-    every = compare_fills_on(cases, profile, recipes=recipes, seed=seed)  # every scene's fits in one side-by-side pool
+    every = compare_fills_on(cases, profile, recipes=recipes, seed=seed,  # every scene's fits in one side-by-side pool
+                             **profile.notebook_settings())
     for scene, case, estimates in zip(TABLE6_SCENES, cases, every):
         truth = case.fb / case.gt
         rmse[scene] = {name: case.rmse_px(case.fb / d) for name, d in estimates.items()}
