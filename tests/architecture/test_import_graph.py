@@ -37,6 +37,17 @@ def _parsed_file(path: Path) -> ast.Module:
     return _parsed(path.read_text(encoding="utf-8"))
 
 
+@lru_cache(maxsize=None)
+def _nodes(source: str) -> tuple[ast.AST, ...]:
+    """Every node of ``source``'s tree in ``ast.walk`` order, listed once per session: the checks below go
+    over every node of every file, several times each."""
+    return tuple(ast.walk(_parsed(source)))
+
+
+def _file_nodes(path: Path) -> tuple[ast.AST, ...]:
+    return _nodes(path.read_text(encoding="utf-8"))
+
+
 def resolve(importer: str, is_package: bool, level: int, target: str | None) -> str:
     """The absolute name of ``from <level dots><target> import ...`` written in ``importer``."""
     if level == 0:
@@ -51,9 +62,8 @@ def imports(name: str, path: Path, known: dict[str, Path]):
     """(imported module, names taken from it) for every import of a package module in ``path``,
     at any depth (imports inside functions count too), and every ``"ddp_lite.module:name"`` string
     (a handler the command line imports by name)."""
-    tree = _parsed_file(path)
     is_package = path.name == "__init__.py"
-    for node in ast.walk(tree):
+    for node in _file_nodes(path):
         if isinstance(node, ast.Constant) and isinstance(node.value, str) and HANDLER.fullmatch(node.value):
             module, taken = node.value.split(":")
             if module in known:
@@ -76,9 +86,11 @@ def imports(name: str, path: Path, known: dict[str, Path]):
                 yield source, tuple(taken)
 
 
+@lru_cache(maxsize=None)
 def graph() -> dict[str, dict[str, set[str]]]:
     """importer → {imported module → names taken} over the package (a package's ``__init__``,
-    which only hands names on lazily, is left out as an importer)."""
+    which only hands names on lazily, is left out as an importer). Built once per session: the checks
+    only read it."""
     known = modules()
     edges: dict[str, dict[str, set[str]]] = {}
     for name, path in known.items():
@@ -238,7 +250,7 @@ def test_the_methods_rooms_import_only_downward():
 
 def _ddp_lite_imports(source: str, importer: str | None = None, is_package: bool = False):
     """(line, absolute module name) of every import of ``ddp_lite`` or one of its modules in ``source``."""
-    for node in ast.walk(_parsed(source)):
+    for node in _nodes(source):
         if isinstance(node, ast.Import):
             for alias in node.names:
                 if alias.name.split(".")[0] == "ddp_lite":
@@ -272,16 +284,15 @@ def _names_taken(source: str):
     """(line, module, name) of every ``from ddp_lite... import name`` in ``source`` (a module taken as a
     name is left out), and (line, "ddp_lite", name) of every ``ddp.name`` after ``import ddp_lite as ddp``."""
     known = modules()
-    tree = _parsed(source)
     aliases = set()
-    for node in ast.walk(tree):
+    for node in _nodes(source):
         if isinstance(node, ast.ImportFrom) and not node.level and (node.module or "").split(".")[0] == "ddp_lite":
             for alias in node.names:
                 if f"{node.module}.{alias.name}" not in known:
                     yield node.lineno, node.module, alias.name
         elif isinstance(node, ast.Import):
             aliases |= {alias.asname or alias.name for alias in node.names if alias.name == "ddp_lite"}
-    for node in ast.walk(tree):
+    for node in _nodes(source):
         if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) and node.value.id in aliases:
             yield node.lineno, "ddp_lite", node.attr
 
@@ -362,7 +373,7 @@ def test_the_package_never_imports_the_downloader():
     root = PACKAGE.parent
     found = []
     for path in sorted(PACKAGE.rglob("*.py")):
-        for node in ast.walk(_parsed_file(path)):
+        for node in _file_nodes(path):
             names = [a.name for a in node.names] if isinstance(node, ast.Import) else \
                 [node.module or ""] if isinstance(node, ast.ImportFrom) and node.level == 0 else []
             found += [f"{path.relative_to(root)}:{node.lineno}: {n}" for n in names if n.split(".")[0] == "data_fetch"]

@@ -87,9 +87,12 @@ def test_the_fast_global_smoother_beats_nearest_on_the_photo(photo):
 
 
 def test_shift_map_copies_valid_depth_into_the_holes(photo):
-    # an exemplar method pastes valid pixels: every filled value is one of the input's valid values
-    disparity, _, _, _ = photo
+    # an exemplar method pastes valid pixels: every filled value is one of the input's valid values. A property
+    # of each pixel, so a 64×96 window of the photo (30 % holes) shows it: shift-map's graph cuts over every
+    # offset take ~5× longer on the whole 125×185
+    disparity = photo[0][30:94, 40:136]
     valid = np.isfinite(disparity)
+    assert 0.2 < (~valid).mean() < 0.4
     out = fill_ebi(disparity)
     known = np.unique(disparity[valid].astype(np.float64))
     filled = out[~valid].astype(np.float64)

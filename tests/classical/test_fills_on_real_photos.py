@@ -49,6 +49,7 @@ def test_no_fill_is_worse_than_nearest_on_any_real_hole_kind(real_cases, method)
         error, nearest = (_rmse(f(disparity, rgb), truth, scored) for f in (BASELINES[method], fill_nearest))
         if error > nearest:
             worse[holes] = round(error / nearest, 3)
+            break  # one hole kind worse fails the test: the known-worse fills (KNOWN_WORSE) stop here
     assert not worse, f"{method} is worse than nearest (ratio) on {worse}"
 
 

@@ -199,7 +199,7 @@ def test_complete_keeps_valid_pixels_exactly_fills_the_holes_and_writes_a_previe
     depth, gt = _pair(tmp_path)
     before = (tmp_path / "depth.npy").read_bytes()
     argv = ["complete", "--rgb", str(tmp_path / "rgb.png"), "--depth", str(tmp_path / "depth.npy"),
-            "--out", str(tmp_path / "filled.npy"), "--profile", "ci", "--iterations", "40", "--max-side", "32"]
+            "--out", str(tmp_path / "filled.npy"), "--profile", "ci", "--iterations", "15", "--max-side", "32"]
     assert main(argv + ["--gt", str(tmp_path / "gt.npy")]) == 0
     printed = capsys.readouterr().out
     assert "fitting at 21×32" in printed, printed  # 60×90 → longer side 32
@@ -252,7 +252,7 @@ def test_complete_with_a_stereo_depth_source_does_not_carry_a_wrong_rim_into_the
     cv2.imwrite(str(tmp_path / "rgb.png"), (np.stack([u / W, v / H, 0.5 + 0 * u], -1)[..., ::-1] * 255).astype(np.uint8))
     np.save(tmp_path / "depth.npy", depth)
     argv = ["complete", "--rgb", str(tmp_path / "rgb.png"), "--depth", str(tmp_path / "depth.npy"),
-            "--profile", "ci", "--iterations", "20", "--max-side", "32"]
+            "--profile", "ci", "--iterations", "10", "--max-side", "32"]
     errors = {}
     for source in ("clean", "stereo"):
         assert main(argv + ["--depth-source", source, "--out", str(tmp_path / f"{source}.npy")]) == 0
@@ -632,7 +632,7 @@ def test_recipe_flag_runs_the_named_method_as_ddp_recipe_does(tmp_path, monkeypa
     """``--recipe paper`` gives the fit DDP_RECIPE=paper gives, and not the kit's."""
     _pair(tmp_path)
     argv = ["complete", "--rgb", str(tmp_path / "rgb.png"), "--depth", str(tmp_path / "depth.npy"), "--raw",
-            "--profile", "ci", "--iterations", "20", "--max-side", "32"]
+            "--profile", "ci", "--iterations", "5", "--max-side", "32"]
     monkeypatch.setenv("DDP_RECIPE", "kit")
     assert main(argv + ["--recipe", "paper", "--out", str(tmp_path / "flag.npy")]) == 0
     assert main(argv + ["--out", str(tmp_path / "kit.npy")]) == 0

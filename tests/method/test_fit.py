@@ -79,7 +79,7 @@ def test_warp_loss_prefers_the_true_depth():
 def test_a_short_fit_fills_a_hole_better_than_nearest_neighbour():
     gt, depth = slanted_plane()
     rgb = np.zeros((32, 48, 3), np.float32)
-    result = complete_depth(rgb, depth, variant="d", gt_depth=gt, config=FitConfig(iterations=150, **TINY))
+    result = complete_depth(rgb, depth, variant="d", gt_depth=gt, config=FitConfig(iterations=60, **TINY))
     holes = np.isnan(depth)
     rmse = lambda d: float(np.sqrt(np.mean((d[holes] - gt[holes]) ** 2)))
     initial = result.history["hole_rmse_m"][0]
@@ -184,7 +184,7 @@ def test_fit_image_inpaints_a_smooth_image():
     image = np.stack([u, v, 0.5 * (u + v)], axis=2).astype(np.float32)
     mask = np.ones((32, 32), bool)
     mask[8:24, 8:24] = False
-    result = fit_image(image * mask[..., None], mask, FitConfig(iterations=150, **TINY), clean=image)
+    result = fit_image(image * mask[..., None], mask, FitConfig(iterations=60, **TINY), clean=image)
     error = np.abs(result.image - image)[~mask].mean()
     assert error < 0.5 * np.abs(image[~mask]).mean()  # better than the zeros it was given
     assert result.history["psnr"][-1] > result.history["psnr"][0]
@@ -223,7 +223,7 @@ def test_bad_variant_config_and_missing_neighbours():
 def test_warm_start_begins_where_the_previous_fit_ended():
     gt, depth = slanted_plane()
     rgb = np.zeros((32, 48, 3), np.float32)
-    config = FitConfig(iterations=60, **TINY)
+    config = FitConfig(iterations=30, **TINY)
     first = complete_depth(rgb, depth, variant="d", config=config)
     warm = complete_depth(rgb, depth, variant="d", config=config.replace(iterations=2), init=first)
     cold = complete_depth(rgb, depth, variant="d", config=config.replace(iterations=2))

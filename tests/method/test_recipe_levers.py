@@ -110,7 +110,7 @@ def test_ensemble_members_run_side_by_side_with_the_numbers_of_one_thread_in_tur
 
 def test_ensemble_is_the_mean_disparity_of_its_seeds():
     gt, depth = plane_with_hole()
-    config = FitConfig(**TINY, iterations=15)
+    config = FitConfig(**TINY, iterations=8)
     transform = DisparityTransform.from_depth(depth)
     with one_thread():  # as each member of an ensemble runs, so the numbers match exactly
         members = [complete_depth(None, depth, variant="d", config=config.replace(seed=s), transform=transform)
@@ -119,7 +119,7 @@ def test_ensemble_is_the_mean_disparity_of_its_seeds():
     expected = np.mean([m.disparity for m in members], axis=0)
     assert np.allclose(ensemble.disparity, expected, atol=1e-6)
     assert np.allclose(ensemble.depth, transform.to_depth(expected), rtol=1e-5)
-    assert ensemble.iterations == 45 and ensemble.fits == 3 and members[0].fits == 1
+    assert ensemble.iterations == 3 * 8 and ensemble.fits == 3 and members[0].fits == 1
     assert ensemble.best_iteration == members[0].best_iteration  # the first fit's, as documented
     assert not np.allclose(members[0].disparity, members[1].disparity)  # the seeds really differ
 
@@ -224,7 +224,7 @@ def test_flatness_continues_a_border_hole_flat_where_curvature_alone_carries_the
     last_valid = transform.to_disparity(depth[:, 21]).mean()
 
     def border_mean(**weights):
-        config = FitConfig(**TINY, iterations=120, **weights)
+        config = FitConfig(**TINY, iterations=60, **weights)
         result = complete_depth(None, depth, variant="d", config=config, transform=transform)
         return float(result.disparity[:, 26:].mean())
 
@@ -270,7 +270,7 @@ def test_flatness_reach_zero_leaves_an_enclosed_hole_to_the_curvature_term_alone
     gt, depth = plane_with_hole()
     transform = DisparityTransform.from_depth(depth)
     fit = lambda **c: complete_depth(None, depth, variant="d", transform=transform,
-                                     config=FitConfig(**TINY, iterations=30, smoothness=1.0, **c)).disparity
+                                     config=FitConfig(**TINY, iterations=10, smoothness=1.0, **c)).disparity
     without = fit()
     np.testing.assert_array_equal(fit(flatness=0.6, flatness_reach=0.0), without)
     assert not np.array_equal(fit(flatness=0.6), without)
@@ -282,7 +282,7 @@ def test_step_reach_switches_the_hole_terms_off_beside_a_depth_step_and_nowhere_
     depth[8:16, 10:20] = np.nan
     transform = DisparityTransform.from_depth(depth)
     fit = lambda d, t, **c: complete_depth(None, d, variant="d", transform=t,
-                                           config=FitConfig(**TINY, iterations=30, **c)).disparity
+                                           config=FitConfig(**TINY, iterations=10, **c)).disparity
     terms = dict(smoothness=1.0, flatness=0.6)
     np.testing.assert_array_equal(fit(depth, transform, step_reach=6.0, **terms), fit(depth, transform, **terms))
     # a band of holes between a near (1 m) and a far (2 m) half: every hole pixel sees both sides
