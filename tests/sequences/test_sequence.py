@@ -3,6 +3,7 @@ views, a worker killed mid-run loses and duplicates nothing, and the dry run pri
 
 Tiny sizes (4 views of 24×32, ci profile, a few iterations): these test the bookkeeping, not the
 quality; four views are more than each view's two neighbours and give each of two workers two views. Every fit runs on one thread, so the same seed gives the same numbers on any process."""
+import functools
 import json
 import os
 import signal
@@ -23,6 +24,7 @@ from ddp_lite.sequences.runner import open_client, run_jobs
 from ddp_lite.world.scenes import make_scene
 from ddp_lite.sequences.sequence_jobs import VARIANT, plan_jobs
 from ddp_lite.sequences.sequence_files import read_manifest
+from ddp_lite.sequences import sequence_cost
 from ddp_lite.sequences.sequence import run_sequence
 
 N_VIEWS, ITERATIONS = 4, 6
@@ -211,14 +213,19 @@ def test_plan_refuses_bad_input_before_any_fit(tum):
         plan_jobs(type(scene)("one", scene.views[:1]), config)
 
 
-def test_cli_refusals_and_dry_run(tum, tmp_path, capsys):
+def test_cli_refusals_and_dry_run(tum, tmp_path, capsys, monkeypatch):
     assert main(["sequence", str(tum), "--format", "colmap", "--out", str(tmp_path), "--every", "2"]) == 2
     assert "--every does not apply to --format colmap" in capsys.readouterr().err
     assert main(["sequence", str(tum), "--format", "tum", "--out", str(tmp_path), "--views", "nope"]) == 2
     assert "--views: 'nope' is neither" in capsys.readouterr().err
+    # the paper net's cost measured at 48×64 instead of 96×128 (half the time): what the measurement
+    # counts is tested in test_sequence_cost.py, what the dry run makes of it here
+    monkeypatch.setattr(sequence_cost, "measure_fit_cost", functools.partial(sequence_cost.measure_fit_cost,
+                                                                             size=(48, 64)))
     assert main(["sequence", str(tum), "--format", "tum", "--out", str(tmp_path), "--profile", "paper",
                  "--dry-run"]) == 0
     printed = capsys.readouterr().out
     assert f"{N_VIEWS} jobs" in printed and "16000 iterations" in printed and "GPU-hours" in printed
+    assert "counted at 48×64" in printed and "per pixel-iteration, measured now" in printed
     assert "--scheduler tcp://" in printed
     assert not (tmp_path / "manifest.json").exists()  # a dry run writes nothing
