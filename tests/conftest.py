@@ -59,7 +59,7 @@ SLOW_NOTEBOOKS = ("10_", "12_", "05_", "06_", "11_", "07_")
 # The test files that take longest (10-30 s each held to AVX2), longest first: they start right after the
 # student copies, so that the run ends on files of a second or less (test_sequence.py, started last in
 # collection order, kept one worker busy 18 s after the other had finished).
-SLOW_TESTS = ("test_classroom.py", "test_sequence.py", "test_cli.py", "test_fit.py", "test_real_cases.py",
+SLOW_TESTS = ("test_classroom.py", "test_grader_supervisor.py", "test_sequence.py", "test_cli.py", "test_fit.py", "test_real_cases.py",
               "test_grader_trust.py", "test_recipe_levers.py")
 
 
