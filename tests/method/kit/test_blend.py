@@ -68,7 +68,7 @@ def test_blend_weight_none_blends_the_two_fits_without_the_ring_by_the_ring():
     depth[10:30, 12:36] = np.nan  # a 20 × 24 hole: its ring (1 px at this size) has ~45 pixels
     rgb = np.random.default_rng(1).random(depth.shape + (3,)).astype(np.float32)
     given = depth.copy()
-    config = FitConfig(**TINY, iterations=15, seed=2, smoothness=1.0, net_input="meshgrid", noise_channels=2)
+    config = FitConfig(**TINY, iterations=5, seed=2, smoothness=1.0, net_input="meshgrid", noise_channels=2)
     threads = torch.get_num_threads()
     torch.set_num_threads(1)
     try:
@@ -105,18 +105,18 @@ def test_a_blend_of_the_kit_fit_the_paper_fit_and_the_fill_is_their_weighted_mea
     depth = tilted_plane(32, 40, slope=0.05)
     depth[8:20, 10:28] = np.nan
     rgb = np.random.default_rng(2).random(depth.shape + (3,)).astype(np.float32)
-    thirds = FitConfig.for_profile("ci", variant="rgbd", recipe="kit", iterations=12,
+    thirds = FitConfig.for_profile("ci", variant="rgbd", recipe="kit", iterations=4,
                                    blend_paper=True, blend_weight=0.5, blend_fill=1 / 3)
     threads = torch.get_num_threads()
     torch.set_num_threads(1)
     try:
         blended = complete_depth(rgb, depth, variant="rgbd", config=thirds)
         kit = complete_depth(rgb, depth, variant="rgbd", transform=blended.transform,
-                             config=FitConfig.for_profile("ci", variant="rgbd", recipe="kit", iterations=12,
+                             config=FitConfig.for_profile("ci", variant="rgbd", recipe="kit", iterations=4,
                                                           blend_fill=0.0))  # the kit's fit alone
         paper = complete_depth(rgb, depth, variant="rgbd", transform=blended.transform,
                                config=FitConfig.for_profile("ci", variant="rgbd", recipe="paper",
-                                                            iterations=12))
+                                                            iterations=4))
     finally:
         torch.set_num_threads(threads)
     fill = two_fills_disparity(depth, rgb, blended.transform)
@@ -132,8 +132,8 @@ def test_the_photo_recipe_is_the_kit_fit_refined_then_the_kits_share_of_the_fill
     depth = tilted_plane(32, 40, slope=0.05)
     depth[8:20, 10:28] = np.nan
     rgb = np.random.default_rng(2).random(depth.shape + (3,)).astype(np.float32)
-    photo = FitConfig.for_profile("ci", variant="rgbd", recipe="photo", iterations=12)
-    kit = FitConfig.for_profile("ci", variant="rgbd", recipe="kit", iterations=12)
+    photo = FitConfig.for_profile("ci", variant="rgbd", recipe="photo", iterations=4)
+    kit = FitConfig.for_profile("ci", variant="rgbd", recipe="kit", iterations=4)
     assert kit.holes.smoothness > 0 and kit.holes.flatness > 0
     kit_config = kit.replace(smoothness=0.0, flatness=0.0)
     assert photo == kit_config.replace(refine=True)  # the kit without its hole terms, and the solve
