@@ -2,7 +2,8 @@
 views, a worker killed mid-run loses and duplicates nothing, and the dry run prints its estimate.
 
 Tiny sizes (4 views of 24×32, ci profile, a few iterations): these test the bookkeeping, not the
-quality; four views are more than each view's two neighbours and give each of two workers two views. Every fit runs on one thread, so the same seed gives the same numbers on any process."""
+quality; four views are more than each view's two neighbours and give each of two workers two views.
+Every fit runs on one thread, so the same seed gives the same numbers on any process."""
 import functools
 import json
 import os
