@@ -17,6 +17,7 @@ import numpy as np
 import torch
 
 from ..core.progress import FitProgress
+from .adam import Adam, CosineSchedule, StepSchedule
 from .config import FitConfig
 from .paper.nets import build_net, make_input
 from .runtime.device import use_bf16
@@ -67,14 +68,11 @@ def run(net, noise, loss_fn, config: FitConfig, iterations: int, held_out_error=
     ``progress``: the caller's hook, iterated over for the iterations; ``options``: the run's memory format
     and callback rate (the net's precision is the config's)."""
     paper, stopping, tricks = config.paper, config.stopping, config.tricks
-    # the fused kernel updates all parameters in one call: faster per iteration on CPU
-    # (docs/studies/benchmark_history.md, "Fused Adam")
-    optimizer = torch.optim.Adam(net.parameters(), lr=paper.lr, fused=noise.device.type in ("cpu", "cuda"))
+    adam = Adam(net.parameters(), lr=paper.lr)  # torch's fused Adam kernel, without torch.optim (adam.py says why)
     if paper.schedule == "cosine":
-        scheduler = torch.optim.lr_scheduler.CosineAnnealingLR(optimizer, T_max=iterations)
+        schedule = CosineSchedule(iterations)
     else:
-        milestones = [m for m in paper.lr_milestones if m < iterations]
-        scheduler = torch.optim.lr_scheduler.MultiStepLR(optimizer, milestones, gamma=paper.lr_gamma)
+        schedule = StepSchedule([m for m in paper.lr_milestones if m < iterations], gamma=paper.lr_gamma)
     autocast = torch.autocast(noise.device.type, dtype=torch.bfloat16, enabled=use_bf16(config.precision.bf16, noise.device))
     if options.channels_last:
         net, noise = net.to(memory_format=torch.channels_last), noise.contiguous(memory_format=torch.channels_last)
@@ -96,11 +94,11 @@ def run(net, noise, loss_fn, config: FitConfig, iterations: int, held_out_error=
             output = net(net_input)
         output = output.float().contiguous()
         total, terms = loss_fn(output)
-        optimizer.zero_grad(set_to_none=True)
+        adam.zero_grad()
         total.backward()
-        lrs.append(optimizer.param_groups[0]["lr"])  # a Python float: no device sync
-        optimizer.step()
-        scheduler.step()
+        lrs.append(adam.lr)  # a Python float: no device sync
+        adam.step()
+        adam.lr = schedule.next(adam.lr)
         if terms_log is None:
             names = ["loss", *terms]
             terms_log = torch.zeros(iterations, len(names), device=noise.device)
@@ -126,8 +124,7 @@ def run(net, noise, loss_fn, config: FitConfig, iterations: int, held_out_error=
                 if event == "improved":
                     best_iteration, best_output = it + 1, current.clone()
                 elif event == "decay":
-                    for group in optimizer.param_groups:
-                        group["lr"] *= paper.lr_gamma
+                    adam.lr *= paper.lr_gamma
                     evals["lr_decay_iteration"].append(it + 1)
                 elif event == "stop":
                     break
