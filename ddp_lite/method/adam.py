@@ -76,7 +76,8 @@ class Adam:
 
 class CosineSchedule:
     """The rate annealed from its start to 0 over ``iterations`` steps on a half cosine,
-    lr_t = ½·lr₀·(1 + cos(π t / T)) for t ≤ T, by torch's ``CosineAnnealingLR`` recursion (its ``eta_min`` 0)."""
+    lr_t = ½·lr₀·(1 + cos(π t / T)) for t ≤ T, by torch's ``CosineAnnealingLR`` recursion
+    (its ``eta_min`` 0)."""
 
     def __init__(self, iterations: int):
         self.T, self.t, self.eta_min = int(iterations), 0, 0.0
@@ -85,7 +86,8 @@ class CosineSchedule:
         """The rate of the next step, from this step's ``lr``."""
         self.t += 1
         t, T = self.t, self.T
-        return (1 + math.cos(math.pi * t / T)) / (1 + math.cos(math.pi * (t - 1) / T)) * (lr - self.eta_min) + self.eta_min
+        ratio = (1 + math.cos(math.pi * t / T)) / (1 + math.cos(math.pi * (t - 1) / T))
+        return ratio * (lr - self.eta_min) + self.eta_min
 
 
 class StepSchedule:

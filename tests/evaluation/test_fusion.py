@@ -2,8 +2,8 @@
 view is voted out, TSDF agrees, and clouds survive a .ply round trip and a headless render."""
 import os
 
+# open3d is imported inside the tests that use it: loading it takes ~3 s, which every test worker paid at collection
 import numpy as np
-import open3d as o3d
 import pytest
 
 from ddp_lite.core.camera import Camera
@@ -100,6 +100,7 @@ def test_fused_ground_truth_scores_high_against_ground_truth_points(desk):
 
 
 def test_save_ply_round_trip(desk, tmp_path):
+    import open3d as o3d
     depths, cameras, images = desk
     cloud = fuse_depths(depths, cameras, images, min_views=1)
     path = tmp_path / "fused.ply"
@@ -115,6 +116,7 @@ def test_save_ply_round_trip(desk, tmp_path):
 
 
 def test_render_point_cloud_reproduces_a_view_from_its_own_points(desk):
+    import open3d as o3d
     import matplotlib.pyplot as plt
 
     depths, cameras, images = desk
@@ -131,6 +133,7 @@ def test_render_point_cloud_reproduces_a_view_from_its_own_points(desk):
 
 
 def test_nearest_point_wins_in_the_render():
+    import open3d as o3d
     cam = Camera.from_fov(width=9, height=7, fov_x_deg=60.0)  # principal point on pixel (4, 3)
     cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(np.array([[0.0, 0.0, 2.0], [0.0, 0.0, 1.0]])))
     cloud.colors = o3d.utility.Vector3dVector(np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]))

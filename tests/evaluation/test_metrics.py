@@ -1,6 +1,6 @@
 """Metrics against cases small enough to compute by hand (and PSNR against scikit-image)."""
+# open3d is imported inside the tests that use it: loading it takes ~3 s, which every test worker paid at collection
 import numpy as np
-import open3d as o3d
 import pytest
 from skimage.metrics import peak_signal_noise_ratio
 
@@ -92,6 +92,7 @@ def test_psnr_matches_scikit_image():
 
 
 def test_point_cloud_prf_on_point_sets_with_known_distances():
+    import open3d as o3d
     pred = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [5.0, 0.0, 0.0]])
     gt = np.array([[0.0, 0.0, 0.1], [1.0, 0.0, 0.3]])
     # pred → gt: 0.1, 0.3, ~4.0;   gt → pred: 0.1, 0.3
