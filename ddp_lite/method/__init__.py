@@ -14,7 +14,8 @@
   (``dip_tricks``), its config and profiles (``config``, which holds each room's settings as a section,
   ``profiles``), its inputs
   checked (``input_checks``), a setting that acts on nothing said before the fit (``inert_settings``), a
-  keyword given to the wrong place named with where it goes (``misplaced_arguments``), the loop (``loop``),
+  keyword given to the wrong place named with where it goes (``misplaced_arguments``), the loop (``loop``) and
+  its optimiser (``adam``),
   one fit (``fit``, which composes the paper's loss with the kit's terms), fits done once (``fit_cache``),
   the entry point ``complete_depth``, the pipeline that runs the fits and the kit's combinations of them
   (``complete``), coarse-to-fine (``coarse_to_fine``), Deep Image Prior (``dip``) and the loss a config
