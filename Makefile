@@ -69,11 +69,9 @@ lab-command:
 # tests/conftest.py puts the notebooks first, slowest first, and the student copies right after them,
 # which read the notebooks' fits from the session's fit cache),
 # each with one torch thread: on 2 cores, two 1-thread processes finish sooner than
-# one 2-thread process, because most of a test is Python, not arithmetic, and a third fills the time
-# a worker waits (a kernel starting, a hanging hand-in's time limit, a subprocess): on 2 cores,
-# 3 workers took 385 s where 2 took 405 s. TEST_WORKERS=0 runs everything in one process (torch then
-# takes 2 threads).
-TEST_WORKERS ?= 3
+# one 2-thread process, because most of a test is Python, not arithmetic. TEST_WORKERS=0 runs
+# everything in one process (torch then takes 2 threads).
+TEST_WORKERS ?= 2
 
 TEST_CMD := DDP_PROFILE=ci MPLBACKEND=Agg $(if $(filter 0,$(TEST_WORKERS)),,OMP_NUM_THREADS=1) $(PY) -m pytest tests --nbval-lax --nbval-current-env notebooks -p no:cacheprovider -n $(TEST_WORKERS) --dist loadfile --no-loadscope-reorder
 
