@@ -208,8 +208,6 @@ def run_graded(nb, is_check, workdir, env: dict, timeout: int):
     against the kernel's state at that point (see the module docstring).
 
     Returns (the exception that stopped the run early or None, whether the kernel started)."""
-    import nbformat
-    from jupyter_core.utils import run_sync
     from nbclient import NotebookClient
     from nbclient.exceptions import DeadKernelError
 
@@ -229,6 +227,24 @@ def run_graded(nb, is_check, workdir, env: dict, timeout: int):
             raise DeadKernelError(f"a cell ignored the interrupt at its {timeout} s timeout; the kernel was killed")
 
     nb.metadata.pop("kernelspec", None)  # the notebook's choice of kernel is the student's: not followed
+    # A kernel's start can fail for a moment's reason: the TCP ports its manager picked taken by another
+    # process before the kernel binds them ("Address already in use", "Kernel died before replying to
+    # kernel_info"), which kernels starting side by side do now and then. No cell has run then: start again.
+    for attempt in range(KERNEL_START_TRIES):
+        stopped, started = _run_in_kernel(GradingClient, nb, is_check, workdir, env, timeout)
+        if started or attempt + 1 == KERNEL_START_TRIES:
+            return stopped, started
+
+
+KERNEL_START_TRIES = 3
+
+
+def _run_in_kernel(GradingClient, nb, is_check, workdir, env: dict, timeout: int):
+    """One try of :func:`run_graded`: (the exception that stopped the run or None, whether the kernel started)."""
+    import nbformat
+    from jupyter_core.utils import run_sync
+    from nbclient.exceptions import DeadKernelError
+
     # shut down "immediate" (killed, its process group with it): a graded kernel has nothing to save, and
     # a graceful shutdown waits for it to exit on its own
     client = GradingClient(nb, timeout=timeout, allow_errors=True, interrupt_on_timeout=True, kernel_name="python3",

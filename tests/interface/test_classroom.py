@@ -388,3 +388,23 @@ def test_a_kernel_that_does_not_start_stops_the_grading_and_scores_nobody_0(tmp_
     assert main(["grade", str(tmp_path / "submissions"), "--source", str(source_path.parent),
                  "--csv", str(csv_path)]) == 1
     assert "kernel did not start" in capsys.readouterr().err and not csv_path.exists()
+
+
+def test_a_kernel_whose_first_start_fails_is_started_again_and_the_work_graded(tmp_path, monkeypatch):
+    """A start that fails for a moment's reason (its ports taken before it binds them: "Kernel died before
+    replying to kernel_info") is the machine's, once: the grader starts the kernel again and grades."""
+    from jupyter_client.manager import AsyncKernelManager
+
+    source_path = _tiny_source(tmp_path)
+    _submit(tmp_path, "ada", nbformat.read(source_path, as_version=4))
+    start, failed = AsyncKernelManager.start_kernel, []
+
+    async def fails_once(self, **kwargs):  # once in each process that grades (the supervised child)
+        if not failed:
+            failed.append(True)
+            raise RuntimeError("Kernel died before replying to kernel_info")
+        return await start(self, **kwargs)
+    monkeypatch.setattr(AsyncKernelManager, "start_kernel", fails_once)
+    scores = grading.grade(tmp_path / "submissions", source_path.parent, timeout=30, log=lambda *_: None)
+    table = {(s.student, s.exercise): (s.points, s.status) for s in scores}
+    assert table[("ada", "01.1")] == (2, "pass") and table[("ada", "01.2")] == (3, "pass"), table
