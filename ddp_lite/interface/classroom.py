@@ -126,9 +126,14 @@ def student_copy(nb, name: str = "notebook") -> nbformat.NotebookNode:
 
 @contextlib.contextmanager
 def _environment(**values):
-    """Set environment variables for a kernel started inside the block (it inherits them), then restore."""
+    """Set environment variables for a kernel started inside the block (it inherits them), then restore;
+    a value of None removes the variable for the block."""
     saved = {name: os.environ.get(name) for name in values}
-    os.environ.update({name: str(value) for name, value in values.items()})
+    for name, value in values.items():
+        if value is None:
+            os.environ.pop(name, None)
+        else:
+            os.environ[name] = str(value)
     try:
         yield
     finally:
@@ -140,9 +145,10 @@ def _environment(**values):
 
 
 def execute(nb, profile: str = "ci", timeout: int = 600, workdir=None, allow_errors: bool = True,
-            figures: bool = False, recipe: str = "kit"):
+            figures: bool = False, recipe: str | None = None):
     """Run ``nb`` (modified in place) top to bottom in a fresh kernel with ``DDP_PROFILE=profile`` and
-    ``DDP_RECIPE=recipe`` (grading keeps the default ``kit``, which the checks expect).
+    ``DDP_RECIPE=recipe``; ``recipe=None`` unsets ``DDP_RECIPE``, so that the notebook runs its own recipe,
+    as in a student's ``make lab`` (``kit``; notebook 09, on real photographs, ``photo``).
 
     Args:
         timeout: seconds one cell may take; a cell over it is interrupted and gets an error output.
@@ -156,7 +162,8 @@ def execute(nb, profile: str = "ci", timeout: int = 600, workdir=None, allow_err
     from nbgrader.preprocessors import Execute
     if profile not in ("ci", "class", "paper"):
         raise ValueError(f"profile must be 'ci', 'class' or 'paper', got {profile!r}")
-    get_recipe(recipe)  # an unknown name is refused here, before any notebook runs
+    if recipe is not None:
+        get_recipe(recipe)  # an unknown name is refused here, before any notebook runs
     if not (isinstance(timeout, int) and timeout > 0):
         raise ValueError(f"timeout must be a positive number of seconds, got {timeout!r}")
     for cell in nb.cells:  # so that "did not run" is visible afterwards
@@ -191,19 +198,20 @@ def build_student(source_dir="notebooks", out_dir="build/student") -> list[Path]
 
 
 def build_solutions(source_dir="notebooks", out_dir="build/solutions", profile: str = "class",
-                    timeout: int = 3600, names=None, log=print, recipe: str = "kit") -> list[Path]:
-    """Execute every source notebook (solutions in place) under ``profile`` and ``recipe`` and write it with its
-    outputs to ``out_dir``: the copy a teacher projects. Stops at the first failing cell. Refused
+                    timeout: int = 3600, names=None, log=print, recipe: str | None = None) -> list[Path]:
+    """Execute every source notebook (solutions in place) under ``profile`` and ``recipe`` (None: each notebook's
+    own, as a student runs it) and write it with its outputs to ``out_dir``: the copy a teacher projects. Stops at the first failing cell. Refused
     (ValueError, before anything runs) when ``out_dir`` is, contains or lies inside ``source_dir``."""
     check_not_overlapping(out_dir, "out_dir (--out)", source_dir, "source_dir (--source)")
     check_output_folder(out_dir, "out_dir (--out)")
-    get_recipe(recipe)  # an unknown name is refused here, before any notebook runs
+    if recipe is not None:
+        get_recipe(recipe)  # an unknown name is refused here, before any notebook runs
     chosen = [path for path in source_notebooks(source_dir)
               if not names or path.stem[:2] in names or path.stem in names]
     sources = read_sources(chosen)  # a malformed one is named before the first runs
     written = []
     for path in chosen:
-        log(f"executing {path.name} at {profile} ({recipe} recipe) ...")
+        log(f"executing {path.name} at {profile} ({f'{recipe} recipe' if recipe else 'its own recipe'}) ...")
         nb = sources[path.name]
         try:
             execute(nb, profile=profile, timeout=timeout, workdir=path.parent, allow_errors=False, figures=True,

@@ -132,9 +132,9 @@ def _add_profile(parser, default=None, what: str = PROFILE_SIZES) -> None:
                                      f" (default: {default})"))
 
 
-def _add_recipe(parser) -> None:
+def _add_recipe(parser, otherwise: str = "kit") -> None:
     parser.add_argument("--recipe", choices=RECIPE_NAMES, default=None,
-                        help=RECIPE_HELP)
+                        help=f"{RECIPE_HELP} (default: $DDP_RECIPE, else {otherwise})")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -270,7 +270,7 @@ def build_parser() -> argparse.ArgumentParser:
     solutions.add_argument("--out", default="build/solutions",
                            help="folder for the executed copies, outside --source (default: build/solutions)")
     _add_profile(solutions, default="class")
-    _add_recipe(solutions)
+    _add_recipe(solutions, otherwise="each notebook's own, as a student runs it: kit, or photo on real photographs")
     solutions.add_argument("--only", nargs="+", default=None, metavar="NN", help="only these notebooks (01 05 ...)")
     solutions.add_argument("--timeout", type=_number(int, 1, "--timeout"), default=3600,
                            help="seconds one cell may run (default 3600)")

@@ -117,8 +117,10 @@ def grade_notebook(submission, source, student: str = "", timeout: int = 600, pr
     for cell in nb.cells:  # "not run" stays visible afterwards
         if cell.cell_type == "code":
             cell.outputs, cell.execution_count = [], None
-    env = {**os.environ, "DDP_PROFILE": profile, "DDP_RECIPE": "kit", "MPLBACKEND": "Agg"}
-    for variable in ("PWD", "OLDPWD"):  # no path to the grader's folder handed to the submission
+    env = {**os.environ, "DDP_PROFILE": profile, "MPLBACKEND": "Agg"}
+    # each notebook runs its own recipe, as a student with nothing set runs it (kit; notebook 09 photo),
+    # whatever the grader's shell exports; no path to the grader's folder is handed to the submission
+    for variable in ("DDP_RECIPE", "PWD", "OLDPWD"):
         env.pop(variable, None)
     with contextlib.ExitStack() as stack:
         if workdir is None:

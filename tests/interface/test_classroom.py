@@ -124,11 +124,15 @@ def _edit(nb, grade_id, source):
     return nb
 
 
-def test_grader_scores_right_wrong_crashing_tampered_slow_and_missing_work(tmp_path):
+def test_grader_scores_right_wrong_crashing_tampered_slow_and_missing_work(tmp_path, monkeypatch):
     source_path = _tiny_source(tmp_path)
     source = nbformat.read(source_path, as_version=4)
     student = classroom.student_copy(source)
-    _submit(tmp_path, "ada", source)  # the solutions
+    # the grader's shell names a recipe: each notebook still runs its own, as a student's make lab does (ada's
+    # square is right only in a kernel where DDP_RECIPE is unset)
+    monkeypatch.setenv("DDP_RECIPE", "paper")
+    _submit(tmp_path, "ada", _edit(source, "ex1_square", "import os\ndef square(x):\n"
+                                   "    return x * x if 'DDP_RECIPE' not in os.environ else -1"))  # the solutions
     _submit(tmp_path, "ben", student)  # untouched
     _submit(tmp_path, "cy", _edit(_edit(student, "ex1_square", "def square(x):\n    return x + x"),
                                   "ex3_answer", "Because it is quick."))
@@ -189,14 +193,18 @@ def test_solutions_get_full_marks(tmp_path):
     assert auto and all(s.points == s.max_points and s.status == "pass" for s in auto), auto
 
 
-def test_solution_copies_keep_their_figures_and_stop_at_a_failing_cell(tmp_path):
+def test_solution_copies_keep_their_figures_and_stop_at_a_failing_cell(tmp_path, monkeypatch):
     source = tmp_path / "source"
     source.mkdir()
-    plot = nbformat.v4.new_code_cell("import matplotlib.pyplot as plt\nplt.plot([0, 1])\nprint('drawn')")
+    plot = nbformat.v4.new_code_cell("import os\nimport matplotlib.pyplot as plt\nplt.plot([0, 1])\n"
+                                     "print('drawn, recipe', os.environ.get('DDP_RECIPE'))")
     nbformat.write(nbformat.v4.new_notebook(cells=[plot]), source / "01_plot.ipynb")
+    monkeypatch.setenv("DDP_RECIPE", "paper")  # no recipe asked for: the notebook runs its own, as a student's
     [written] = classroom.build_solutions(source, tmp_path / "solutions", profile="ci", log=lambda *_: None)
+    assert os.environ["DDP_RECIPE"] == "paper"  # the caller's environment as it was
     outputs = nbformat.read(written, as_version=4).cells[0].outputs
     assert any("image/png" in o.get("data", {}) for o in outputs)  # the teacher projects these
+    assert "drawn, recipe None" in "".join(o.get("text", "") for o in outputs), outputs
     broken = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell("1 / 0")])
     nbformat.write(broken, source / "02_broken.ipynb")
     with pytest.raises(Exception, match="ZeroDivisionError"):
