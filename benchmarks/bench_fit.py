@@ -171,7 +171,7 @@ def main(argv=None) -> None:
     parser.add_argument("--isa", default="native", choices=sorted(ISA_ENV),
                         help="native, or avx2: torch, oneDNN and MKL held to AVX2 kernels (isa.py)")
     parser.add_argument("--iterations", type=positive_int, default=20)
-    parser.add_argument("--narrow", action="store_true", help="also the ci profile's 16–128 net")
+    parser.add_argument("--narrow", action="store_true", help="also the ci profile's narrower net")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                         help="FitConfig field or RunOptions override, repeatable: bf16=True, pad='zeros', "
                              "channels_last=True")
@@ -183,7 +183,8 @@ def main(argv=None) -> None:
         print(json.dumps(run_one(variant, int(height), int(width), [int(c) for c in channels.split("-")], args.iterations,
                                  overrides)))
         return
-    widths = ["32-64-128-256-512"] + (["16-32-64-128"] if args.narrow else [])
+    from ddp_lite.method.profiles import PROFILES
+    widths = ["32-64-128-256-512"] + (["-".join(map(str, PROFILES["ci"].channels))] if args.narrow else [])
     print(cpu_summary())
     print(f"torch {torch.__version__}, {torch.get_num_threads()} threads, {args.iterations} timed iterations"
           + (f", overrides {overrides}" if overrides else ""))

@@ -31,37 +31,37 @@ DEFAULTS = dict(
 # (profile, recipe, variant, net) → the fields that differ from DEFAULTS
 EXPECTED = {
     ('ci', 'kit', 'd', 'unet'): dict(
-        channels=(16, 32, 64, 128), image_input=1.0, image_blur=0.5, lr=0.01, iterations=150, lr_milestones=(90,
+        channels=(8, 16, 32, 64), image_input=1.0, image_blur=0.5, lr=0.01, iterations=150, lr_milestones=(90,
         128), lr_gamma=0.3, smoothness=1.0, smoothness_edge=100.0, flatness=0.6, patience=60),
     ('ci', 'kit', 'd', 'skip'): dict(
         net='skip', channels=(32, 32, 32, 32), image_input=1.0, image_blur=0.5, lr=0.01, iterations=150,
         lr_milestones=(90, 128), lr_gamma=0.3, smoothness=1.0, smoothness_edge=100.0, flatness=0.6, patience=60),
     ('ci', 'kit', 'rgbd', 'unet'): dict(
-        channels=(16, 32, 64, 128), image_input=1.0, image_blur=0.5, lr=0.01, iterations=150, lr_milestones=(90,
+        channels=(8, 16, 32, 64), image_input=1.0, image_blur=0.5, lr=0.01, iterations=150, lr_milestones=(90,
         128), lr_gamma=0.3, smoothness=1.0, smoothness_edge=100.0, flatness=0.6, patience=60, blend_fill=0.25),
     ('ci', 'kit', 'rgbd', 'skip'): dict(
         net='skip', channels=(32, 32, 32, 32), image_input=1.0, image_blur=0.5, lr=0.01, iterations=150,
         lr_milestones=(90, 128), lr_gamma=0.3, smoothness=1.0, smoothness_edge=100.0, flatness=0.6, patience=60, blend_fill=0.25),
     ('ci', 'kit', 'rgbd+warp', 'unet'): dict(
-        channels=(16, 32, 64, 128), image_input=1.0, image_blur=0.5, lr=0.01, iterations=150, lr_milestones=(90,
+        channels=(8, 16, 32, 64), image_input=1.0, image_blur=0.5, lr=0.01, iterations=150, lr_milestones=(90,
         128), lr_gamma=0.3, smoothness=1.0, smoothness_edge=100.0, flatness=0.6, patience=60, blend_fill=0.25),
     ('ci', 'kit', 'rgbd+warp', 'skip'): dict(
         net='skip', channels=(32, 32, 32, 32), image_input=1.0, image_blur=0.5, lr=0.01, iterations=150,
         lr_milestones=(90, 128), lr_gamma=0.3, smoothness=1.0, smoothness_edge=100.0, flatness=0.6, patience=60, blend_fill=0.25),
     ('ci', 'paper', 'd', 'unet'): dict(
-        channels=(16, 32, 64, 128), image_blur=0.5, lr=0.01, iterations=150, lr_milestones=(90, 128),
+        channels=(8, 16, 32, 64), image_blur=0.5, lr=0.01, iterations=150, lr_milestones=(90, 128),
         lr_gamma=0.3, smoothness_edge=100.0, patience=60),
     ('ci', 'paper', 'd', 'skip'): dict(
         net='skip', channels=(32, 32, 32, 32), image_blur=0.5, lr=0.01, iterations=150, lr_milestones=(90, 128),
         lr_gamma=0.3, smoothness_edge=100.0, patience=60),
     ('ci', 'paper', 'rgbd', 'unet'): dict(
-        channels=(16, 32, 64, 128), image_blur=0.5, lr=0.01, iterations=150, lr_milestones=(90, 128),
+        channels=(8, 16, 32, 64), image_blur=0.5, lr=0.01, iterations=150, lr_milestones=(90, 128),
         lr_gamma=0.3, smoothness_edge=100.0, patience=60),
     ('ci', 'paper', 'rgbd', 'skip'): dict(
         net='skip', channels=(32, 32, 32, 32), image_blur=0.5, lr=0.01, iterations=150, lr_milestones=(90, 128),
         lr_gamma=0.3, smoothness_edge=100.0, patience=60),
     ('ci', 'paper', 'rgbd+warp', 'unet'): dict(
-        channels=(16, 32, 64, 128), image_blur=0.5, lr=0.01, iterations=150, lr_milestones=(90, 128),
+        channels=(8, 16, 32, 64), image_blur=0.5, lr=0.01, iterations=150, lr_milestones=(90, 128),
         lr_gamma=0.3, smoothness_edge=100.0, patience=60),
     ('ci', 'paper', 'rgbd+warp', 'skip'): dict(
         net='skip', channels=(32, 32, 32, 32), image_blur=0.5, lr=0.01, iterations=150, lr_milestones=(90, 128),
@@ -137,7 +137,7 @@ EXPECTED = {
 }
 
 DESCRIBED = {
-    "ci": "profile 'ci': 48×64 images, UNet 16-32-64-128, 150 iterations (depth-only 150), lr 0.01, auto-stop off",
+    "ci": "profile 'ci': 48×64 images, UNet 8-16-32-64, 150 iterations (depth-only 150), lr 0.01, auto-stop off",
     "class": "profile 'class': 96×128 images, UNet 16-32-64-128-256, ≤ 600 iterations (depth-only 600), lr 0.01, "
              "auto-stop on",
     "paper": "profile 'paper': 512×960 images, UNet 32-64-128-256-512, 16000 iterations (depth-only 6000), lr 5e-05, "
