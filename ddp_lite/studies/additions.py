@@ -86,10 +86,11 @@ def _best_fill_px(case: Case) -> tuple[str, float]:
 
 
 def run_additions(cases: dict[str, Case], profile=None, seeds=(0, 1, 2), variant: str = "rgbd", log=print,
-                  options: RunOptions = RunOptions(progress=False)) -> dict:
+                  options: RunOptions = RunOptions(progress=False), net_of=None) -> dict:
     """Fit every step of :func:`addition_steps` on every case and seed: all the fits side by side, one
     torch thread each, as many at once as torch has threads (``side_by_side.run_side_by_side``), each run
-    as ``options`` say (no progress bars by default).
+    as ``options`` say (no progress bars by default). ``net_of``: the profile whose UNet widths the fits take
+    (the one whose image size the cases have; None: ``profile``'s); ``profile`` sets the recipe and the budget.
 
     Returns ``{"steps": [names], "best_fill": {case: (name, px)}, "px": {case: {step: [px per seed]}},
     "ratio": {case: {step: [DDP px / best fill px, per seed]}}, "example": {case: {step: depth}}}``
@@ -99,6 +100,7 @@ def run_additions(cases: dict[str, Case], profile=None, seeds=(0, 1, 2), variant
     profile = get_profile(profile)
     steps = addition_steps(profile)
     short = profile.notebook_settings()
+    widths = {} if net_of is None else {"channels": get_profile(net_of).channels}
     if short:
         log(f"each fit {short['iterations']} iterations (the profile's notebook_iterations)")
     names = list(steps)
@@ -111,7 +113,8 @@ def run_additions(cases: dict[str, Case], profile=None, seeds=(0, 1, 2), variant
     def fit(k: int):
         case_name, step, seed = jobs[k]
         case = cases[case_name]
-        config = FitConfig.for_profile(profile, variant=variant, recipe="paper", seed=seed, **steps[step], **short)
+        config = FitConfig.for_profile(profile, variant=variant, recipe="paper", seed=seed, **steps[step], **short,
+                                       **widths)
         neighbors = case.neighbors if variant == "rgbd+warp" else ()
         return complete_depth(case.rgb, case.depth, case.camera, neighbors, variant=variant, config=config,
                               options=options)

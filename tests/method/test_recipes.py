@@ -102,3 +102,27 @@ def test_the_additions_path_runs_from_the_paper_recipe_to_the_kit(profile):
     assert configs[0] == FitConfig.for_profile(profile, variant="rgbd", recipe="paper")
     assert configs[-1] == FitConfig.for_profile(profile, variant="rgbd", recipe="kit")
     assert len(set(map(repr, configs))) == len(configs)  # every step changes something
+
+
+def test_the_additions_path_fits_at_its_cases_profile_net_with_the_profiles_budget(monkeypatch):
+    """Notebook 10 at `class` fits its cases at `ci`'s size with `ci`'s net (``net_of``) and `class`'s recipe
+    and budget: every fit's config says so, field by field, against the profiles' own tables."""
+    from ddp_lite.method.profiles import PROFILES
+    from ddp_lite.studies import additions
+
+    seen = []
+
+    class Recorded(Exception):
+        pass
+
+    def record(*args, config, **kwargs):
+        seen.append(config.flat())
+        raise Recorded
+    monkeypatch.setattr(additions, "complete_depth", record)
+    cases = additions.additions_cases("ci", ("house",), ())
+    for net_of, widths in ((None, PROFILES["class"].channels), ("ci", PROFILES["ci"].channels)):
+        seen.clear()
+        with pytest.raises(Recorded):
+            additions.run_additions(cases, "class", seeds=(0,), log=lambda *_: None, net_of=net_of)
+        assert seen and all(c["channels"] == widths for c in seen), (net_of, seen)
+        assert all(c["auto_stop"] is True and c["iterations"] == PROFILES["class"].iterations for c in seen)
