@@ -38,16 +38,9 @@ import numpy as np
 from ..core.files import atomic_path
 from ..core.camera import Camera, backproject_pixels, look_at, project_points
 from ..core.checks import check_depth
+from .open3d_loader import import_open3d
 
 __all__ = ["points_from_depth", "fuse_depths", "tsdf_fuse", "save_ply", "render_point_cloud"]
-
-
-def _open3d():
-    """The ``open3d`` module, imported on first use: the one import not at the top. It takes ≈2 s
-    (``import ddp_lite`` 3.2 s → 5.2 s, and ``ddp_lite`` imports this module), and only the
-    point-cloud functions need it."""
-    import open3d
-    return open3d
 
 
 def _check_view(depth, camera, rgb=None, index: str = "") -> tuple:
@@ -102,7 +95,7 @@ def _check_views(depths, cameras, images):
 
 
 def _to_cloud(points: np.ndarray, colours=None):
-    o3d = _open3d()
+    o3d = import_open3d()  # on first use: the one import not at the top
 
     cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(np.ascontiguousarray(points, np.float64)))
     if colours is not None:
@@ -192,7 +185,7 @@ def tsdf_fuse(depths, cameras, images=None, voxel_length: float = 0.01, sdf_trun
     signed distance. ``images`` (H, W, 3) in [0, 1] colour the result; without them the cloud has
     no colours. The points are the zero crossings of the averaged signed distance.
     """
-    o3d = _open3d()
+    o3d = import_open3d()  # on first use: the one import not at the top
 
     views = _check_views(depths, cameras, images)
     if not (np.isscalar(voxel_length) and voxel_length > 0):
@@ -221,7 +214,7 @@ def tsdf_fuse(depths, cameras, images=None, voxel_length: float = 0.01, sdf_trun
 
 def save_ply(cloud, path) -> None:
     """Write an ``open3d.geometry.PointCloud`` to a ``.ply`` file atomically (temporary file, then rename)."""
-    o3d = _open3d()
+    o3d = import_open3d()  # on first use: the one import not at the top
 
     if not isinstance(cloud, o3d.geometry.PointCloud):
         raise TypeError(f"cloud must be an open3d.geometry.PointCloud, got {type(cloud).__name__}")
@@ -261,7 +254,7 @@ def render_point_cloud(cloud, camera=None, ax=None, point_size: int = 1, backgro
     bar when the colours are depths (``colorbar=False``: none, for renders that share one
     ``depth_range`` and so one :func:`~ddp_lite.evaluation.viz.shared_colorbar`). No OpenGL: works headless.
     """
-    o3d = _open3d()
+    o3d = import_open3d()  # on first use: the one import not at the top
 
     if isinstance(cloud, o3d.geometry.PointCloud):
         points = np.asarray(cloud.points, np.float64)

@@ -20,6 +20,7 @@ import numpy as np
 from scipy import ndimage
 
 from ..method.paper.disparity import DisparityTransform
+from .open3d_loader import import_open3d
 
 __all__ = ["rmse", "mae", "hole_rmse", "d1_error", "psnr", "point_cloud_prf", "cloud_scores", "disparity_rmse",
            "edge_band", "texture_leakage", "texture_leakage_map"]
@@ -181,7 +182,7 @@ def psnr(pred, target, data_range: float = 1.0, mask=None) -> float:
 
 def _points(cloud, name: str) -> np.ndarray:
     """(N, 3) float64 points from an array or an ``open3d.geometry.PointCloud``."""
-    import open3d as o3d
+    o3d = import_open3d()
 
     if isinstance(cloud, o3d.geometry.PointCloud):
         points = np.asarray(cloud.points, dtype=np.float64)
@@ -213,7 +214,7 @@ def point_cloud_prf(pred_points, gt_points, tau: float) -> dict:
         >>> point_cloud_prf(np.zeros((1, 3)), np.array([[0.0, 0, 0], [1.0, 0, 0]]), tau=0.5)["recall"]
         0.5
     """
-    import open3d as o3d
+    o3d = import_open3d()
 
     if not (np.isscalar(tau) and np.isfinite(tau) and tau > 0):
         raise ValueError(f"tau must be a positive distance in metres, got {tau!r}")
