@@ -1,32 +1,47 @@
-"""What reading a notebook imports: every process that grades, builds student copies or runs the tests reads
-notebooks (nbformat, which validates with jsonschema). From jsonschema 4.24 on, its format checkers pull in
-rfc3987-syntax, which builds a Lark grammar at import (2.2 s of CPU here, per process); environment.txt pins
-4.23.0, which checks the same formats without it."""
+"""What the kit's processes import, and what they do not need to: each a fresh interpreter, whose modules are
+read after the work.
+
+- A fit: torch.optim's first optimizer imports torch._dynamo (1.9 s of CPU); the loop's Adam does not.
+- Reading a notebook (nbformat, which validates with jsonschema), in every process that grades, builds
+  student copies or runs the tests: from jsonschema 4.24 on, its format checkers pull in rfc3987-syntax,
+  which builds a Lark grammar at import (2.2 s of CPU here); environment.txt pins 4.23.0, which checks the
+  same formats without it.
+- Open3D (evaluation.open3d_loader): Open3D-ML's datasets import scikit-learn, 2.5 s of the 3.5 s of
+  `import open3d`; they load on first use instead, and still work then. Open3D's web visualizer, which it
+  enables (and announces) in a Jupyter kernel, stays off, and the environment is left as it was."""
 import subprocess
 import sys
 
 
-def test_reading_a_notebook_builds_no_grammar():
-    code = ("import sys, nbformat, jsonschema\n"
-            "nbformat.validate(nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell('x = 1')]))\n"
-            "print(sorted(m for m in sys.modules if m.split('.')[0] in ('lark', 'rfc3987_syntax')))\n")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+def _printed(code: str) -> list[str]:
+    """The words ``code`` prints in a fresh interpreter."""
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
     assert out.returncode == 0, out.stderr[-2000:]
-    assert out.stdout.strip().splitlines()[-1] == "[]", out.stdout
+    return out.stdout.split()
+
+
+def test_a_fit_never_imports_torchs_compiler():
+    assert _printed("import sys, numpy as np\n"
+                    "from ddp_lite.method.complete import complete_depth\n"
+                    "from ddp_lite.method.config import FitConfig\n"
+                    "depth = np.full((16, 20), 2.0, np.float32); depth[5:9, 6:12] = np.nan\n"
+                    "config = FitConfig(iterations=2, channels=(4, 8))\n"
+                    "complete_depth(np.zeros((16, 20, 3), np.float32), depth, variant='d', config=config)\n"
+                    "print(any(m.startswith('torch._dynamo') for m in sys.modules))\n")[-1:] == ["False"]
+
+
+def test_reading_a_notebook_builds_no_grammar():
+    assert _printed("import sys, nbformat, jsonschema\n"
+                    "nbformat.validate(nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell('x = 1')]))\n"
+                    "print(any(m.split('.')[0] in ('lark', 'rfc3987_syntax') for m in sys.modules))\n") == ["False"]
 
 
 def test_open3d_comes_without_open3d_ml_until_it_is_used_and_without_the_web_visualizer():
-    """The kit's Open3D (evaluation.open3d_loader): Open3D-ML's datasets import scikit-learn, 2.5 s of the 3.5 s of
-    `import open3d`; they load on first use instead, and still work then. Open3D's web visualizer, which it
-    enables (and announces) in a Jupyter kernel, stays off, and the environment is left as it was."""
-    code = ("import os, sys\n"
-            "from ddp_lite.evaluation.fusion import fuse_depths\n"
-            "from ddp_lite.evaluation.open3d_loader import import_open3d\n"
-            "o3d = import_open3d()\n"
-            "print('sklearn' in sys.modules, 'OPEN3D_DISABLE_WEB_VISUALIZER' in os.environ,\n"
-            "      o3d.geometry.PointCloud().is_empty(), import_open3d() is o3d)\n"
-            "import open3d.ml.datasets\n"
-            "print('sklearn' in sys.modules, hasattr(open3d.ml.datasets, 'SemanticKITTI'))\n")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
-    assert out.returncode == 0, out.stderr[-2000:]
-    assert out.stdout.split() == ["False", "False", "True", "True", "True", "True"], out.stdout
+    assert _printed("import os, sys\n"
+                    "from ddp_lite.evaluation.open3d_loader import import_open3d\n"
+                    "o3d = import_open3d()\n"
+                    "print('sklearn' in sys.modules, 'OPEN3D_DISABLE_WEB_VISUALIZER' in os.environ,\n"
+                    "      o3d.geometry.PointCloud().is_empty(), import_open3d() is o3d)\n"
+                    "import open3d.ml.datasets\n"
+                    "print('sklearn' in sys.modules, hasattr(open3d.ml.datasets, 'SemanticKITTI'))\n") \
+        == ["False", "False", "True", "True", "True", "True"]

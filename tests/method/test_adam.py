@@ -1,9 +1,7 @@
 """The fit's Adam and schedules (ddp_lite.method.adam) against torch.optim's own, the independent reference:
-the same numbers to the bit, step after step, under either schedule and a cut in between; and a fit that
-never imports the compiler torch.optim would."""
+the same numbers to the bit, step after step, under either schedule and a cut in between (that a fit imports
+none of the compiler torch.optim would: tests/architecture/test_import_costs.py)."""
 import copy
-import subprocess
-import sys
 
 import pytest
 import torch
@@ -67,16 +65,3 @@ def test_the_first_step_moves_each_weight_by_lr_against_its_gradient():
     adam.step()
     # m̂ = g, v̂ = g²: the step is lr·g/(|g| + ε) = lr·sign(g), up to ε
     assert torch.allclose(w.detach(), torch.tensor([0.9, -1.9, 0.4]), atol=1e-6)
-
-
-def test_a_fit_never_imports_torchs_compiler():
-    code = ("import sys, numpy as np\n"
-            "from ddp_lite.method.complete import complete_depth\n"
-            "from ddp_lite.method.config import FitConfig\n"
-            "depth = np.full((16, 20), 2.0, np.float32); depth[5:9, 6:12] = np.nan\n"
-            "config = FitConfig(iterations=2, channels=(4, 8))\n"
-            "complete_depth(np.zeros((16, 20, 3), np.float32), depth, variant='d', config=config)\n"
-            "print(sorted(m for m in sys.modules if m.startswith('torch._dynamo')))\n")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
-    assert out.returncode == 0, out.stderr[-2000:]
-    assert out.stdout.strip().splitlines()[-1] == "[]", out.stdout
