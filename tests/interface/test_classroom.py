@@ -273,10 +273,17 @@ def test_hand_points_merge_into_the_scores_and_open_answers_go_to_one_file_per_s
     assert "YOUR ANSWER HERE" in (tmp_path / "open" / "dan.md").read_text()
 
 
-def test_exercise_11_3s_command_prints_what_its_expected_answer_says(tmp_path, capsys):
+def test_exercise_11_3s_command_prints_what_its_expected_answer_says(tmp_path, capsys, monkeypatch):
+    import functools
+
     from ddp_lite.interface.cli import main
     from ddp_lite.data.tum import write_tum
+    from ddp_lite.sequences import sequence_cost
     from ddp_lite.world.scenes import make_scene
+    # the GPU figures come from the convolution FLOPs the warm-up counts; the timed runs give the CPU line only,
+    # which this test does not read: the shortest timed runs (1 and 2 iterations instead of 2 and 8)
+    monkeypatch.setattr(sequence_cost, "measure_fit_cost", functools.partial(sequence_cost.measure_fit_cost,
+                                                                             iterations=(1, 2)))
     nb = nbformat.read(NOTEBOOKS / "11_your_own_data.ipynb", as_version=4)
     listed = next(c.source for c in nb.cells if "## Exercises" in c.source).split("3. Run `", 1)[1]
     command = listed.split("`", 1)[0].split()
