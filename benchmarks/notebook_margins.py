@@ -102,7 +102,8 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--profile", default="ci", choices=("ci", "class"))
     parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
-    parser.add_argument("--channels", type=positive_int, nargs="+", help="the `ci` UNet's widths (default: the profile's)")
+    parser.add_argument("--channels", type=positive_int, nargs="+",
+                        help="the `ci` UNet's widths (default: the profile's)")
     parser.add_argument("--only", nargs="+", default=[], help="notebook name prefixes, e.g. 04_ 12_")
     parser.add_argument("--jobs", type=positive_int, default=2, help="notebooks side by side (one thread each)")
     parser.add_argument("--out", type=Path, help="append one JSON row per notebook run")
@@ -129,7 +130,8 @@ def main(argv=None):
             if args.out:
                 with open(args.out, "a", encoding="utf-8") as handle:
                     handle.write(json.dumps(row) + "\n")
-    print(f"\nmargins (> 0 passes), profile {args.profile}, UNet {channels or 'the profile’s'}, fit seeds {args.seeds}:")
+    print(f"\nmargins (> 0 passes), profile {args.profile}, UNet {channels or 'the profile’s'}, "
+          f"fit seeds {args.seeds}:")
     for p in notebooks:
         for name in next(m for prefix, m in MARGINS.items() if p.name.startswith(prefix)):
             values = [r["margins"].get(name) for r in rows if r["notebook"] == p.stem]

@@ -38,7 +38,7 @@ import numpy as np
 from ..core.files import atomic_path
 from ..core.camera import Camera, backproject_pixels, look_at, project_points
 from ..core.checks import check_depth
-from .open3d_loader import import_open3d
+from .open3d_loader import import_open3d  # Open3D itself on first use: ~1 s, only the point-cloud functions need it
 
 __all__ = ["points_from_depth", "fuse_depths", "tsdf_fuse", "save_ply", "render_point_cloud"]
 
@@ -95,7 +95,7 @@ def _check_views(depths, cameras, images):
 
 
 def _to_cloud(points: np.ndarray, colours=None):
-    o3d = import_open3d()  # on first use: the one import not at the top
+    o3d = import_open3d()
 
     cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(np.ascontiguousarray(points, np.float64)))
     if colours is not None:
@@ -185,7 +185,7 @@ def tsdf_fuse(depths, cameras, images=None, voxel_length: float = 0.01, sdf_trun
     signed distance. ``images`` (H, W, 3) in [0, 1] colour the result; without them the cloud has
     no colours. The points are the zero crossings of the averaged signed distance.
     """
-    o3d = import_open3d()  # on first use: the one import not at the top
+    o3d = import_open3d()
 
     views = _check_views(depths, cameras, images)
     if not (np.isscalar(voxel_length) and voxel_length > 0):
@@ -214,7 +214,7 @@ def tsdf_fuse(depths, cameras, images=None, voxel_length: float = 0.01, sdf_trun
 
 def save_ply(cloud, path) -> None:
     """Write an ``open3d.geometry.PointCloud`` to a ``.ply`` file atomically (temporary file, then rename)."""
-    o3d = import_open3d()  # on first use: the one import not at the top
+    o3d = import_open3d()
 
     if not isinstance(cloud, o3d.geometry.PointCloud):
         raise TypeError(f"cloud must be an open3d.geometry.PointCloud, got {type(cloud).__name__}")
@@ -254,7 +254,7 @@ def render_point_cloud(cloud, camera=None, ax=None, point_size: int = 1, backgro
     bar when the colours are depths (``colorbar=False``: none, for renders that share one
     ``depth_range`` and so one :func:`~ddp_lite.evaluation.viz.shared_colorbar`). No OpenGL: works headless.
     """
-    o3d = import_open3d()  # on first use: the one import not at the top
+    o3d = import_open3d()
 
     if isinstance(cloud, o3d.geometry.PointCloud):
         points = np.asarray(cloud.points, np.float64)

@@ -200,8 +200,9 @@ def build_student(source_dir="notebooks", out_dir="build/student") -> list[Path]
 def build_solutions(source_dir="notebooks", out_dir="build/solutions", profile: str = "class",
                     timeout: int = 3600, names=None, log=print, recipe: str | None = None) -> list[Path]:
     """Execute every source notebook (solutions in place) under ``profile`` and ``recipe`` (None: each notebook's
-    own, as a student runs it) and write it with its outputs to ``out_dir``: the copy a teacher projects. Stops at the first failing cell. Refused
-    (ValueError, before anything runs) when ``out_dir`` is, contains or lies inside ``source_dir``."""
+    own, as a student runs it) and write it with its outputs to ``out_dir``: the copy a teacher projects. Stops at
+    the first failing cell. Refused (ValueError, before anything runs) when ``out_dir`` is, contains or lies inside
+    ``source_dir``."""
     check_not_overlapping(out_dir, "out_dir (--out)", source_dir, "source_dir (--source)")
     check_output_folder(out_dir, "out_dir (--out)")
     if recipe is not None:
