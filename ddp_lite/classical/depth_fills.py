@@ -25,8 +25,7 @@ from __future__ import annotations
 
 import cv2
 import numpy as np
-from scipy import interpolate, ndimage
-from scipy.spatial import QhullError
+from scipy import ndimage
 
 from ..core.checks import check_depth, check_image
 
@@ -70,6 +69,9 @@ def _griddata(depth, rgb, method: str) -> np.ndarray:
     holes = ~valid
     if not holes.any():
         return depth.astype(np.float32)
+    from scipy import interpolate  # here, not above: ~0.4 s of import that a fill without it never needs
+    from scipy.spatial import QhullError
+
     known, wanted = np.argwhere(valid), np.argwhere(holes)  # (N, 2), (M, 2) rows, cols
     try:
         if method == "linear":
@@ -91,6 +93,8 @@ def _clough_tocher_within_triangles(known: np.ndarray, values: np.ndarray, wante
     vertices (NaN outside the hull). The cubic's gradients are estimated from far-off pixels: across a
     depth edge they overshoot by several times the step (``docs/studies/real_data.md``, "The classical fills
     bounded on real photos")."""
+    from scipy import interpolate
+
     interpolant = interpolate.CloughTocher2DInterpolator(known, values)
     out = interpolant(wanted)
     simplex = interpolant.tri.find_simplex(wanted)
@@ -143,6 +147,9 @@ def fill_linear_from_rim(depth, rgb=None) -> np.ndarray:
     rim = valid & ndimage.binary_dilation(holes, structure=np.ones((3, 3), bool))
     if not holes.any():
         return depth.astype(np.float32)
+    from scipy import interpolate
+    from scipy.spatial import QhullError
+
     try:
         values = interpolate.griddata(np.argwhere(rim), depth[rim], np.argwhere(holes), method="linear")
     except QhullError:  # a rim on one line: the whole valid set decides

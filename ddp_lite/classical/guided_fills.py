@@ -31,7 +31,6 @@ from __future__ import annotations
 import cv2
 import numpy as np
 from scipy import ndimage, sparse
-from scipy.sparse.linalg import spsolve
 
 from ..core.checks import check_image, check_int, check_real
 from .depth_fills import check_fill_input, fill_linear, nearest_values
@@ -103,6 +102,8 @@ def fill_colorization(depth, rgb=None, alpha: float = 1.0) -> np.ndarray:
     A = sparse.csr_matrix((-weights[inside], (rows, nbr_index[inside])), shape=(H * W, H * W))
     A = A + sparse.diags(1.0 + alpha * valid.ravel())
     b = alpha * np.where(valid, depth, 0.0).ravel()
+    from scipy.sparse.linalg import spsolve  # on first use, as cg below: a kernel that never solves skips its import
+
     solution = spsolve(A.tocsc(), b).reshape(H, W)
     return np.where(valid, depth, solution).astype(np.float32)
 

@@ -22,7 +22,6 @@ import functools
 import io
 
 import numpy as np
-from skimage.metrics import peak_signal_noise_ratio, structural_similarity
 
 from ..core.camera import Camera, look_at
 from ..evaluation.metrics import d1_error
@@ -148,6 +147,8 @@ def _close(atol):
            "ddp_lite.evaluation.metrics.psnr")
 def check_psnr(student_psnr) -> bool:
     """``student_psnr(a, b)`` for images in [0, 1] vs ``skimage.metrics.peak_signal_noise_ratio``."""
+    from skimage.metrics import peak_signal_noise_ratio  # here, not above: it imports scipy.stats (~1 s)
+
     rng = np.random.default_rng(0)
     cases = []
     for shape, sigma in (((16, 20, 3), 0.01), ((16, 20, 3), 0.05), ((16, 20, 3), 0.2), ((12, 9), 0.1)):
@@ -214,6 +215,8 @@ def check_hole_rmse(student_hole_rmse) -> bool:
 def check_ssim(student_ssim) -> bool:
     """``student_ssim(x, y)`` for grey images in [0, 1] vs scikit-image (Gaussian 11×11, σ = 1.5,
     population covariance, data range 1, mean over the windows that fit inside the image)."""
+    from skimage.metrics import structural_similarity  # as in check_psnr: only where a check needs it
+
     rng = np.random.default_rng(2)
     cases = []
     # Low-contrast pairs come first: there the constants C1, C2 are as large as the variances, so a
