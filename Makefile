@@ -36,21 +36,30 @@ $(PY):
 	$(PYTHON) -c 'import sys; assert sys.version_info >= (3, 10), "ddp-lite needs Python >= 3.10, found " + sys.version.split()[0]'
 	$(PYTHON) -m venv $(VENV)
 
-# torch goes first and pinned: anything that pulls a newer torch downloads a multi-GB CUDA build.
+# torch is pinned: anything that pulls a newer torch downloads a multi-GB CUDA build.
 # pip does not byte-compile (--no-compile): of the 2.6 GB stack the tests and notebooks import about a fifth
 # of the files, and Python compiles each on its first import and caches it (below), so compiling all of
 # site-packages at install time spent about 4x the CPU on files nothing imports.
-# The rest of the stack goes in through uv (Astral's installer, pinned below), which fetches and unpacks the
-# ~170 pinned packages in parallel: about 5x faster than pip here (35 s against 180 s on 2 cores); torch stays
-# with pip, which finds the CPU wheel on disk where uv would not look.  Without uv (no registry), pip does it all.
+# The stack goes in through uv (Astral's installer, pinned below), which fetches and unpacks the ~170 pinned
+# packages in parallel: about 5x faster than pip here (35 s against 180 s on 2 cores).  uv does not read pip's
+# configuration, which on some machines points at a CPU build of torch on disk (find-links): so pip is asked
+# where it would take torch from (a dry run, ~2 s) and, where that is a file, uv installs that file with the
+# rest (4 s against pip's 15 s for torch); otherwise pip installs torch first, as it would alone.  Without uv
+# (no registry), pip does it all.
 PIP := $(PY) -m pip install --disable-pip-version-check -q --no-compile
 UV_PIN := uv==0.13.8
 UV := $(VENV)/bin/uv pip install -q --python $(PY)
+TORCH_PIN = $$(grep -E '^torch==' environment.txt)
+TORCH_FILE = $$($(PIP) --dry-run --no-deps --report - "$(TORCH_PIN)" 2>/dev/null | $(PY) -c \
+	'import json, sys; url = json.load(sys.stdin)["install"][0]["download_info"]["url"]; print(url if url.startswith("file:") else "")' \
+	2>/dev/null)
 
 $(STAMP): $(PY) environment.txt pyproject.toml
-	$(PIP) "$$(grep -E '^torch==' environment.txt)"
-	if $(PIP) "$(UV_PIN)"; then $(UV) -r environment.txt && $(UV) --no-deps -e .; \
-	else $(PIP) -r environment.txt && $(PIP) --no-deps -e .; fi
+	if $(PIP) "$(UV_PIN)"; then \
+	  torch_file=$(TORCH_FILE); \
+	  if [ -n "$$torch_file" ]; then $(UV) -r environment.txt "torch @ $$torch_file"; \
+	  else $(PIP) "$(TORCH_PIN)" && $(UV) -r environment.txt; fi && $(UV) --no-deps -e .; \
+	else $(PIP) "$(TORCH_PIN)" && $(PIP) -r environment.txt && $(PIP) --no-deps -e .; fi
 	touch $(STAMP)
 
 # Python caches the bytecode of what it imports (in .venv and the checkout's __pycache__) unless
