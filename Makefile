@@ -24,8 +24,8 @@ ifeq ($(strip $(DISPLAY)$(WAYLAND_DISPLAY)),)
 LAB_ARGS += --no-browser
 endif
 endif
-# The notebooks' fits are kept in $(DDP_CACHE) (ddp_lite.method.fit_cache): a notebook run again, after a
-# kernel restart or an edit further down, reads its fits back in seconds instead of minutes.
+# The notebooks' fits and scenes are kept in $(DDP_CACHE) (ddp_lite.method.fit_cache, ddp_lite.world.scene_cache): a
+# notebook run again, after a kernel restart or an edit further down, reads them back in seconds instead of minutes.
 # `DDP_CACHE= make lab` keeps nothing; `rm -r .cache/fits` frees the space (a few MB per fit).
 DDP_CACHE ?= $(CURDIR)/.cache/fits
 LAB_CMD := env DDP_CACHE=$(DDP_CACHE) $(VENV)/bin/jupyter lab $(LAB_ARGS)

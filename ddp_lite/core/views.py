@@ -107,9 +107,10 @@ class Scene:
         return (f"Scene('{self.name}', {len(self.views)} views of {H}×{W}{stereo}, "
                 f"depth {np.min(depths):.2f}–{np.max(depths):.2f} m)")
 
-    def save(self, path) -> None:
-        """Write the scene to an ``.npz`` file atomically (temporary file, then rename)."""
-        arrays = {"name": np.array(self.name), "n_views": np.array(len(self.views)),
+    def save(self, path, tag: str = "") -> None:
+        """Write the scene to an ``.npz`` file atomically (temporary file, then rename); ``tag``, a string
+        kept with it, is what :meth:`load` can ask for (the scene cache stores its key there)."""
+        arrays = {"name": np.array(self.name), "tag": np.array(str(tag)), "n_views": np.array(len(self.views)),
                   "n_right": np.array(len(self.right)), "n_labels": np.array(len(self.labels)),
                   "meta_keys": np.array(list(self.meta.keys()), dtype=str),
                   "meta_values": np.array([float(v) for v in self.meta.values()], dtype=np.float64)}
@@ -126,9 +127,12 @@ class Scene:
             np.savez_compressed(handle, **arrays)
 
     @classmethod
-    def load(cls, path) -> "Scene":
-        """Read a scene written by :meth:`save`."""
+    def load(cls, path, tag: str | None = None) -> "Scene":
+        """Read a scene written by :meth:`save`; with ``tag``, a file saved with another tag is refused
+        (``ValueError``) before anything else is read."""
         with np.load(os.fspath(path), allow_pickle=False) as data:
+            if tag is not None and (str(data["tag"]) if "tag" in data.files else "") != tag:
+                raise ValueError(f"{os.fspath(path)} was saved with another tag than {tag!r}")
             def read(prefix, count):
                 views = []
                 for i in range(count):

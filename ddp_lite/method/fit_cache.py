@@ -35,50 +35,27 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import hashlib
 import inspect
 import os
 import warnings
-from pathlib import Path
 
 import numpy as np
 import torch
 
-from ..core.files import describe_kind, regular_file
+from ..core.disk_cache import ENV_VAR, cache_folder, source_digest
+from ..core.files import regular_file
 from .runtime.cache_entry import BadEntry, Unstorable, read_entry, write_entry
 from .runtime.options import RunOptions
 from .config import FitConfig
 from .profiles import current_profile_name
 from .kit.recipes import current_recipe_name
 
-__all__ = ["ENV_VAR", "cache_folder", "cached"]
-
-ENV_VAR = "DDP_CACHE"
+__all__ = ["cached"]
 
 
-def cache_folder() -> Path | None:
-    """The folder ``DDP_CACHE`` names (``~`` expanded), or None when it is unset or empty.
-
-    A name that exists but is not a folder is refused here, before any fit runs (``ValueError``):
-    otherwise the first store, after the whole fit, would fail."""
-    folder = os.environ.get(ENV_VAR, "").strip()
-    if not folder:
-        return None
-    path = Path(folder).expanduser()
-    if path.exists() and not path.is_dir():
-        raise ValueError(f"{ENV_VAR}={folder!r} names {path}, which is {describe_kind(path.stat().st_mode)}; "
-                         f"{ENV_VAR} must name a folder for the fit cache (or be unset)")
-    return path
-
-
-@functools.lru_cache(maxsize=1)
 def _library_digest() -> str:
     """SHA-256 over the package's own source files (every sub-package), in path order."""
-    digest = hashlib.sha256()
-    root = Path(__file__).resolve().parents[__name__.count(".") - 1]  # ddp_lite/, wherever this file sits in it
-    for path in sorted(root.rglob("*.py")):
-        digest.update(path.relative_to(root).as_posix().encode() + b"\0" + path.read_bytes())
-    return digest.hexdigest()
+    return source_digest()
 
 
 def _plain(value):

@@ -30,6 +30,7 @@ from ..core.camera import Camera, look_at
 from ..core.checks import check_size
 from .organic import ORGANIC_SCENES
 from .render import Box, Cylinder, Plane, Sphere, render, sky_plane
+from .scene_cache import cached_scene
 from .textures import seeded_texture
 from ..core.views import Scene, View
 
@@ -157,7 +158,8 @@ def _render_view(prims, W: int, H: int, fov: float, pose, seed: int, supersample
 def make_scene(name: str, size=(96, 128), n_views: int = 5, seed: int = 0, fov_x_deg: float | None = None,
                supersample: int = 3) -> Scene:
     """Render the named synthetic scene: ``n_views`` views of ``size`` (H, W) with exact depth
-    (metres), a rectified right view each, texture labels, and ``meta`` (d_min, d_max, baseline, ...)."""
+    (metres), a rectified right view each, texture labels, and ``meta`` (d_min, d_max, baseline, ...).
+    With ``DDP_CACHE`` set, a scene rendered before is read back instead (:mod:`ddp_lite.world.scene_cache`)."""
     if not isinstance(name, str) or name not in SCENES:
         raise ValueError(f"name must be one of {sorted(SCENES)}, got {name!r}")
     H, W = check_size(size)
@@ -171,6 +173,16 @@ def make_scene(name: str, size=(96, 128), n_views: int = 5, seed: int = 0, fov_x
     fov = rig["fov"] if fov_x_deg is None else float(fov_x_deg)
     if not 10.0 <= fov <= 150.0:
         raise ValueError(f"fov_x_deg must be in [10, 150] degrees, got {fov_x_deg!r}")
+    if int(supersample) != supersample or supersample < 1 or supersample % 2 == 0:
+        raise ValueError(f"supersample must be an odd positive integer, got {supersample!r}")
+    return cached_scene(lambda: _render_scene(name, prims, rig, (H, W), int(n_views), int(seed), fov, int(supersample)),
+                        name, (H, W), int(n_views), int(seed), fov_x_deg, int(supersample))
+
+
+def _render_scene(name: str, prims, rig: dict, size: tuple[int, int], n_views: int, seed: int, fov: float,
+                  supersample: int) -> Scene:
+    """Every view of the scene ``prims`` and ``rig`` describe (``make_scene``'s arguments, checked)."""
+    H, W = size
     eye0, target = np.array(rig["eye"]), np.array(rig["target"])
     step = 0.06 * np.linalg.norm(target - eye0)  # ~3.4° apart at the target: good for MVS
     baseline = rig["baseline"]
