@@ -5,12 +5,9 @@ import tempfile
 import matplotlib
 import numpy as np
 import pytest
-import torch
 
 matplotlib.use("Agg")
 os.environ.setdefault("DDP_PROFILE", "ci")
-# under pytest-xdist (`make test`) each worker gets one thread: the workers share the cores
-torch.set_num_threads(1 if os.environ.get("PYTEST_XDIST_WORKER") else max(1, min(2, os.cpu_count() or 1)))
 
 
 def pytest_configure(config):
@@ -20,6 +17,13 @@ def pytest_configure(config):
     read their fits back (they test the notebooks' flow and checks, not the fits). Python tests run
     without it (``_fit_cache_only_where_marked``): a test of a fit must compute it."""
     config.addinivalue_line("markers", "fit_cache: run with the session's DDP_CACHE (notebook re-runs)")
+    if hasattr(config, "workerinput") or not getattr(config.option, "numprocesses", None):
+        # a process that runs tests: under pytest-xdist (`make test`) each worker gets one thread, as the workers
+        # share the cores. torch is imported here, not above: the controller of a `make test` run runs no test,
+        # and its workers start 3-4 s sooner when it does not import torch first
+        import torch
+
+        torch.set_num_threads(1 if os.environ.get("PYTEST_XDIST_WORKER") else max(1, min(2, os.cpu_count() or 1)))
     if not hasattr(config, "workerinput"):  # the controller, or a run without xdist
         config._ddp_cache_saved = os.environ.get("DDP_CACHE")
         config._ddp_cache = tempfile.mkdtemp(prefix="ddp-lite-test-cache-")
