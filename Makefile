@@ -32,9 +32,14 @@ LAB_CMD := env DDP_CACHE=$(DDP_CACHE) $(VENV)/bin/jupyter lab $(LAB_ARGS)
 
 install: $(STAMP)
 
+# The venv's pip is the one its Python bundles (ensurepip's wheel), installed by running it from that wheel without
+# byte-compiling it (`python -m venv` compiles pip and setuptools: 6-8 s of the install); where that fails, ensurepip.
 $(PY):
 	$(PYTHON) -c 'import sys; assert sys.version_info >= (3, 10), "ddp-lite needs Python >= 3.10, found " + sys.version.split()[0]'
-	$(PYTHON) -m venv $(VENV)
+	$(PYTHON) -m venv --without-pip $(VENV)
+	wheel=$$($(PY) -c 'import ensurepip, glob, os; print(glob.glob(os.path.join(os.path.dirname(ensurepip.__file__), "_bundled", "pip-*.whl"))[0])') \
+	  && $(PY) "$$wheel/pip" install -q --no-compile --no-index --disable-pip-version-check "$$wheel" \
+	  || $(PY) -m ensurepip --default-pip
 
 # torch is pinned: anything that pulls a newer torch downloads a multi-GB CUDA build.
 # pip does not byte-compile (--no-compile): of the 2.6 GB stack the tests and notebooks import about a fifth
