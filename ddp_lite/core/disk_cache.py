@@ -35,7 +35,7 @@ def cache_folder() -> Path | None:
     path = Path(folder).expanduser()
     if path.exists() and not path.is_dir():
         raise ValueError(f"{ENV_VAR}={folder!r} names {path}, which is {describe_kind(path.stat().st_mode)}; "
-                         f"{ENV_VAR} must name a folder for the fit cache (or be unset)")
+                         f"{ENV_VAR} must name a folder for the fit and scene caches (or be unset)")
     return path
 
 

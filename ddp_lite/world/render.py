@@ -34,7 +34,7 @@ import numpy as np
 from ..core.camera import Camera, pixel_rays
 from .textures import Texture, jitter_colour
 
-__all__ = ["Plane", "Box", "Sphere", "Cylinder", "render", "EPS", "unit_vector", "yaw_matrix", "LIGHT", "AMBIENT"]
+__all__ = ["Plane", "Box", "Sphere", "Cylinder", "render", "check_supersample", "EPS", "unit_vector", "yaw_matrix", "LIGHT", "AMBIENT"]
 
 # Primitives: closed-form first hits. Rays: origin o (3,), directions d (N, 3); return t (N,).
 
@@ -211,16 +211,23 @@ def _shade(primitives, seed, o, d):
     return colour, t, label
 
 
+def check_supersample(supersample) -> int:
+    """``supersample`` as an int if it is an odd positive integer (the middle sample gives a pixel's depth),
+    else ``ValueError``."""
+    if int(supersample) != supersample or supersample < 1 or supersample % 2 == 0:
+        raise ValueError(f"supersample must be an odd positive integer, got {supersample!r}")
+    return int(supersample)
+
+
 def render(primitives, camera: Camera, seed: int = 0, supersample: int = 3):
     """Ray-cast ``primitives`` → rgb (H, W, 3) float32 [0, 1], depth (H, W) float32 metres
     (centre sample; inf where nothing is hit), labels (H, W) uint8 (255 = nothing hit)."""
     if not isinstance(camera, Camera):
         raise TypeError(f"camera must be a ddp_lite.Camera, got {type(camera).__name__}")
-    if int(supersample) != supersample or supersample < 1 or supersample % 2 == 0:
-        raise ValueError(f"supersample must be an odd positive integer, got {supersample!r}")
+    supersample = check_supersample(supersample)
     if len(primitives) == 0:
         raise ValueError("primitives must not be empty")
-    H, W, s = camera.height, camera.width, int(supersample)
+    H, W, s = camera.height, camera.width, supersample
     offsets = (np.arange(s) + 0.5) / s - 0.5  # sub-pixel offsets; the middle one is 0
     world_from_cam = camera.world_from_cam
     o, R_wc = world_from_cam[:3, 3], world_from_cam[:3, :3]

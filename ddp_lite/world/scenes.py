@@ -29,7 +29,7 @@ import numpy as np
 from ..core.camera import Camera, look_at
 from ..core.checks import check_size
 from .organic import ORGANIC_SCENES
-from .render import Box, Cylinder, Plane, Sphere, render, sky_plane
+from .render import Box, Cylinder, Plane, Sphere, check_supersample, render, sky_plane
 from .scene_cache import cached_scene
 from .textures import seeded_texture
 from ..core.views import Scene, View
@@ -173,10 +173,9 @@ def make_scene(name: str, size=(96, 128), n_views: int = 5, seed: int = 0, fov_x
     fov = rig["fov"] if fov_x_deg is None else float(fov_x_deg)
     if not 10.0 <= fov <= 150.0:
         raise ValueError(f"fov_x_deg must be in [10, 150] degrees, got {fov_x_deg!r}")
-    if int(supersample) != supersample or supersample < 1 or supersample % 2 == 0:
-        raise ValueError(f"supersample must be an odd positive integer, got {supersample!r}")
-    return cached_scene(lambda: _render_scene(name, prims, rig, (H, W), int(n_views), int(seed), fov, int(supersample)),
-                        name, (H, W), int(n_views), int(seed), fov_x_deg, int(supersample))
+    n_views, seed, supersample = int(n_views), int(seed), check_supersample(supersample)
+    return cached_scene(lambda: _render_scene(name, prims, rig, (H, W), n_views, seed, fov, supersample),
+                        name, (H, W), n_views, seed, fov_x_deg, supersample)
 
 
 def _render_scene(name: str, prims, rig: dict, size: tuple[int, int], n_views: int, seed: int, fov: float,
@@ -187,7 +186,7 @@ def _render_scene(name: str, prims, rig: dict, size: tuple[int, int], n_views: i
     step = 0.06 * np.linalg.norm(target - eye0)  # ~3.4° apart at the target: good for MVS
     baseline = rig["baseline"]
     views, right, labels = [], [], []
-    for i, offset in enumerate(_path_offsets(int(n_views))):
+    for i, offset in enumerate(_path_offsets(n_views)):
         pose = look_at(eye0 + np.array([offset * step, 0.0, 0.0]), target)
         right_pose = pose.copy()  # rectified right view: same rotation, centre + baseline along camera x
         right_pose[0, 3] -= baseline
