@@ -5,8 +5,8 @@
 
 Every ``--interval`` seconds it reads, from /proc (Linux only), the CPU time (user + system) of each process
 below the command and the machine's idle time. At the end it prints, per kind of process
-(:func:`process_kind`: the pytest controller, its workers, notebook kernels nbval starts, the grader's
-forked children and the kernels they start, ``ddp-lite`` commands, Dask and multiprocessing, Jupyter, the
+(:func:`process_kind`: the pytest controller, its workers, the kernels they start (nbval's, the classroom's
+runs), ``grade()``'s supervised children and their kernels, ``ddp-lite`` commands, Dask and multiprocessing, Jupyter, the
 installer, the rest), how many ran and their CPU seconds; then the wall time, the cores' idle seconds in
 each tenth of the run, and the command's exit status. A process that ends between two reads loses its last
 interval (at most ``--interval`` s each): the counts are a floor. It asserts nothing (a benchmark).
@@ -34,13 +34,15 @@ def process_kind(command: str, parent_kind: str | None) -> str:
     """The kind of a process, from its command line (arguments joined by spaces) and its parent's kind.
 
     >>> process_kind("python -m ipykernel_launcher -f k.json", "pytest worker")
-    'notebook kernel (nbval)'
+    "kernel (a worker's)"
     """
-    if "ipykernel_launcher" in command:  # nbval starts its kernel itself; the grader from a supervised child
-        return "notebook kernel (nbval)" if parent_kind == "pytest worker" else "grader kernel"
-    if XDIST_WORKER in command:  # a fork keeps its parent's command line: the grader's child for each hand-in
-        return "grader child" if parent_kind in ("pytest worker", "grader child") else "pytest worker"
     program = Path(command.split(" ", 1)[0]).name
+    if program in ("make", "sh", "bash", "env", "time"):  # before pytest: make's shell line holds the pytest command
+        return "shell"
+    if "ipykernel_launcher" in command:  # nbval and the classroom's runs start kernels themselves; grade() from a child
+        return "kernel (a worker's)" if parent_kind == "pytest worker" else "kernel (a grader child's)"
+    if XDIST_WORKER in command:  # a fork keeps its parent's command line: grade()'s supervised child per hand-in
+        return "grader child" if parent_kind in ("pytest worker", "grader child") else "pytest worker"
     if " -m pytest" in command or program in ("pytest", "py.test"):  # not a path that holds "pytest-of-root"
         return "pytest controller" if parent_kind in (None, "shell") else "pytest (nested)"
     if "ddp-lite" in command or "ddp_lite.interface.cli" in command:
@@ -51,8 +53,6 @@ def process_kind(command: str, parent_kind: str | None) -> str:
         return "jupyter server"
     if " pip " in f" {command} " or "/uv " in command or command.startswith("uv "):
         return "installer (pip, uv)"
-    if program in ("make", "sh", "bash", "env", "time"):
-        return "shell"
     return "other"
 
 

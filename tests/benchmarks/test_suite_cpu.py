@@ -18,12 +18,13 @@ WORKER = "/x/.venv/bin/python -u -c import sys;exec(eval(sys.stdin.readline()))"
     ("/x/.venv/bin/python -m pytest tests -n 2", "shell", "pytest controller"),
     (WORKER, "pytest controller", "pytest worker"),
     (WORKER, "pytest worker", "grader child"),  # a fork keeps the worker's command line
-    ("/x/.venv/bin/python -m ipykernel_launcher -f /tmp/k.json", "pytest worker", "notebook kernel (nbval)"),
-    ("/x/.venv/bin/python -m ipykernel_launcher -f /tmp/k.json", "grader child", "grader kernel"),
+    ("/x/.venv/bin/python -m ipykernel_launcher -f /tmp/k.json", "pytest worker", "kernel (a worker's)"),
+    ("/x/.venv/bin/python -m ipykernel_launcher -f /tmp/k.json", "grader child", "kernel (a grader child's)"),
     ("/x/.venv/bin/python /x/.venv/bin/ddp-lite complete --rgb a.png", "pytest worker", "ddp-lite command"),
     ("/x/.venv/bin/python -c from multiprocessing.spawn import spawn_main", "pytest worker", "dask / multiprocessing"),
     ("/x/.venv/bin/python -m pip wheel --no-deps .", "pytest worker", "installer (pip, uv)"),
     ("make test", None, "shell"),
+    ("/bin/sh -c echo '.venv/bin/python -m pytest tests'; .venv/bin/python -m pytest tests", "shell", "shell"),
     ("/usr/bin/git status", "pytest worker", "other"),
     ("/x/.venv/bin/python /tmp/pytest-of-root/pytest-3/test_x0/script.py", "pytest worker", "other"),
 ])
