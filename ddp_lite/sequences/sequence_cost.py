@@ -26,10 +26,11 @@ def measure_fit_cost(profile="paper", size=(96, 128), iterations=(2, 8), threads
     A 3-view synthetic scene at ``size`` is fitted once (warm-up), then for ``iterations[0]`` and
     ``iterations[1]`` iterations; the difference of the two times divided by the extra iterations and the pixels is
     the CPU cost of a pixel-iteration (start-up excluded). The convolution FLOPs of one iteration, the warm-up's
-    (forward + backward, counted by ``torch.utils.flop_counter``; element-wise work, SSIM and the
-    warp's sampling are not counted) per pixel give a hardware-free cost. The UNet is fully
-    convolutional, so both scale with the pixel count (the CPU cost per pixel still falls a little
-    with size, as per-iteration overheads spread: 96×128 is a conservative base). Returns
+    (forward + backward, counted by ``torch.utils.flop_counter``: the net's, and SSIM's Gaussian blurs, 0.2 % of
+    the total at the paper's net and 96×128; element-wise work and the warp's sampling are not counted) per pixel
+    give a hardware-free cost; the counter imports torch's compiler (``torch._dynamo``, ≈2 s) on its first use.
+    The UNet is fully convolutional, so both scale with the pixel count (the CPU cost per pixel still falls a
+    little with size, as per-iteration overheads spread: 96×128 is a conservative base). Returns
     {"cpu_seconds_per_pixel_iteration", "flops_per_pixel_iteration", "size", "threads"}: measured once per
     process for each config, size, iterations and threads (the machine is the same at the next dry run), a copy
     each time.
