@@ -92,17 +92,15 @@ def measure(command: list[str], interval: float = 0.25) -> dict:
     idle_samples = [(0.0, idle0)]
     while True:
         done = child.poll() is not None
-        parents = {}
-        for pid in os.listdir("/proc"):
-            if pid.isdigit() and (stat := _read_stat(pid)) is not None:
-                parents[pid] = stat
-        for pid, (ppid, cpu) in parents.items():
+        stats = {pid: stat for pid in os.listdir("/proc") if pid.isdigit() and (stat := _read_stat(pid)) is not None}
+        for pid, (ppid, cpu) in stats.items():
             if pid in seen:
                 seen[pid]["cpu_s"] = cpu
             elif pid == root or ppid in seen:
+                command = _command_line(pid)
                 parent_kind = seen[ppid]["kind"] if ppid in seen else None
-                seen[pid] = {"kind": process_kind(_command_line(pid), parent_kind), "command": _command_line(pid)[:200],
-                             "cpu_s": cpu, "parent": ppid}
+                seen[pid] = {"kind": process_kind(command, parent_kind), "command": command[:200], "cpu_s": cpu,
+                             "parent": ppid}
         idle_samples.append((time.monotonic() - start, _idle_seconds()))
         if done:
             break

@@ -34,7 +34,8 @@ import numpy as np
 from ..core.camera import Camera, pixel_rays
 from .textures import Texture, jitter_colour
 
-__all__ = ["Plane", "Box", "Sphere", "Cylinder", "render", "check_supersample", "EPS", "unit_vector", "yaw_matrix", "LIGHT", "AMBIENT"]
+__all__ = ["Plane", "Box", "Sphere", "Cylinder", "render", "check_supersample", "EPS", "unit_vector", "yaw_matrix",
+           "LIGHT", "AMBIENT"]
 
 # Primitives: closed-form first hits. Rays: origin o (3,), directions d (N, 3); return t (N,).
 
