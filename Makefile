@@ -87,7 +87,8 @@ lab-command:
 # which read the notebooks' fits from the session's fit cache),
 # each with one torch thread: on 2 cores, two 1-thread processes finish sooner than
 # one 2-thread process, because most of a test is Python, not arithmetic. TEST_WORKERS=0 runs
-# everything in one process (torch then takes 2 threads).
+# everything in one process (torch then takes 2 threads). The notebook kernels the workers start are forked from
+# one that has imported the notebooks' stack (tests/kernel_forkserver.py); DDP_TEST_FRESH_KERNELS=1 starts each fresh.
 TEST_WORKERS ?= 2
 
 TEST_CMD := DDP_PROFILE=ci MPLBACKEND=Agg $(if $(filter 0,$(TEST_WORKERS)),,OMP_NUM_THREADS=1) $(PY) -m pytest tests --nbval-lax --nbval-current-env notebooks -p no:cacheprovider -n $(TEST_WORKERS) --dist loadfile --no-loadscope-reorder

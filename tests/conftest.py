@@ -7,6 +7,8 @@ import matplotlib
 import numpy as np
 import pytest
 
+import kernel_forkserver
+
 matplotlib.use("Agg")
 os.environ.setdefault("DDP_PROFILE", "ci")
 
@@ -29,10 +31,19 @@ def pytest_configure(config):
         config._ddp_cache_saved = os.environ.get("DDP_CACHE")
         config._ddp_cache = tempfile.mkdtemp(prefix="ddp-lite-test-cache-")
         os.environ["DDP_CACHE"] = config._ddp_cache
+        if getattr(config.option, "nbval_lax", False) or getattr(config.option, "nbval", False):
+            # a run of the notebooks (`make test`): their kernels are forked from one that has imported their
+            # stack (see kernel_forkserver.py); the workers, started after this hook, inherit its address
+            config._kernel_server = kernel_forkserver.start_server(config.rootpath / "notebooks")
+    if hasattr(config, "workerinput") or not getattr(config.option, "numprocesses", None):
+        kernel_forkserver.redirect_kernel_launches()
 
 
 @pytest.hookimpl(trylast=True)  # after pytest's own (its last garbage collection, whose warnings still go out)
 def pytest_unconfigure(config):
+    server = getattr(config, "_kernel_server", None)
+    if server is not None:
+        server.stop()
     folder = getattr(config, "_ddp_cache", None)
     if folder is not None:
         shutil.rmtree(folder, ignore_errors=True)

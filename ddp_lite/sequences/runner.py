@@ -20,6 +20,7 @@ times, 3 by default); the nanny restarts the dead worker.
 from __future__ import annotations
 
 import contextlib
+import os
 from collections.abc import Callable, Iterator, Mapping
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 
@@ -58,9 +59,33 @@ def open_client(workers: int = 0, scheduler: str | None = None, threads_per_work
         return
     # processes: each fit gets its own interpreter and torch thread pool (the nanny also sets
     # OMP_NUM_THREADS=1 in the worker's environment before it starts)
-    with LocalCluster(n_workers=int(workers), threads_per_worker=int(threads_per_worker), processes=True,
-                      dashboard_address=None) as cluster, Client(cluster) as client:
-        yield client
+    before = dict(os.environ)
+    set_by_dask = None
+    try:
+        with LocalCluster(n_workers=int(workers), threads_per_worker=int(threads_per_worker), processes=True,
+                          dashboard_address=None) as cluster, Client(cluster) as client:
+            set_by_dask = _changed_since(before)
+            yield client
+    finally:
+        _take_back(before, _changed_since(before) if set_by_dask is None else set_by_dask)
+
+
+def _changed_since(before: dict) -> dict:
+    return {name: os.environ.get(name) for name in set(before) | set(os.environ)
+            if os.environ.get(name) != before.get(name)}
+
+
+def _take_back(before: dict, set_by_dask: dict):
+    """Undo what starting the cluster wrote into this process's environment: distributed's nanny sets its
+    workers' variables (MALLOC_TRIM_THRESHOLD_, OPENBLAS_NUM_THREADS, PYTHONHASHSEED, ...) in the caller's own
+    ``os.environ`` before it spawns them, where every process the caller starts later would inherit them. A
+    variable the caller changed meanwhile is left as the caller set it."""
+    for name, value in set_by_dask.items():
+        if os.environ.get(name) == value:
+            if name in before:
+                os.environ[name] = before[name]
+            else:
+                os.environ.pop(name, None)
 
 
 def run_jobs(fn: Callable, jobs: Mapping[str, tuple], client=None, retries: int = 2,

@@ -82,9 +82,17 @@ def test_serial_run_writes_every_output(serial, tum):
 @pytest.fixture(scope="module")
 def cluster():
     """One local Dask cluster of two one-thread worker processes (``--workers 2``'s), for the module's Dask
-    tests: starting and closing one costs ~12 s, most of it waiting."""
+    tests: starting and closing one costs ~12 s, most of it waiting. Closed, it leaves this process's environment
+    as it found it (distributed's nanny writes its workers' settings into it; a kernel or command started
+    afterwards would inherit them)."""
+    def environment():
+        return {name: value for name, value in os.environ.items() if name != "PYTEST_CURRENT_TEST"}
+
+    before = environment()
     with open_client(workers=2) as client:
+        assert environment() != before  # what the nanny does, so that the last line tests the taking back
         yield client
+    assert environment() == before
 
 
 def test_two_dask_workers_joined_by_address_give_the_serial_depths(serial, tum, cluster, tmp_path):
