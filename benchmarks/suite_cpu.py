@@ -6,7 +6,7 @@
 Every ``--interval`` seconds it reads, from /proc (Linux only), the CPU time (user + system) of each process
 below the command and the machine's idle time. At the end it prints, per kind of process
 (:func:`process_kind`: the pytest controller, its workers, the kernels they start (nbval's, the classroom's
-runs), ``grade()``'s supervised children and their kernels, ``ddp-lite`` commands, Dask and multiprocessing, Jupyter, the
+runs; forked by tests/kernel_forkserver.py's server, or fresh), ``grade()``'s supervised children and their kernels, ``ddp-lite`` commands, Dask and multiprocessing, Jupyter, the
 installer, the rest), how many ran and their CPU seconds; then the wall time, the cores' idle seconds in
 each tenth of the run, and the command's exit status. A process that ends between two reads loses its last
 interval (at most ``--interval`` s each): the counts are a floor. It asserts nothing (a benchmark).
@@ -41,6 +41,10 @@ def process_kind(command: str, parent_kind: str | None) -> str:
         return "shell"
     if "ipykernel_launcher" in command:  # nbval and the classroom's runs start kernels themselves; grade() from a child
         return "kernel (a worker's)" if parent_kind == "pytest worker" else "kernel (a grader child's)"
+    if "kernel_forkserver.py serve" in command:  # the tests' kernel server; the kernels it forks keep its command line
+        return "kernel (a worker's, forked)" if parent_kind == "kernel server" else "kernel server"
+    if "kernel_forkserver.py launch" in command:  # the stand-in for a forked kernel (a fresh one where it is refused)
+        return "kernel (a worker's)"
     if XDIST_WORKER in command:  # a fork keeps its parent's command line: grade()'s supervised child per hand-in
         return "grader child" if parent_kind in ("pytest worker", "grader child") else "pytest worker"
     if " -m pytest" in command or program in ("pytest", "py.test"):  # not a path that holds "pytest-of-root"

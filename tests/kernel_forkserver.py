@@ -226,6 +226,9 @@ def serve(socket_path: str, notebooks_dir: str):
     own_env = dict(os.environ)  # as the loader and the libraries found it at start-up
     del sys.path[0]  # this file's folder (tests/, whose data_fetch/ would shadow the package); a kernel's has no such entry
     _preload(notebooks_dir)
+    if os.environ.get("DDP_TEST_KERNEL_SERVER_DEBUG"):
+        import time
+        print(f"kernel server: ready, {time.process_time():.1f} CPU-s of imports", file=sys.stderr, flush=True)
     waiting = {}  # the pidfd of a running kernel -> (its pid, the connection its launcher waits on)
     while True:
         readable, _, _ = select.select([listener, sys.stdin, *waiting], [], [])

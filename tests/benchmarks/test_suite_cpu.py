@@ -20,6 +20,12 @@ WORKER = "/x/.venv/bin/python -u -c import sys;exec(eval(sys.stdin.readline()))"
     (WORKER, "pytest worker", "grader child"),  # a fork keeps the worker's command line
     ("/x/.venv/bin/python -m ipykernel_launcher -f /tmp/k.json", "pytest worker", "kernel (a worker's)"),
     ("/x/.venv/bin/python -m ipykernel_launcher -f /tmp/k.json", "grader child", "kernel (a grader child's)"),
+    ("/x/.venv/bin/python /x/tests/kernel_forkserver.py serve /tmp/k/server /x/notebooks", "pytest controller",
+     "kernel server"),
+    ("/x/.venv/bin/python /x/tests/kernel_forkserver.py serve /tmp/k/server /x/notebooks", "kernel server",
+     "kernel (a worker's, forked)"),  # a fork keeps the server's command line
+    ("/x/.venv/bin/python -I -S /x/tests/kernel_forkserver.py launch /tmp/k/server -f /tmp/k.json", "pytest worker",
+     "kernel (a worker's)"),
     ("/x/.venv/bin/python /x/.venv/bin/ddp-lite complete --rgb a.png", "pytest worker", "ddp-lite command"),
     ("/x/.venv/bin/python -c from multiprocessing.spawn import spawn_main", "pytest worker", "dask / multiprocessing"),
     ("/x/.venv/bin/python -m pip wheel --no-deps .", "pytest worker", "installer (pip, uv)"),
