@@ -249,14 +249,17 @@ def serve(socket_path: str, notebooks_dir: str):
         conn, _ = listener.accept()
         try:
             request, fds = _receive(conn, max_fds=3)
-        except OSError:
+        except (OSError, ValueError):  # a launcher gone, or not one of ours
             conn.close()
             continue
         differing = _differences((request or {}).get("env", {}), own_env)
         if os.environ.get("DDP_TEST_KERNEL_SERVER_DEBUG") and differing:
             print("kernel server: refused, differs:", differing, file=sys.stderr, flush=True)
         if request is None or len(fds) != 3 or differing:
-            _send(conn, {"refused": differing or "malformed request"})
+            try:
+                _send(conn, {"refused": differing or "malformed request"})
+            except OSError:
+                pass
             for fd in fds:
                 os.close(fd)
             conn.close()
@@ -275,7 +278,10 @@ def serve(socket_path: str, notebooks_dir: str):
         for fd in fds:
             os.close(fd)
         waiting[os.pidfd_open(pid)] = (pid, conn)
-        _send(conn, {"pid": pid})
+        try:
+            _send(conn, {"pid": pid})
+        except OSError:  # the launcher is gone: the kernel sees that too, and ends
+            pass
     for pid, conn in waiting.values():  # the test run is over: what is left goes with it
         try:
             os.killpg(pid, signal.SIGKILL)

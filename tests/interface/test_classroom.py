@@ -141,7 +141,7 @@ def test_grader_scores_right_wrong_crashing_tampered_slow_and_missing_work(tmp_p
     _submit(tmp_path, "fay", _edit(source, "ex1_square", "import time\ntime.sleep(60)\ndef square(x):\n    return x * x"))
     (tmp_path / "submissions" / "gus").mkdir()  # handed in nothing
     log = []
-    scores = grading.grade(tmp_path / "submissions", source_path.parent, timeout=4, log=log.append)  # fay's wait
+    scores = grading.grade(tmp_path / "submissions", source_path.parent, timeout=2, log=log.append)  # fay's wait
     table = {(s.student, s.exercise): (s.points, s.status) for s in scores}
     assert table[("ada", "01.1")] == (2, "pass") and table[("ada", "01.2")] == (3, "pass")
     assert table[("ben", "01.1")] == (0, "fail") and table[("ben", "01.2")] == (0, "fail")
