@@ -3,13 +3,11 @@ import shutil
 import sys
 import tempfile
 
-import matplotlib
 import numpy as np
 import pytest
 
 import kernel_forkserver
 
-matplotlib.use("Agg")
 os.environ.setdefault("DDP_PROFILE", "ci")
 
 
@@ -22,9 +20,12 @@ def pytest_configure(config):
     config.addinivalue_line("markers", "fit_cache: run with the session's DDP_CACHE (notebook re-runs)")
     if hasattr(config, "workerinput") or not getattr(config.option, "numprocesses", None):
         # a process that runs tests: under pytest-xdist (`make test`) each worker gets one thread, as the workers
-        # share the cores. torch is imported here, not above: the controller of a `make test` run runs no test,
-        # and its workers start 3-4 s sooner when it does not import torch first
+        # share the cores. torch and Matplotlib are imported here, not above: the controller of a `make test` run
+        # runs no test, and its workers start sooner when it does not import them first
+        import matplotlib
         import torch
+
+        matplotlib.use("Agg")
 
         torch.set_num_threads(1 if os.environ.get("PYTEST_XDIST_WORKER") else max(1, min(2, os.cpu_count() or 1)))
     if not hasattr(config, "workerinput"):  # the controller, or a run without xdist
