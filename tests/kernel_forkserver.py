@@ -21,7 +21,7 @@ manager's SIGKILL). Where the server cannot give an exact stand-in, the launcher
   is read at start-up here) may differ. They are set in the fork before the kernel starts;
   ``MPLBACKEND`` is applied to Matplotlib's rcParams, as its import would, and the temporary folder is
   looked up again;
-- no server (``DDP_TEST_FRESH_KERNELS=1``, or not Linux: the launcher needs ``os.pidfd_open``).
+- no server (``DDP_TEST_FRESH_KERNELS=1``, or no ``os.pidfd_open``: Linux >= 5.3 only).
 
 ``DDP_TEST_KERNEL_SERVER_DEBUG=1`` prints each refusal, with the variables that differed.
 
@@ -312,13 +312,22 @@ class Server:
         shutil.rmtree(self.folder, ignore_errors=True)
 
 
+def _has_pidfds() -> bool:
+    """Linux >= 5.3 with Python >= 3.9: the server and its kernels watch processes through pidfds."""
+    try:
+        os.close(os.pidfd_open(os.getpid()))
+        return True
+    except (AttributeError, OSError):
+        return False
+
+
 def start_server(notebooks_dir):
     """Start the server (it imports in the background) and export its socket's path for the test processes;
     None where kernels stay fresh (``DDP_TEST_FRESH_KERNELS=1``, or no ``os.pidfd_open``)."""
     import subprocess
     import tempfile
 
-    if os.environ.get("DDP_TEST_FRESH_KERNELS") or not hasattr(os, "pidfd_open") or not sys.platform.startswith("linux"):
+    if os.environ.get("DDP_TEST_FRESH_KERNELS") or not _has_pidfds():
         os.environ.pop(SOCKET_VARIABLE, None)
         return None
     folder = tempfile.mkdtemp(prefix="ddp-kernels-")
