@@ -6,9 +6,10 @@
 Every ``--interval`` seconds it reads, from /proc (Linux only), the CPU time (user + system) of each process
 below the command and the machine's idle time. At the end it prints, per kind of process
 (:func:`process_kind`: the pytest controller, its workers, the kernels they start (nbval's, the classroom's
-runs; forked by tests/kernel_forkserver.py's server, or fresh), ``grade()``'s supervised children and their kernels, ``ddp-lite`` commands, Dask and multiprocessing, Jupyter, the
-installer, the rest), how many ran and their CPU seconds; then the wall time, the cores' idle seconds in
-each tenth of the run, and the command's exit status. A process that ends between two reads loses its last
+runs; forked by tests/kernel_forkserver.py's server, or fresh), ``grade()``'s supervised children and their
+kernels, ``ddp-lite`` commands, Dask and multiprocessing, Jupyter, the installer, the rest), how many ran and
+their CPU seconds; then the wall time, the cores' idle seconds in each tenth of the run, and the command's exit
+status. A process that ends between two reads loses its last
 interval (at most ``--interval`` s each): the counts are a floor. It asserts nothing (a benchmark).
 What it found on `make test`: docs/studies/benchmark_history.md.
 """

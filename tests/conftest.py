@@ -18,7 +18,8 @@ def pytest_configure(config):
     read their fits back (they test the notebooks' flow and checks, not the fits). Python tests run
     without it (``_fit_cache_only_where_marked``): a test of a fit must compute it."""
     config.addinivalue_line("markers", "fit_cache: run with the session's DDP_CACHE (notebook re-runs)")
-    if hasattr(config, "workerinput") or not getattr(config.option, "numprocesses", None):
+    runs_tests = hasattr(config, "workerinput") or not getattr(config.option, "numprocesses", None)
+    if runs_tests:
         # a process that runs tests: under pytest-xdist (`make test`) each worker gets one thread, as the workers
         # share the cores. torch and Matplotlib are imported here, not above: the controller of a `make test` run
         # runs no test, and its workers start sooner when it does not import them first
@@ -36,8 +37,8 @@ def pytest_configure(config):
             # a run of the notebooks (`make test`): their kernels are forked from one that has imported their
             # stack (see kernel_forkserver.py); the workers, started after this hook, inherit its address
             config._kernel_server = kernel_forkserver.start_server(config.rootpath / "notebooks")
-    if hasattr(config, "workerinput") or not getattr(config.option, "numprocesses", None):
-        kernel_forkserver.redirect_kernel_launches()
+    if runs_tests:
+        kernel_forkserver.redirect_kernel_launches()  # where a server was started (the address is in os.environ)
 
 
 @pytest.hookimpl(trylast=True)  # after pytest's own (its last garbage collection, whose warnings still go out)

@@ -18,7 +18,8 @@ manager's SIGKILL). Where the server cannot give an exact stand-in, the launcher
 - the requested environment differs from the server's in a variable that may be read at start-up (threads,
   paths, locale, ...): only ``DDP_*``, ``PYTEST_*``, ``JPY_*``, ``MPLBACKEND``, the temporary folder, the
   shell's ``PWD``, the terminal's size and four that libraries set when a test imports them (none of which
-  is read at start-up here) may differ. They are set in the fork before the kernel starts;
+  is read at start-up here) may differ, and ``LD_LIBRARY_PATH`` by folders that hold no library (OpenCV's
+  import adds one). They are set in the fork before the kernel starts;
   ``MPLBACKEND`` is applied to Matplotlib's rcParams, as its import would, and the temporary folder is
   looked up again;
 - no server (``DDP_TEST_FRESH_KERNELS=1``, or no ``os.pidfd_open``: Linux >= 5.3 only).
@@ -53,9 +54,13 @@ FORWARDED_SIGNALS = ("SIGINT", "SIGTERM", "SIGHUP", "SIGQUIT", "SIGUSR1", "SIGUS
 
 
 def _send(conn, message: dict, fds=()):
+    """One length-prefixed JSON message, and ``fds`` (file descriptors) with it."""
     data = json.dumps(message).encode()
-    socket.send_fds(conn, [struct.pack("!I", len(data)) + data], list(fds)) if fds else conn.sendall(
-        struct.pack("!I", len(data)) + data)
+    framed = struct.pack("!I", len(data)) + data
+    if fds:
+        socket.send_fds(conn, [framed], list(fds))
+    else:
+        conn.sendall(framed)
 
 
 def _receive(conn, max_fds=0):

@@ -67,11 +67,12 @@ def test_an_interrupt_a_kill_and_an_exit_reach_the_kernel_manager(tmp_path):
     try:
         client.execute("import time\nwhile True:\n    time.sleep(0.05)")
         time.sleep(0.5)
-        manager.interrupt_kernel()
+        manager.interrupt_kernel()  # SIGINT to the launcher's group
         reply = client.get_shell_msg(timeout=20)["content"]
         assert reply["status"] == "error" and reply["ename"] == "KeyboardInterrupt"
         _, printed = _run(client, "import os\nprint(os.getpid())")
         kernel = int(printed)
+        assert kernel != manager.provisioner.process.pid  # a fork, behind its launcher
     finally:
         client.stop_channels()
         manager.shutdown_kernel(now=True)  # SIGKILL to the launcher's group
@@ -82,15 +83,11 @@ def test_an_interrupt_a_kill_and_an_exit_reach_the_kernel_manager(tmp_path):
     else:
         pytest.fail(f"the kernel {kernel} outlived its launcher's kill")
 
-    manager, client = _start(tmp_path)
-    try:
-        client.execute("import os\nos._exit(3)")
-        assert manager.provisioner.process.wait(timeout=20) == 3
-        manager, client2 = _start(tmp_path)
-        client.stop_channels()
-        client = client2
-        client.execute("import os, signal\nos.kill(os.getpid(), signal.SIGTERM)")
-        assert manager.provisioner.process.wait(timeout=20) == -signal.SIGTERM
-    finally:
-        client.stop_channels()
-        manager.shutdown_kernel(now=True)
+    for code, status in (("os._exit(3)", 3), ("os.kill(os.getpid(), signal.SIGTERM)", -signal.SIGTERM)):
+        manager, client = _start(tmp_path)
+        try:
+            client.execute(f"import os, signal\n{code}")
+            assert manager.provisioner.process.wait(timeout=20) == status  # the kernel's end, as a fresh one's
+        finally:
+            client.stop_channels()
+            manager.shutdown_kernel(now=True)

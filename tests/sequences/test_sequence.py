@@ -82,7 +82,7 @@ def test_serial_run_writes_every_output(serial, tum):
 @pytest.fixture(scope="module")
 def cluster():
     """One local Dask cluster of two one-thread worker processes (``--workers 2``'s), for the module's Dask
-    tests: starting and closing one costs ~12 s, most of it waiting. Closed, it leaves this process's environment
+    tests: starting and closing one takes about 2.5 s. Closed, it leaves this process's environment
     as it found it (distributed's nanny writes its workers' settings into it; a kernel or command started
     afterwards would inherit them)."""
     def environment():
