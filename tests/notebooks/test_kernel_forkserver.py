@@ -10,8 +10,8 @@ import pytest
 
 from kernel_forkserver import SOCKET_VARIABLE
 
-pytestmark = pytest.mark.skipif(SOCKET_VARIABLE not in os.environ, reason="no kernel server in this session "
-                                "(it runs with the notebooks: make test)")
+pytestmark = pytest.mark.skipif(SOCKET_VARIABLE not in os.environ, reason="no kernel server in this session (a run "
+                                "of the notebooks starts one, as make test does, unless DDP_TEST_FRESH_KERNELS=1)")
 
 PROBE = """import json, os, sys
 import matplotlib.pyplot as plt
