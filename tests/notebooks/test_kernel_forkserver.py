@@ -41,6 +41,16 @@ def _run(client, code, timeout=30):
     return reply["content"], "".join(printed)
 
 
+def _message_for(get, msg_id, accept=lambda msg: True, timeout=20):
+    """The first message from ``get`` (a channel's get_msg) answering ``msg_id`` that ``accept`` takes: a kernel
+    that was slow to start has answered several kernel_info requests, whose replies wait on the channel first."""
+    deadline = time.monotonic() + timeout
+    while True:
+        msg = get(timeout=max(0.1, deadline - time.monotonic()))
+        if msg["parent_header"].get("msg_id") == msg_id and accept(msg):
+            return msg
+
+
 def _probe(tmp_path, **env):
     manager, client = _start(tmp_path, **env)
     try:
@@ -65,10 +75,10 @@ def test_a_forked_kernel_shows_a_notebook_what_a_fresh_one_does(tmp_path):
 def test_an_interrupt_a_kill_and_an_exit_reach_the_kernel_manager(tmp_path):
     manager, client = _start(tmp_path)
     try:
-        client.execute("import time\nwhile True:\n    time.sleep(0.05)")
-        time.sleep(0.5)
+        msg_id = client.execute("import time\nprint('looping', flush=True)\nwhile True:\n    time.sleep(0.05)")
+        _message_for(client.get_iopub_msg, msg_id, lambda msg: "looping" in msg["content"].get("text", ""))
         manager.interrupt_kernel()  # SIGINT to the launcher's group
-        reply = client.get_shell_msg(timeout=20)["content"]
+        reply = _message_for(client.get_shell_msg, msg_id)["content"]
         assert reply["status"] == "error" and reply["ename"] == "KeyboardInterrupt"
         _, printed = _run(client, "import os\nprint(os.getpid())")
         kernel = int(printed)
