@@ -150,6 +150,15 @@ def plane_with_hole(height: int = 24, width: int = 32):
     return gt, depth
 
 
+def process_has_ended(pid: int) -> bool:
+    """True once ``pid`` is gone or a zombie (killed, not yet reaped by its parent): Linux's /proc."""
+    try:
+        with open(f"/proc/{pid}/stat") as handle:
+            return handle.read().rsplit(")", 1)[1].split()[0] == "Z"
+    except FileNotFoundError:
+        return True
+
+
 def pinhole_plane(height: int = 60, width: int = 90):
     """Ground-truth depth (H, W) float32 metres of a tilted plane seen by a pinhole camera: disparity 1/Z is
     affine in the pixel coordinates (0.4–0.65 1/m: 1.5–2.5 m)."""

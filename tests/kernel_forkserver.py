@@ -303,16 +303,17 @@ def serve(socket_path: str, notebooks_dir: str):
 # --- the test side -----------------------------------------------------------------------------------------
 
 class Server:
-    def __init__(self, process, socket_path, folder):
-        self.process, self.socket_path, self.folder = process, socket_path, folder
+    def __init__(self, process, folder):
+        self.process, self.folder = process, folder
 
     def stop(self):
         import shutil
+        import subprocess
 
         self.process.stdin.close()  # the server ends its loop, kills the kernels left, and exits
         try:
             self.process.wait(timeout=10)
-        except Exception:
+        except subprocess.TimeoutExpired:
             self.process.kill()
         shutil.rmtree(self.folder, ignore_errors=True)
 
@@ -341,7 +342,7 @@ def start_server(notebooks_dir):
     process = subprocess.Popen([sys.executable, __file__, "serve", socket_path, str(notebooks_dir)],
                                stdin=subprocess.PIPE, env=env)
     os.environ[SOCKET_VARIABLE] = socket_path
-    return Server(process, socket_path, folder)
+    return Server(process, folder)
 
 
 def redirect_kernel_launches():

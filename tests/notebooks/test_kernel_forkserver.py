@@ -8,6 +8,7 @@ import time
 
 import pytest
 
+from conftest import process_has_ended
 from kernel_forkserver import SOCKET_VARIABLE
 
 pytestmark = pytest.mark.skipif(SOCKET_VARIABLE not in os.environ, reason="no kernel server in this session (a run "
@@ -87,7 +88,7 @@ def test_an_interrupt_a_kill_and_an_exit_reach_the_kernel_manager(tmp_path):
         client.stop_channels()
         manager.shutdown_kernel(now=True)  # SIGKILL to the launcher's group
     for _ in range(100):
-        if not os.path.exists(f"/proc/{kernel}") or open(f"/proc/{kernel}/stat").read().rsplit(")", 1)[1].split()[0] == "Z":
+        if process_has_ended(kernel):
             break
         time.sleep(0.05)
     else:
